@@ -1,0 +1,35 @@
+# make run  : set-up + the main job on embedded defaults
+# make test : set-up + the whole test suite
+# make bench: set-up + the benchmarks (JSON under logs/bench/)
+SHELL := /bin/bash
+PY ?= python3
+VENV := .venv
+BIN := $(VENV)/bin
+STAMP := $(VENV)/.installed
+export MUJOCO_GL ?= osmesa
+export PYOPENGL_PLATFORM ?= osmesa
+
+.PHONY: setup run test bench clean
+
+setup: $(STAMP)
+
+$(STAMP): pyproject.toml scripts/system_deps.sh
+	bash scripts/system_deps.sh
+	test -x $(BIN)/python || $(PY) -m venv $(VENV)
+	$(BIN)/python -m pip install -q --upgrade pip
+	# The CPU build of torch first: a bare `torch` requirement could pull a multi-GB CUDA build.
+	$(BIN)/python -m pip install -q "torch==2.13.0"
+	$(BIN)/python -m pip install -q -e ".[test]"
+	touch $(STAMP)
+
+run: setup
+	$(BIN)/wrp-eval run experiments/quickstart.yaml
+
+test: setup
+	$(BIN)/python -m pytest -q -p no:cacheprovider
+
+bench: setup
+	$(BIN)/wrp-eval bench --out logs/bench/
+
+clean:
+	rm -rf $(VENV) build *.egg-info

@@ -1,0 +1,35 @@
+"""Pydantic models of the YAML configs.
+
+Each stage defines the model of its own section (``wrp_eval/<stage>/config.py``); this module composes
+them into :class:`ExperimentConfig`, the one document ``wrp-eval run CONFIG`` and the stage commands read.
+Unknown keys, wrong types and impossible values are refused with one line (see :mod:`wrp_eval.validation`).
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+from pydantic import Field
+
+from wrp_eval.ship.config import ShipSection
+from wrp_eval.validation import StrictModel, load_model
+
+
+class RunSection(StrictModel):
+    """Run-wide settings."""
+
+    name: str = Field("quickstart", min_length=1, pattern=r"^[A-Za-z0-9_.-]+$",
+                      description="run name: outputs go to logs/<name>/")
+    seed: int = Field(0, ge=0, description="root seed of every random draw")
+
+
+class ExperimentConfig(StrictModel):
+    """A whole experiment. Every section has embedded defaults, so ``{}`` is a valid config."""
+
+    run: RunSection = RunSection()
+    ship: ShipSection = ShipSection()
+
+
+def load_experiment(path: str | Path) -> ExperimentConfig:
+    """Load and validate an experiment YAML file (raises :class:`InputError`)."""
+    return load_model(ExperimentConfig, path)

@@ -1,0 +1,18 @@
+"""The one error type for bad user input.
+
+Every bad input (config, AIS sentence, mesh, netCDF, checkpoint, path file) raises
+:class:`InputError`; the CLI prints it as one line and exits with status 2.
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+
+class InputError(Exception):
+    """Bad user input. ``str(err)`` is one line: ``<source>: <problem>``."""
+
+    def __init__(self, source: str | Path, problem: str):
+        self.source = str(source)
+        self.problem = " ".join(str(problem).split())  # always one line
+        super().__init__(f"{self.source}: {self.problem}")
