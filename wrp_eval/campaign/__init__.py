@@ -1,0 +1,1 @@
+"""The campaign stage (see README.md in this folder)."""

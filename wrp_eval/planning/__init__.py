@@ -1,0 +1,1 @@
+"""The planning stage (see README.md in this folder)."""

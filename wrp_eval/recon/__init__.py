@@ -1,0 +1,1 @@
+"""The recon stage (see README.md in this folder)."""

@@ -1,0 +1,1 @@
+"""The ship stage (see README.md in this folder)."""

@@ -1,0 +1,1 @@
+"""The surrogate stage (see README.md in this folder)."""

@@ -1,0 +1,1 @@
+"""The wind stage (see README.md in this folder)."""

@@ -1,0 +1,1 @@
+"""The wrp stage (see README.md in this folder)."""
