@@ -1,1 +1,0 @@
-"""The campaign stage (see README.md in this folder)."""

@@ -1,1 +1,0 @@
-"""The export stage (see README.md in this folder)."""

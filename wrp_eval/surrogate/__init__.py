@@ -1,1 +1,0 @@
-"""The surrogate stage (see README.md in this folder)."""

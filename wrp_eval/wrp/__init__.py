@@ -1,1 +1,0 @@
-"""The wrp stage (see README.md in this folder)."""
