@@ -1,0 +1,287 @@
+"""Dryden turbulence, MIL-F-8785C low-altitude model, batched over flights.
+
+Formulas (MIL-F-8785C Sec. 3.7.2.3 / MIL-HDBK-1797, reproduced in DESIGN.md), h in feet, 10 <= h <= 1000:
+    L_w = h,  L_u = L_v = h / (0.177 + 0.000823 h)^1.2
+    sigma_w = 0.1 W20,  sigma_u = sigma_v = sigma_w / (0.177 + 0.000823 h)^0.4      (W20: wind at 20 ft)
+One-sided PSDs over temporal frequency omega (rad/s), each integrating over [0, inf) to sigma^2:
+    Phi_u(omega) = sigma_u^2 (2 L_u / (pi V)) / (1 + (L_u omega / V)^2)
+    Phi_v,w(omega) = sigma^2 (L / (pi V)) (1 + 3 (L omega / V)^2) / (1 + (L omega / V)^2)^2
+Forming filters (|H(i omega)|^2 = Phi(omega) for a unit one-sided input PSD):
+    H_u = K_u / (1 + tau s),                    K_u = sigma_u sqrt(2 L_u / (pi V)),  tau = L / V
+    H_v,w = K (1 + sqrt(3) tau s) / (1 + tau s)^2,  K = sigma sqrt(L / (pi V))
+
+Noise scaling (checked, see README): a unit one-sided PSD over omega in [0, pi/dt] means discrete white noise
+of variance pi/dt held constant over each step (variance = integral of the PSD = 1 * pi/dt).
+
+Exact zero-order-hold discretisation, in closed form (= scipy.signal.cont2discrete(..., "zoh"); a test checks
+it), with r = dt / tau, a = exp(-r):
+  first order   x' = (-x + e)/tau,             y = K x:     x+ = a x + (1 - a) e
+  second order  x2' = (-x2 + e)/tau, x1' = (-x1 + x2)/tau,   y = K ((1 - sqrt3) x1 + sqrt3 x2):
+                x1+ = a x1 + a r x2 + (1 - a (1 + r)) e,     x2+ = a x2 + (1 - a) e
+
+Axes: u along the mean horizontal wind, v across it (horizontal, to the left), w vertical (up).
+Airspeed V (frozen-field "Taylor" speed): the mean wind speed at the vehicle with a floor, since a hovering
+multirotor has no airspeed of its own (DESIGN.md).
+"""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+
+import numpy as np
+from scipy.signal import lfilter
+
+FT_M = 0.3048
+KNOT_MPS = 1852.0 / 3600.0
+MIN_ALTITUDE_FT, MAX_ALTITUDE_FT = 10.0, 1000.0
+SQRT3 = np.sqrt(3.0)
+
+# W20 of the MIL-F-8785C / MIL-HDBK-1797 low-altitude severity levels (knots)
+SEVERITY_W20_KT = {"light": 15.0, "moderate": 30.0, "severe": 45.0}
+
+
+def severity_w20_mps(severity: str) -> float:
+    """W20 (m/s) of a severity preset (light 15 kt, moderate 30 kt, severe 45 kt)."""
+    return SEVERITY_W20_KT[severity] * KNOT_MPS
+
+
+def dryden_parameters(altitude_m: np.ndarray | float, w20_mps: np.ndarray | float):
+    """Intensities sigma (..., 3) m/s and length scales L (..., 3) m for axes (u, v, w).
+
+    altitude_m is clipped to the low-altitude model's range 10..1000 ft.
+    """
+    h_ft = np.clip(np.asarray(altitude_m, dtype=float) / FT_M, MIN_ALTITUDE_FT, MAX_ALTITUDE_FT)
+    w20 = np.asarray(w20_mps, dtype=float)
+    h_ft, w20 = np.broadcast_arrays(h_ft, w20)
+    base = 0.177 + 0.000823 * h_ft
+    length_uv = h_ft / base**1.2 * FT_M
+    sigma_w = 0.1 * w20
+    sigma_uv = sigma_w / base**0.4
+    sigma = np.stack([sigma_uv, sigma_uv, sigma_w], axis=-1)
+    length = np.stack([length_uv, length_uv, h_ft * FT_M], axis=-1)
+    return sigma, length
+
+
+def dryden_psd(omega_rad_s: np.ndarray, sigma: Sequence[float], length: Sequence[float],
+               airspeed_mps: float) -> np.ndarray:
+    """One-sided analytic PSDs (len(omega), 3) in (m/s)^2 per rad/s for axes (u, v, w)."""
+    om = np.asarray(omega_rad_s, dtype=float)[:, None]
+    s, L = np.asarray(sigma, float)[None, :], np.asarray(length, float)[None, :]
+    x2 = (L * om / airspeed_mps) ** 2
+    first = s**2 * 2 * L / (np.pi * airspeed_mps) / (1 + x2)
+    second = s**2 * L / (np.pi * airspeed_mps) * (1 + 3 * x2) / (1 + x2) ** 2
+    return np.concatenate([first[:, :1], second[:, 1:]], axis=1)
+
+
+def continuous_filters(sigma: Sequence[float], length: Sequence[float], airspeed_mps: float):
+    """State-space (A, B, C, D) of the three forming filters, in the realisation used here (for tests)."""
+    out = []
+    for axis in range(3):
+        tau = length[axis] / airspeed_mps
+        if axis == 0:
+            gain = sigma[0] * np.sqrt(2 * length[0] / (np.pi * airspeed_mps))
+            out.append((np.array([[-1 / tau]]), np.array([[1 / tau]]), np.array([[gain]]), np.zeros((1, 1))))
+        else:
+            gain = sigma[axis] * np.sqrt(length[axis] / (np.pi * airspeed_mps))
+            a = np.array([[-1 / tau, 1 / tau], [0.0, -1 / tau]])
+            out.append((a, np.array([[0.0], [1 / tau]]), gain * np.array([[1 - SQRT3, SQRT3]]), np.zeros((1, 1))))
+    return out
+
+
+def _zoh(tau: np.ndarray, dt: float):
+    """Closed-form ZOH coefficients (a, a r, 1 - a(1+r), 1 - a) for time constants tau (any shape)."""
+    r = dt / tau
+    a = np.exp(-r)
+    return a, a * r, -np.expm1(-r) - r * a, -np.expm1(-r)
+
+
+def _discrete_lyapunov_2x2(F: np.ndarray, Q: np.ndarray) -> np.ndarray:
+    """Batched solution of P = F P F^T + Q for (..., 2, 2) matrices: vec(P) = (I - F kron F)^-1 vec(Q)."""
+    kron = np.einsum("...ij,...kl->...ikjl", F, F).reshape(F.shape[:-2] + (4, 4))
+    eye = np.eye(4)
+    vec = np.linalg.solve(eye - kron, Q.reshape(Q.shape[:-2] + (4,))[..., None])[..., 0]
+    P = vec.reshape(F.shape)
+    return 0.5 * (P + np.swapaxes(P, -1, -2))
+
+
+class DrydenTurbulence:
+    """Dryden turbulence for a batch of ``n_flights`` flights, each with its own random stream.
+
+    State per flight: x_u (1), and (x1, x2) for v and for w. ``advance`` moves all flights one step of
+    ``dt_s`` (one batched elementwise update); ``generate`` produces a whole series at fixed altitude and
+    airspeed with scipy's C recursion (identical numbers to repeated ``advance``).
+
+    rngs: one Generator per flight (e.g. ``np.random.default_rng(seed).spawn(n)``) or a single Generator /
+    seed from which they are spawned. w20_mps: scalar or (n,). sigma_w_override_mps: if given, W20 is
+    replaced by 10 * sigma_w (the intensity override). Noise is drawn per flight in blocks of
+    ``block_steps`` steps, so the per-flight draws are independent of how the time axis is chunked.
+    """
+
+    def __init__(self, n_flights: int, dt_s: float, rngs, w20_mps=0.0, sigma_w_override_mps: float | None = None,
+                 airspeed_floor_mps: float = 1.0, block_steps: int = 1024):
+        if n_flights < 1:
+            raise ValueError("n_flights must be >= 1")
+        if not dt_s > 0:
+            raise ValueError("dt_s must be > 0")
+        if isinstance(rngs, (int, np.integer, np.random.SeedSequence)) or rngs is None:
+            rngs = np.random.default_rng(rngs).spawn(n_flights)
+        elif isinstance(rngs, np.random.Generator):
+            rngs = rngs.spawn(n_flights)
+        if len(rngs) != n_flights:
+            raise ValueError(f"got {len(rngs)} generators for {n_flights} flights")
+        self.n_flights = n_flights
+        self.dt_s = float(dt_s)
+        self.rngs = list(rngs)
+        w20 = 10.0 * sigma_w_override_mps if sigma_w_override_mps is not None else w20_mps
+        self.w20_mps = np.broadcast_to(np.asarray(w20, dtype=float), (n_flights,)).copy()
+        self.airspeed_floor_mps = float(airspeed_floor_mps)
+        self.block_steps = int(block_steps)
+        self._noise = np.empty((n_flights, 0, 3))
+        self._cursor = 0
+        self.state_u = None            # (n,)
+        self.state_vw = None           # (n, 2, 2): [axis v/w, (x1, x2)]
+        self.t_s: float | None = None
+
+    # --- parameters -------------------------------------------------------------------------------
+    def parameters(self, altitude_m, airspeed_mps):
+        """(sigma (n,3), length (n,3), V (n,), tau (n,3), gain (n,3)) for the flights' current conditions."""
+        sigma, length = dryden_parameters(altitude_m, self.w20_mps)
+        sigma = np.broadcast_to(sigma, (self.n_flights, 3))
+        length = np.broadcast_to(length, (self.n_flights, 3))
+        v = np.maximum(np.broadcast_to(np.asarray(airspeed_mps, float), (self.n_flights,)), self.airspeed_floor_mps)
+        tau = length / v[:, None]
+        gain = sigma * np.sqrt(np.array([2.0, 1.0, 1.0]) * length / (np.pi * v[:, None]))
+        return sigma, length, v, tau, gain
+
+    # --- noise ---------------------------------------------------------------------------------------
+    def _draw(self, n_steps: int) -> np.ndarray:
+        """Unit normals (n, n_steps, 3) from each flight's own generator, in stream order."""
+        out = np.empty((self.n_flights, n_steps, 3))
+        filled = 0
+        while filled < n_steps:
+            if self._cursor >= self._noise.shape[1]:
+                self._noise = np.stack([g.standard_normal((self.block_steps, 3)) for g in self.rngs])
+                self._cursor = 0
+            take = min(n_steps - filled, self._noise.shape[1] - self._cursor)
+            out[:, filled:filled + take] = self._noise[:, self._cursor:self._cursor + take]
+            self._cursor += take
+            filled += take
+        return out
+
+    def _initialise(self, tau: np.ndarray) -> None:
+        """Draw each flight's state from the stationary distribution of its discrete filters."""
+        q = np.pi / self.dt_s
+        a, ar, c1, c2 = _zoh(tau, self.dt_s)
+        z = self._draw(2)                                        # 6 normals per flight, stream order
+        var_u = c2[:, 0] ** 2 * q / (1 - a[:, 0] ** 2)
+        self.state_u = np.sqrt(var_u) * z[:, 0, 0]
+        F = np.zeros((self.n_flights, 2, 2, 2))
+        F[..., 0, 0] = a[:, 1:]
+        F[..., 0, 1] = ar[:, 1:]
+        F[..., 1, 1] = a[:, 1:]
+        G = np.stack([c1[:, 1:], c2[:, 1:]], axis=-1)           # (n, 2, 2)
+        Q = q * G[..., :, None] * G[..., None, :]
+        P = _discrete_lyapunov_2x2(F, Q)
+        chol = np.linalg.cholesky(P)
+        normals = np.stack([z[:, 0, 1:3], z[:, 1, 0:2]], axis=1)  # (n, 2 axes, 2)
+        self.state_vw = np.einsum("naij,naj->nai", chol, normals)
+
+    # --- stepping --------------------------------------------------------------------------------------
+    def output(self, gain: np.ndarray) -> np.ndarray:
+        """Current turbulence (n, 3) along/across/vertical for gains (n, 3)."""
+        vw = (1 - SQRT3) * self.state_vw[..., 0] + SQRT3 * self.state_vw[..., 1]
+        return gain * np.concatenate([self.state_u[:, None], vw], axis=1)
+
+    def advance(self, tau: np.ndarray, n_steps: int = 1) -> None:
+        """Advance every flight ``n_steps`` steps with time constants tau (n, 3) (one batched update each)."""
+        q_sqrt = np.sqrt(np.pi / self.dt_s)
+        a, ar, c1, c2 = _zoh(tau, self.dt_s)
+        e = self._draw(n_steps) * q_sqrt
+        for k in range(n_steps):  # n_steps is 0 or 1 in simulation use; series use generate()
+            self.state_u = a[:, 0] * self.state_u + c2[:, 0] * e[:, k, 0]
+            x1, x2 = self.state_vw[..., 0], self.state_vw[..., 1]
+            self.state_vw = np.stack([a[:, 1:] * x1 + ar[:, 1:] * x2 + c1[:, 1:] * e[:, k, 1:],
+                                      a[:, 1:] * x2 + c2[:, 1:] * e[:, k, 1:]], axis=-1)
+
+    def local_turbulence(self, altitude_m, airspeed_mps, t_s: float) -> np.ndarray:
+        """Turbulence (n, 3) along/across/vertical at time t_s (non-decreasing across calls).
+
+        The first call sets the time origin and draws the stationary initial state; later calls advance
+        round((t - t_prev) / dt) steps with the current altitude and airspeed.
+        """
+        _, _, _, tau, gain = self.parameters(altitude_m, airspeed_mps)
+        if self.t_s is None:
+            self._initialise(tau)
+            self.t_s = float(t_s)
+        else:
+            n_steps = int(round((t_s - self.t_s) / self.dt_s))
+            if n_steps < 0:
+                raise ValueError(f"turbulence queried at t = {t_s} s after t = {self.t_s} s: time must not decrease")
+            if n_steps:
+                self.advance(tau, n_steps)
+                self.t_s += n_steps * self.dt_s
+        return self.output(gain)
+
+    def velocity(self, points: np.ndarray, t: float, mean_wind: np.ndarray | None = None) -> np.ndarray:
+        """Turbulence (n, 3) m/s in the world frame at flight positions ``points`` (n, 3).
+
+        mean_wind (n, 3): the mean wind at the points (sets the u axis and the airspeed V); None = calm
+        (u along +x, V = the floor).
+        """
+        points = np.asarray(points, dtype=float)
+        if points.shape != (self.n_flights, 3):
+            raise ValueError(f"points must have shape ({self.n_flights}, 3), got {points.shape}")
+        if mean_wind is None:
+            mean_wind = np.zeros_like(points)
+        horizontal = np.hypot(mean_wind[:, 0], mean_wind[:, 1])
+        speed = np.linalg.norm(mean_wind, axis=1)
+        uvw = self.local_turbulence(points[:, 2], speed, t)
+        return rotate_to_world(uvw, mean_wind, horizontal)
+
+    # --- whole series ----------------------------------------------------------------------------------
+    def generate(self, n_steps: int, altitude_m: float, airspeed_mps: float) -> np.ndarray:
+        """Series (n_flights, n_steps, 3) along/across/vertical at fixed altitude and airspeed.
+
+        Sample k is the turbulence at t0 + k dt (k = 0 is the current, or freshly drawn initial, state);
+        afterwards the state is at t0 + n_steps dt, exactly as after n_steps calls of ``advance``.
+        """
+        _, _, _, tau, gain = self.parameters(altitude_m, airspeed_mps)
+        if self.t_s is None:
+            self._initialise(tau)
+            self.t_s = 0.0
+        tau0 = tau[0]
+        if not np.allclose(tau, tau0):
+            raise ValueError("generate() needs the same altitude and airspeed for every flight")
+        a, ar, c1, c2 = _zoh(tau0, self.dt_s)
+        e = self._draw(n_steps) * np.sqrt(np.pi / self.dt_s)    # (n, T, 3)
+        out = np.empty((self.n_flights, n_steps, 3))
+        # x_{k+1} = a x_k + c e_k as an IIR filter along time (scipy's C loop); zi carries x_0
+        xu_next, _ = lfilter([c2[0]], [1.0, -a[0]], e[:, :, 0], axis=1, zi=(a[0] * self.state_u)[:, None])
+        xu = np.concatenate([self.state_u[:, None], xu_next[:, :-1]], axis=1)
+        out[..., 0] = gain[:, 0:1] * xu
+        self.state_u = xu_next[:, -1]
+        new_vw = np.empty_like(self.state_vw)
+        for ax in (1, 2):
+            x1_0, x2_0 = self.state_vw[:, ax - 1, 0], self.state_vw[:, ax - 1, 1]
+            x2_next, _ = lfilter([c2[ax]], [1.0, -a[ax]], e[:, :, ax], axis=1, zi=(a[ax] * x2_0)[:, None])
+            x2 = np.concatenate([x2_0[:, None], x2_next[:, :-1]], axis=1)
+            drive = ar[ax] * x2 + c1[ax] * e[:, :, ax]
+            x1_next, _ = lfilter([1.0], [1.0, -a[ax]], drive, axis=1, zi=(a[ax] * x1_0)[:, None])
+            x1 = np.concatenate([x1_0[:, None], x1_next[:, :-1]], axis=1)
+            out[..., ax] = gain[:, ax:ax + 1] * ((1 - SQRT3) * x1 + SQRT3 * x2)
+            new_vw[:, ax - 1] = np.stack([x1_next[:, -1], x2_next[:, -1]], axis=-1)
+        self.state_vw = new_vw
+        self.t_s += n_steps * self.dt_s
+        return out
+
+
+def rotate_to_world(uvw: np.ndarray, mean_wind: np.ndarray, horizontal_speed: np.ndarray | None = None) -> np.ndarray:
+    """(n, 3) along/across/vertical -> world frame: u along the mean horizontal wind (x where calm),
+    v 90 deg to its left, w up."""
+    if horizontal_speed is None:
+        horizontal_speed = np.hypot(mean_wind[:, 0], mean_wind[:, 1])
+    calm = horizontal_speed < 1e-9
+    safe = np.where(calm, 1.0, horizontal_speed)
+    cx = np.where(calm, 1.0, mean_wind[:, 0] / safe)
+    cy = np.where(calm, 0.0, mean_wind[:, 1] / safe)
+    return np.stack([cx * uvw[:, 0] - cy * uvw[:, 1], cy * uvw[:, 0] + cx * uvw[:, 1], uvw[:, 2]], axis=1)

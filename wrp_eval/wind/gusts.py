@@ -1,0 +1,52 @@
+"""Discrete "1 - cosine" gusts (MIL-F-8785C Sec. 3.7.4 shape), drawn per flight.
+
+A gust starting at t0 with amplitude A, duration T and unit direction d adds
+    A/2 (1 - cos(2 pi (t - t0) / T)) d      for t0 <= t <= t0 + T
+(the full 1-cosine: it rises to A at mid-gust and falls back). Gust onsets form a Poisson process of rate
+``rate_per_min``; directions are the mean-wind azimuth plus a uniform spread, horizontal. Every draw comes
+from each flight's own Generator, all at construction (a fixed horizon), so queries are pure functions of t.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+
+class OneMinusCosineGusts:
+    """Gusts for ``n_flights`` flights over ``horizon_s`` seconds; ``velocity(points, t)`` -> (n, 3) m/s."""
+
+    def __init__(self, n_flights: int, rngs, horizon_s: float, rate_per_min: float, amplitude_mps: float,
+                 duration_s: float, mean_azimuth_rad: float = 0.0, direction_spread_deg: float = 30.0):
+        if isinstance(rngs, (int, np.integer, np.random.SeedSequence)) or rngs is None:
+            rngs = np.random.default_rng(rngs).spawn(n_flights)
+        elif isinstance(rngs, np.random.Generator):
+            rngs = rngs.spawn(n_flights)
+        if len(rngs) != n_flights:
+            raise ValueError(f"got {len(rngs)} generators for {n_flights} flights")
+        if duration_s <= 0 or horizon_s <= 0 or rate_per_min < 0:
+            raise ValueError("gust duration and horizon must be > 0 and the rate >= 0")
+        self.n_flights = n_flights
+        self.amplitude_mps = float(amplitude_mps)
+        self.duration_s = float(duration_s)
+        starts, azimuths = [], []
+        spread = np.deg2rad(direction_spread_deg)
+        for g in rngs:  # once per flight at construction, never per step
+            count = g.poisson(rate_per_min / 60.0 * horizon_s)
+            starts.append(np.sort(g.uniform(0.0, horizon_s, count)))
+            azimuths.append(mean_azimuth_rad + g.uniform(-spread, spread, count))
+        width = max([len(s) for s in starts] + [1])
+        self.start_s = np.full((n_flights, width), np.inf)      # padded with "never"
+        self.azimuth_rad = np.zeros((n_flights, width))
+        for i, (s, a) in enumerate(zip(starts, azimuths)):
+            self.start_s[i, :len(s)] = s
+            self.azimuth_rad[i, :len(a)] = a
+
+    def velocity(self, points: np.ndarray, t: float) -> np.ndarray:
+        """Sum of the gusts active at time t, (n_flights, 3) m/s in the world frame."""
+        phase = (t - self.start_s) / self.duration_s              # (n, g)
+        active = (phase >= 0.0) & (phase <= 1.0)
+        mag = np.where(active, 0.5 * self.amplitude_mps * (1.0 - np.cos(2 * np.pi * np.where(active, phase, 0))), 0)
+        out = np.zeros((self.n_flights, 3))
+        out[:, 0] = (mag * np.cos(self.azimuth_rad)).sum(axis=1)
+        out[:, 1] = (mag * np.sin(self.azimuth_rad)).sum(axis=1)
+        return out
