@@ -1,0 +1,150 @@
+import dataclasses
+
+import numpy as np
+import pytest
+
+from wrp_eval.sim.aero import drag_force
+from wrp_eval.sim.simple_wind import ConstantWind
+from wrp_eval.wind.config import TurbulenceSection, WindSection
+from wrp_eval.wind.field import build_wind_field
+from wrp_eval.sim.vehicle import PHANTOM4
+
+from .conftest import make_path
+
+
+def _steady(result, fraction=0.7):
+    tr = result.trajectory
+    s = slice(int(len(tr.time) * fraction), None)
+    return tr, s
+
+
+@pytest.mark.parametrize("speed,yaw", [(6.0, 0.0), (11.0, 0.8)])
+def test_hover_in_constant_wind_matches_the_analytic_balance(simulator, speed, yaw):
+    wind = np.array([speed * np.cos(2.0), speed * np.sin(2.0), 0.0])
+    res = simulator.hover(ConstantWind(wind), [0.0, 0.0, 30.0], yaw, 25.0, batch=2)
+    tr, s = _steady(res)
+    f = np.linalg.norm(drag_force(wind[None], np.array([yaw]), PHANTOM4, simulator.section.drag_coefficient,
+                                  simulator.section.air_density_kg_m3)[0])
+    weight = PHANTOM4.weight_n
+    tilt = tr.tilt[0, s].mean()
+    # tan(tilt) = F_drag / (m g); thrust = sqrt(W^2 + F^2)
+    assert np.tan(tilt) == pytest.approx(f / weight, rel=0.02)
+    assert tr.thrust[0, s].mean() == pytest.approx(np.hypot(weight, f), rel=0.02)
+    # integral action: the position error returns to zero
+    err = np.linalg.norm(tr.position[:, -1] - tr.reference[:, -1], axis=1)
+    assert np.all(err < 0.01)
+    assert not res.failed.any()
+
+
+def test_without_integral_action_a_steady_offset_remains(simulator):
+    wind = np.array([8.0, 0.0, 0.0])
+    saved = simulator.gains
+    simulator.gains = dataclasses.replace(saved, ki=0.0)
+    try:
+        res = simulator.hover(ConstantWind(wind), [0.0, 0.0, 30.0], 0.0, 15.0, batch=1)
+    finally:
+        simulator.gains = saved
+    tr, s = _steady(res)
+    f = drag_force(wind[None], np.zeros(1), PHANTOM4, simulator.section.drag_coefficient,
+                   simulator.section.air_density_kg_m3)[0, 0]
+    # proportional loop alone: kp * e = F / m
+    offset = (tr.position[0, s, 0] - tr.reference[0, s, 0]).mean()
+    assert offset == pytest.approx(f / (PHANTOM4.mass_kg * saved.kp), rel=0.05)
+
+
+def test_calm_air_path_captures_are_on_the_plan(simulator, short_path):
+    res = simulator.fly(short_path, ConstantWind([0.0, 0.0, 0.0]), batch=2)
+    assert not res.failed.any() and res.taken.all()
+    assert np.nanmax(np.linalg.norm(res.offsets[..., :3], axis=-1)) < 0.05
+    assert np.degrees(np.nanmax(np.abs(res.offsets[..., 3]))) < 0.3
+    cs = res.captures[0]
+    assert len(cs) == len(short_path)
+    assert np.allclose(cs.pitch, short_path.pitch, atol=np.radians(0.3))
+    assert np.array_equal(cs.planned_index, np.arange(len(short_path)))
+    # photos in order, at least transit time apart
+    assert np.all(np.diff(res.capture_time_s[0]) > short_path.segment_lengths_m / short_path.speed_m_s)
+
+
+def test_commanded_offsets_are_flown(simulator, short_path):
+    n = len(short_path)
+    cmd = np.zeros((2, n, 4))
+    cmd[1, :, 2] = 1.0
+    cmd[1, :, 3] = np.radians(5.0)
+    res = simulator.fly(short_path, ConstantWind([0.0, 0.0, 0.0]), batch=2, view_offsets=cmd)
+    assert np.allclose(res.offsets[1], cmd[1], atol=0.05)
+    assert np.allclose(res.offsets[0], 0.0, atol=0.05)
+
+
+def dryden_wind(severity: str, n_flights: int, seed: int, dt_s: float, speed_10m: float = 3.0):
+    """The wind stage's field: synthetic marine mean wind + MIL-F-8785C Dryden turbulence at ``severity``."""
+    section = WindSection(speed_10m_mps=speed_10m, turbulence=TurbulenceSection(severity=severity))
+    return build_wind_field(section, (0.0, 0.0, 0.0), n_flights, np.random.SeedSequence(seed), dt_s)
+
+
+def _control_dt(simulator):
+    return simulator.section.timestep_s * simulator.section.chunk_steps
+
+
+def test_offsets_grow_with_turbulence_severity(simulator):
+    # MIL-F-8785C presets light / moderate / severe (W20 = 15 / 30 / 45 kt), same seeds for each severity
+    per = 6
+    path = make_path(3, dwell_s=0.5)
+    mags, yaws = [], []
+    for severity in ("light", "moderate", "severe"):
+        res = simulator.fly(path, dryden_wind(severity, per, 11, _control_dt(simulator)), batch=per)
+        assert not res.failed.any()
+        mags.append(np.linalg.norm(res.offsets[..., :3], axis=-1).mean())
+        yaws.append(np.abs(res.offsets[..., 3]).mean())
+    assert mags[0] < mags[1] < mags[2]
+    assert mags[0] > 0.01   # light turbulence still moves the capture
+    assert yaws[0] < yaws[2]
+
+
+def test_same_seed_same_flight(simulator, short_path):
+    def run(seed):
+        return simulator.fly(short_path, dryden_wind("moderate", 2, seed, _control_dt(simulator)), batch=2).offsets
+    a, b, c = run(5), run(5), run(6)
+    assert np.array_equal(a, b)
+    assert not np.allclose(a, c)
+
+
+def test_wind_beyond_capability_is_a_failed_flight(simulator, short_path):
+    res = simulator.fly(short_path, ConstantWind([25.0, 0.0, 0.0]), batch=1)
+    assert res.failed[0]
+    assert "lost position" in res.failure_reason[0]
+    assert len(res.captures[0]) < len(short_path)
+    assert np.isnan(res.offsets[0, ~res.taken[0]]).all()
+
+
+def test_gimbal_range_limits_the_pitch(simulator):
+    path = make_path(2)
+    path = dataclasses.replace(path, pitch=np.radians([45.0, -20.0]))
+    res = simulator.fly(path, ConstantWind([0.0, 0.0, 0.0]), batch=1)
+    assert np.degrees(res.camera_pitch[0, 0]) == pytest.approx(30.0, abs=0.2)
+    assert res.gimbal_saturated[0, 0] and not res.gimbal_saturated[0, 1]
+
+
+def test_bad_offsets_shape_is_refused(simulator, short_path):
+    with pytest.raises(ValueError):
+        simulator.fly(short_path, ConstantWind([0, 0, 0]), batch=2, view_offsets=np.zeros((2, 1, 4)))
+
+
+def test_wind_of_the_wrong_shape_is_refused(simulator, short_path):
+    class Broken:
+        def velocity(self, points, t):
+            return np.zeros((1, 3))
+    with pytest.raises(ValueError, match="wind model returned shape"):
+        simulator.fly(short_path, Broken(), batch=2)
+
+
+def test_flights_in_the_ship_stage_scene(section):
+    trimesh = pytest.importorskip("trimesh")
+    scene_mod = pytest.importorskip("wrp_eval.ship.scene")
+    from wrp_eval.sim.flight import FlightSimulator
+    from wrp_eval.sim.simple_wind import ConstantWind as Wind
+    root = scene_mod.build_scene(trimesh.creation.box(extents=(140.0, 20.0, 25.0)))
+    with FlightSimulator(section, scene_root=root) as sim:
+        assert sim.scene.model.geom("ship_hull").id >= 0
+        res = sim.hover(Wind([5.0, 0.0, 0.0]), [0.0, 30.0, 20.0], 0.0, 5.0, batch=2)
+    assert not res.failed.any()
+    assert np.all(np.abs(res.offsets[:, 0, :3]) < 0.1)

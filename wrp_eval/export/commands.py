@@ -1,0 +1,51 @@
+"""``wrp-eval export DIR/path.json --format FORMAT --out FILE [--config CONFIG]``: flyable missions."""
+
+from __future__ import annotations
+
+import argparse
+from pathlib import Path as FsPath
+
+from wrp_eval.export.formats import FORMATS
+
+
+def _run_export(args: argparse.Namespace) -> int:
+    from wrp_eval.config import ExperimentConfig, load_experiment
+    from wrp_eval.export.formats import export_path
+    from wrp_eval.planning.path import Path
+    from wrp_eval.ship.proxy import build_proxy
+    from wrp_eval.ship.resolve import resolve_particulars
+
+    if args.config:
+        config_path = FsPath(args.config)
+        config, config_dir, source = load_experiment(config_path), config_path.parent, str(config_path)
+    else:
+        config, config_dir, source = ExperimentConfig(), FsPath("."), "embedded defaults"
+    path = Path.load(args.path)
+    # Only the particulars (position, heading, dimensions) and the proxy are needed: no mesh is built.
+    particulars, provenance = resolve_particulars(config.ship, config_dir, source)
+    unknown = [k for k in ("lat_deg", "lon_deg", "heading_deg") if provenance.get(k, "").startswith("default")]
+    proxy = build_proxy(particulars, config.ship.no_fly_margin_m)
+    written = export_path(path, particulars, proxy, args.format, args.out, config.export, str(args.path))
+    print(f"ship at {particulars.lat_deg:.6f}, {particulars.lon_deg:.6f}, heading {particulars.heading_deg:.1f} deg; "
+          f"altitudes relative to the take-off point ({written[0][1].home_alt_m:.2f} m above the sea)")
+    if unknown:
+        print(f"warning: ship {', '.join(unknown)} not given (ship.particulars or an AIS position report in "
+              f"{source}): the default 0 was used, so these waypoints are not where the ship is")
+    for file, mission in written:
+        print(f"sortie {mission.sortie}: {len(mission)} waypoints -> {file}")
+    return 0
+
+
+def register(subparsers) -> None:
+    parser = subparsers.add_parser(
+        "export", help="export a planned path as drone missions (QGC .plan / WPL, DJI WPML KMZ, Litchi CSV)",
+        description="Turn a path.json (ship frame) into geographic waypoint missions using the ship's position "
+                    "and heading from the config (AIS or ship.particulars). One file per sortie: FILE, or "
+                    "FILE_sortie<k>.ext when the path has several sorties. Waypoints below "
+                    "export.min_altitude_m or inside the no-fly zone are refused (exit 2).")
+    parser.add_argument("path", help="path.json written by `wrp-eval plan`")
+    parser.add_argument("--format", required=True, choices=sorted(FORMATS), help="mission file format")
+    parser.add_argument("--out", required=True, help="output file (sorties add _sortie<k> before the extension)")
+    parser.add_argument("--config", help="experiment YAML giving the ship and the export section "
+                                         "(default: the embedded defaults)")
+    parser.set_defaults(func=_run_export)

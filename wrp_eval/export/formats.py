@@ -1,0 +1,81 @@
+"""Format registry and the export entry point: validate, render every sortie in memory, then write.
+
+One file per sortie: ``FILE`` itself for a single-sortie path, else ``FILE`` with ``_sortie<k>`` before the
+extension (k = the path's own sortie number). Nothing is written unless every sortie renders; each file
+is written to a temporary name first and renamed into place, so an existing file is only ever replaced by
+a complete one.
+"""
+
+from __future__ import annotations
+
+import os
+from dataclasses import dataclass
+from pathlib import Path as FsPath
+from typing import Callable
+
+from wrp_eval.errors import InputError
+from wrp_eval.export.config import ExportSection
+from wrp_eval.export.dji import dji_kmz_bytes, read_dji_kmz
+from wrp_eval.export.litchi import litchi_csv_bytes, read_litchi_csv
+from wrp_eval.export.mission import GeoMission, ReadMission, build_missions
+from wrp_eval.export.qgc import qgc_plan_bytes, qgc_wpl_bytes, read_qgc_plan, read_qgc_wpl
+from wrp_eval.planning.path import Path
+from wrp_eval.ship.particulars import ShipParticulars
+from wrp_eval.ship.proxy import Proxy
+
+
+@dataclass(frozen=True)
+class MissionFormat:
+    """render(mission, firmware) -> file bytes; read(file) -> ReadMission; suffix: the usual extension."""
+
+    render: Callable[[GeoMission, str], bytes]
+    read: Callable[[str | FsPath], ReadMission]
+    suffix: str
+
+
+FORMATS: dict[str, MissionFormat] = {
+    "qgc-plan": MissionFormat(qgc_plan_bytes, read_qgc_plan, ".plan"),
+    "qgc-wpl": MissionFormat(qgc_wpl_bytes, read_qgc_wpl, ".waypoints"),
+    "dji-wpml": MissionFormat(dji_kmz_bytes, read_dji_kmz, ".kmz"),
+    "litchi-csv": MissionFormat(litchi_csv_bytes, read_litchi_csv, ".csv"),
+}
+
+
+def sortie_files(out: FsPath, sorties: list[int]) -> list[FsPath]:
+    """Output file of each sortie: ``out`` alone, or ``<stem>_sortie<k><suffix>`` when there are several."""
+    out = FsPath(out)
+    if len(sorties) == 1:
+        return [out]
+    return [out.with_name(f"{out.stem}_sortie{k}{out.suffix}") for k in sorties]
+
+
+def export_path(path: Path, particulars: ShipParticulars, proxy: Proxy, fmt: str, out: str | FsPath,
+                section: ExportSection = ExportSection(), source: str = "path") -> list[tuple[FsPath, GeoMission]]:
+    """Write ``path`` as ``fmt`` missions; returns (file, mission) per sortie. InputError for bad input."""
+    if fmt not in FORMATS:
+        raise InputError(fmt, f"unknown export format; choose one of {', '.join(FORMATS)}")
+    missions = build_missions(path, particulars, proxy, section, source)
+    files = sortie_files(FsPath(out), [m.sortie for m in missions])
+    blobs = [FORMATS[fmt].render(m, section.firmware) for m in missions]
+    write_all_atomic(list(zip(files, blobs)))
+    return list(zip(files, missions))
+
+
+def write_all_atomic(outputs: list[tuple[FsPath, bytes]]) -> None:
+    """Write every file to ``<name>.tmp`` first, then rename them all; on a failure remove the temporaries."""
+    tmps = []
+    try:
+        for file, data in outputs:
+            file.parent.mkdir(parents=True, exist_ok=True)
+            tmp = file.with_name(file.name + ".tmp")
+            tmps.append(tmp)
+            with open(tmp, "wb") as fh:
+                fh.write(data)
+                fh.flush()
+                os.fsync(fh.fileno())
+        for (file, _), tmp in zip(outputs, tmps):
+            tmp.replace(file)
+    except OSError as err:
+        for tmp in tmps:
+            tmp.unlink(missing_ok=True)
+        raise InputError(outputs[0][0] if outputs else "export", f"cannot write the mission file: {err}") from None

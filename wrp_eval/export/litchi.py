@@ -1,0 +1,68 @@
+"""Litchi Mission Hub CSV (metric variant): one row per waypoint.
+
+Columns: latitude, longitude, altitude(m), heading(deg), curvesize(m), rotationdir, gimbalmode,
+gimbalpitchangle, 15 x (actiontype_i, actionparam_i), altitudemode, speed(m/s), poi_latitude, poi_longitude,
+poi_altitude(m), poi_altitudemode, photo_timeinterval, photo_distinterval.
+Values used: altitude above the take-off point (altitudemode 0), heading in [0, 360) (effective with the
+mission's Heading Mode "Custom", a global setting the CSV cannot carry), curvesize 0 (stop at each
+waypoint), rotationdir 0, gimbalmode 2 (interpolate, so the pitch column is used), actions
+0 = "stay for" (ms, the dwell) then 1 = "take photo"; unused actions are -1; no POI; no interval photos (-1).
+"""
+
+from __future__ import annotations
+
+import csv
+import io
+from pathlib import Path as FsPath
+
+import numpy as np
+
+from wrp_eval.errors import InputError
+from wrp_eval.export.mission import GeoMission, ReadMission
+
+N_ACTIONS = 15
+ACTION_NONE, ACTION_STAY_MS, ACTION_PHOTO = -1, 0, 1
+GIMBAL_INTERPOLATE = 2
+HEADER = (["latitude", "longitude", "altitude(m)", "heading(deg)", "curvesize(m)", "rotationdir", "gimbalmode",
+           "gimbalpitchangle"]
+          + [f"action{kind}{i}" for i in range(1, N_ACTIONS + 1) for kind in ("type", "param")]
+          + ["altitudemode", "speed(m/s)", "poi_latitude", "poi_longitude", "poi_altitude(m)", "poi_altitudemode",
+             "photo_timeinterval", "photo_distinterval"])
+
+
+def litchi_csv_bytes(m: GeoMission, firmware: str = "px4") -> bytes:
+    """The sortie as a Litchi CSV."""
+    del firmware
+    out = io.StringIO()
+    writer = csv.writer(out, lineterminator="\n")
+    writer.writerow(HEADER)
+    for k in range(len(m)):
+        actions = [ACTION_STAY_MS, int(round(m.hold_s * 1000)), ACTION_PHOTO, 0]
+        actions += [ACTION_NONE, 0] * (N_ACTIONS - 2)
+        writer.writerow([f"{m.lat_deg[k]:.10f}", f"{m.lon_deg[k]:.10f}", f"{m.alt_rel_m[k]:.4f}",
+                         f"{m.heading_deg[k]:.4f}", 0, 0, GIMBAL_INTERPOLATE, f"{m.gimbal_pitch_deg[k]:.4f}"]
+                        + actions + [0, f"{m.speed_m_s:.2f}", 0, 0, 0, 0, -1, -1])
+    return out.getvalue().encode("ascii")
+
+
+def read_litchi_csv(file: str | FsPath) -> ReadMission:
+    """Parse a Litchi CSV (``csv.DictReader``)."""
+    lat, lon, alt, heading, pitch = [], [], [], [], []
+    photos = 0
+    try:
+        with open(file, newline="", encoding="ascii") as fh:
+            reader = csv.DictReader(fh)
+            missing = {"latitude", "longitude", "altitude(m)", "heading(deg)", "gimbalpitchangle"} - set(
+                reader.fieldnames or ())
+            if missing:
+                raise ValueError(f"missing columns {sorted(missing)}")
+            for row in reader:
+                lat.append(float(row["latitude"])); lon.append(float(row["longitude"]))
+                alt.append(float(row["altitude(m)"])); heading.append(float(row["heading(deg)"]))
+                pitch.append(float(row["gimbalpitchangle"]))
+                photos += sum(int(row.get(f"actiontype{i}", ACTION_NONE)) == ACTION_PHOTO
+                              for i in range(1, N_ACTIONS + 1))
+    except (OSError, ValueError, UnicodeDecodeError) as err:
+        raise InputError(file, f"not a readable Litchi CSV: {err}") from None
+    arr = lambda v: np.asarray(v, dtype=float)  # noqa: E731
+    return ReadMission(arr(lat), arr(lon), arr(alt), arr(heading), arr(pitch), photos)

@@ -1,0 +1,38 @@
+"""The ``sim:`` section of the experiment config (all values SI; angles in degrees at this edge)."""
+
+from __future__ import annotations
+
+from typing import Literal
+
+from pydantic import Field
+
+from wrp_eval.validation import StrictModel
+
+
+class SimSection(StrictModel):
+    """Simulator settings. Defaults: 5 ms physics step, controller every 4 steps (50 Hz)."""
+
+    timestep_s: float = Field(0.005, gt=0.0, le=0.02, description="MuJoCo physics step")
+    chunk_steps: int = Field(4, ge=1, le=50,
+                             description="physics steps per mujoco.rollout call; control, wind and drag "
+                                         "are held over a chunk (control rate = 1/(chunk_steps*timestep_s))")
+    drones_per_model: int = Field(8, ge=1, le=64,
+                                  description="quadrotors per MuJoCo model; a batch of flights is split "
+                                              "into ceil(batch/drones_per_model) rollouts")
+    threads: int = Field(0, ge=0, description="mujoco.rollout threads (0: all CPUs)")
+    gains: Literal["default", "soft", "stiff"] = Field("default", description="controller gain preset")
+    drag_coefficient: float = Field(1.0, gt=0.0, le=3.0, description="C_d of the windward area")
+    air_density_kg_m3: float = Field(1.225, gt=0.0, le=2.0, description="rho (ISA sea level)")
+    acceleration_m_s2: float = Field(2.5, gt=0.0, le=10.0, description="reference accel/decel along a segment")
+    settle_position_m: float = Field(0.10, gt=0.0, description="settled when within this of the viewpoint")
+    settle_speed_m_s: float = Field(0.15, gt=0.0, description="... slower than this")
+    settle_yaw_deg: float = Field(2.0, gt=0.0, description="... and yaw within this")
+    settle_timeout_s: float = Field(8.0, gt=0.0,
+                                    description="take the photo anyway after this long trying to settle "
+                                                "(what a waypoint mission does in gusts)")
+    dwell_s: float | None = Field(None, ge=0.0, description="hover before each photo; None: the path's dwell")
+    fail_distance_m: float = Field(5.0, gt=0.0, description="lost position: farther than this from the "
+                                                               "reference ...")
+    fail_time_s: float = Field(3.0, gt=0.0, description="... for longer than this -> failed flight")
+    record_interval_s: float = Field(0.2, gt=0.0, description="trajectory down-sampling interval")
+    max_flight_time_s: float = Field(3600.0, gt=0.0, description="abort a flight after this (failed)")
