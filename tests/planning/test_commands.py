@@ -1,0 +1,78 @@
+import json
+
+import numpy as np
+import pytest
+
+from wrp_eval.cli import main
+from wrp_eval.errors import InputError
+from wrp_eval.planning.path import Path
+from wrp_eval.validation import parse_model
+from wrp_eval.config import ExperimentConfig
+from wrp_eval.planning.config import PlanningSection
+
+
+def test_path_json_round_trip(plans, tmp_path):
+    path = plans[("stylized", "ours")].path
+    path.save(tmp_path / "path.json")
+    back = Path.load(tmp_path / "path.json")
+    np.testing.assert_allclose(back.positions, path.positions)
+    np.testing.assert_allclose(back.yaw, path.yaw, atol=1e-12)
+    np.testing.assert_allclose(back.pitch, path.pitch, atol=1e-12)
+    for field in ("face_id", "kind", "sortie"):
+        np.testing.assert_array_equal(getattr(back, field), getattr(path, field))
+    assert back.camera == path.camera and back.dwell_s == path.dwell_s and back.method == "ours"
+
+
+@pytest.mark.parametrize("text", ["{not json", '{"format_version": 1, "viewpoints": []}',
+                                  '{"format_version": 1, "viewpoints": [{"x_m": 1}]}'])
+def test_bad_path_file_is_an_input_error(tmp_path, text):
+    f = tmp_path / "path.json"
+    f.write_text(text)
+    with pytest.raises(InputError) as err:
+        Path.load(f)
+    assert str(f) in str(err.value) and "\n" not in str(err.value)
+
+
+def test_planning_section_defaults_and_refusals():
+    cfg = parse_model(ExperimentConfig, {}, "x.yaml")
+    assert cfg.planning.method == "ours"
+    # 7.5 mm/px with f = 44.7846 mm, 36 mm sensor, 6000 px: D = 0.0075 * 44.7846 * 6000 / 36
+    assert cfg.planning.planned_distance_m() == pytest.approx(0.0075 * 44.7846 * 6000 / 36)
+    assert PlanningSection(distance_m=40.0).planned_distance_m() == 40.0
+    for bad in ({"planning": {"overlap_min": 0.9}}, {"planning": {"method": "magic"}},
+                {"planning": {"wat": 1}}, {"planning": {"gsd_mm": -1}}):
+        with pytest.raises(InputError) as err:
+            parse_model(ExperimentConfig, bad, "x.yaml")
+        assert "x.yaml" in str(err.value)
+
+
+def test_cli_plan_writes_path_and_metrics(tmp_path, capsys):
+    cfg = tmp_path / "c.yaml"
+    cfg.write_text("run: {seed: 3}\nship: {type: stylized}\n"
+                   "planning: {tour_solver: ortools, tour_time_limit_s: 0.05}\n")
+    out = tmp_path / "out"
+    assert main(["plan", str(cfg), "--out", str(out), "--method", "zhou2020"]) == 0
+    metrics = json.loads((out / "plan_metrics.json").read_text())
+    for key in ("n_samples", "n_candidates", "n_views", "per_face", "H", "R", "length_m", "flight_time_s",
+                "sorties", "n_transition_views"):
+        assert key in metrics
+    for key in ("sampling_s", "visibility_s", "min_s", "max_s", "tsp_s", "transitions_s", "total_s"):
+        assert key in metrics["timings"]
+    path = Path.load(out / "path.json")
+    assert path.method == "zhou2020" and len(path) == metrics["n_path_views"]
+    assert not list(out.glob("*.tmp"))
+
+
+def test_cli_bad_config_exits_2(tmp_path, capsys):
+    cfg = tmp_path / "c.yaml"
+    cfg.write_text("planning: {threshold: -1}\n")
+    assert main(["plan", str(cfg), "--out", str(tmp_path / "o")]) == 2
+    assert "planning.threshold" in capsys.readouterr().err
+    assert not (tmp_path / "o").exists()
+
+
+def test_rerun_recording_is_written(plans, proxies, tmp_path):
+    from wrp_eval.planning.rerun_log import save_plan_recording
+    out = save_plan_recording(plans[("stylized", "ours")], proxies["stylized"], tmp_path / "plan.rrd")
+    assert out.exists() and out.stat().st_size > 10_000
+    assert not list(tmp_path.glob("*.tmp"))

@@ -1,0 +1,66 @@
+import numpy as np
+import pytest
+
+from wrp_eval.planning.reconstructability import (SlotTable, pair_reconstructability_points,
+                                                  set_reconstructability)
+
+
+def _q_by_hand(alpha, d, d_max, theta_m):
+    w1 = 1 / (1 + np.exp(-32 * (alpha - np.pi / 16)))
+    w2 = 1 - min(d / d_max, 1)
+    w3 = 1 - 1 / (1 + np.exp(-8 * (alpha - np.pi / 4)))
+    return w1 * w2 * w3 * np.cos(theta_m)
+
+
+@pytest.mark.parametrize("alpha", [np.pi / 16, np.pi / 8, np.pi / 4, np.pi / 2])
+def test_symmetric_pair_matches_the_formula(alpha):
+    d, d_max = 30.0, 60.0
+    s, n = np.zeros((1, 3)), np.array([[0.0, 0.0, 1.0]])
+    va = d * np.array([[np.sin(alpha / 2), 0, np.cos(alpha / 2)]])
+    vb = d * np.array([[-np.sin(alpha / 2), 0, np.cos(alpha / 2)]])
+    q = pair_reconstructability_points(s, n, va, vb, d_max)[0]
+    assert q == pytest.approx(_q_by_hand(alpha, d, d_max, alpha / 2))
+
+
+def test_at_alpha1_w1_is_one_half():
+    alpha, d, d_max = np.pi / 16, 10.0, 40.0
+    w3 = 1 - 1 / (1 + np.exp(-8 * (np.pi / 16 - np.pi / 4)))
+    s, n = np.zeros((1, 3)), np.array([[0.0, 0.0, 1.0]])
+    va = d * np.array([[np.sin(alpha / 2), 0, np.cos(alpha / 2)]])
+    vb = d * np.array([[-np.sin(alpha / 2), 0, np.cos(alpha / 2)]])
+    q = pair_reconstructability_points(s, n, va, vb, d_max)[0]
+    assert q == pytest.approx(0.5 * 0.75 * w3 * np.cos(alpha / 2))
+
+
+def test_larger_distance_and_angle_are_used_and_far_views_give_nothing():
+    s, n = np.zeros((1, 3)), np.array([[0.0, 0.0, 1.0]])
+    va = np.array([[0.0, 0.0, 10.0]])                        # theta 0, d 10
+    vb = 20.0 * np.array([[np.sin(0.5), 0, np.cos(0.5)]])    # theta 0.5 rad, d 20
+    q = pair_reconstructability_points(s, n, va, vb, 40.0)[0]
+    assert q == pytest.approx(_q_by_hand(0.5, 20.0, 40.0, 0.5))
+    assert pair_reconstructability_points(s, n, va, vb * 3, 40.0)[0] == 0.0    # d_m = 60 >= d_max
+
+
+def test_set_reconstructability_sums_the_pairs():
+    s, n = np.zeros(3), np.array([0.0, 0.0, 1.0])
+    views = np.array([[10, 0, 20.0], [-10, 0, 20.0], [0, 12, 18.0]])
+    pairs = [(0, 1), (0, 2), (1, 2)]
+    expected = sum(pair_reconstructability_points(s[None], n[None], views[[i]], views[[j]], 50.0)[0]
+                   for i, j in pairs)
+    assert set_reconstructability(s, n, views, 50.0) == pytest.approx(expected)
+
+
+def test_slot_table_matches_the_reference_and_cache():
+    rng = np.random.default_rng(3)
+    points = np.column_stack([rng.uniform(-5, 5, (6, 2)), np.zeros(6)])
+    normals = np.tile([0.0, 0.0, 1.0], (6, 1))
+    positions = np.column_stack([rng.uniform(-30, 30, (9, 2)), rng.uniform(10, 40, 9)])
+    visible = rng.random((9, 6)) < 0.6
+    active = rng.random(9) < 0.7
+    plain = SlotTable.build(visible, points, normals, positions, 80.0)
+    cached = SlotTable.build(visible, points, normals, positions, 80.0, cache=True)
+    for j in range(6):
+        seen = np.flatnonzero(visible[:, j] & active)
+        ref = set_reconstructability(points[j], normals[j], positions[seen], 80.0) if len(seen) > 1 else 0.0
+        assert plain.h(active)[j] == pytest.approx(ref)
+        assert cached.h(active)[j] == pytest.approx(ref, rel=1e-5)

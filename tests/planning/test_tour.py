@@ -1,0 +1,78 @@
+import numpy as np
+import pytest
+
+from wrp_eval.planning.tour import (detour_waypoints, flight_costs, local_search, open_at_longest_edge,
+                                    segments_hit_box, solve_genetic, solve_multistart, solve_ortools,
+                                    tour_length)
+
+BOX = np.array([[-10.0, -5.0, 0.0], [10.0, 5.0, 20.0]])
+
+
+def test_segment_box_hits():
+    a = np.array([[-20.0, 0, 10], [-20.0, 0, 30], [-20.0, 8, 10], [0.0, -20, 10], [15.0, 0, 10]])
+    b = np.array([[20.0, 0, 10], [20.0, 0, 30], [20.0, 8, 10], [0.0, 20, 10], [30.0, 0, 10]])
+    assert segments_hit_box(a, b, BOX).tolist() == [True, False, False, True, False]
+
+
+def test_blocked_pairs_cost_the_over_the_top_detour():
+    pos = np.array([[0.0, -20, 10], [0.0, 20, 10], [30.0, 20, 10]])
+    cost, blocked = flight_costs(pos, BOX)
+    assert blocked[0, 1] and blocked[1, 0] and not blocked[1, 2]
+    # climb 10 -> 22 (box top 20 + 2 m), 40 m level, descend 12 m
+    assert cost[0, 1] == pytest.approx(12 + 40 + 12)
+    assert cost[1, 2] == pytest.approx(30.0)
+    wp = detour_waypoints(pos[0], pos[1], BOX)
+    np.testing.assert_allclose(wp, [[0, -20, 22], [0, 20, 22]])
+    legs = np.array([pos[0], wp[0], wp[1]]), np.array([wp[0], wp[1], pos[1]])
+    assert not segments_hit_box(*legs, BOX).any()
+
+
+def _circle(n, seed):
+    ang = np.random.default_rng(seed).permutation(np.linspace(0, 2 * np.pi, n, endpoint=False))
+    pos = np.column_stack([50 * np.cos(ang), 50 * np.sin(ang), np.zeros(n)])
+    cost = np.linalg.norm(pos[:, None] - pos[None], axis=-1)
+    optimum = n * 2 * 50 * np.sin(np.pi / n)     # the regular polygon's perimeter
+    return cost, optimum
+
+
+@pytest.mark.parametrize("time_limit_s", [0.0, 0.2])   # deterministic descent, guided local search
+def test_ortools_finds_the_polygon(time_limit_s):
+    cost, optimum = _circle(25, 0)
+    order = solve_ortools(cost, time_limit_s)
+    assert sorted(order.tolist()) == list(range(25))
+    assert tour_length(order, cost) == pytest.approx(optimum, rel=1e-6)
+
+
+def test_multistart_finds_the_polygon_and_is_seeded():
+    cost, optimum = _circle(30, 2)
+    a = solve_multistart(cost, np.random.default_rng(9))
+    b = solve_multistart(cost, np.random.default_rng(9))
+    np.testing.assert_array_equal(a, b)
+    assert sorted(a.tolist()) == list(range(30)) and a[0] == 0
+    assert tour_length(a, cost) == pytest.approx(optimum, rel=1e-9)
+
+
+def test_local_search_untangles_a_crossing_and_moves_a_stray_point():
+    # square corners visited crosswise (0, 2, 1, 3): 2-opt removes the crossing
+    sq = np.array([[0, 0], [10, 0], [10, 10], [0, 10]], dtype=float)
+    cost = np.linalg.norm(sq[:, None] - sq[None], axis=-1)
+    assert tour_length(local_search(np.array([0, 2, 1, 3]), cost), cost) == pytest.approx(40.0)
+    # points on a line visited 0 3 1 2 4 5: Or-opt / 2-opt bring the tour to 2 x the span
+    line = np.column_stack([np.arange(6.0), np.zeros(6)])
+    cost = np.linalg.norm(line[:, None] - line[None], axis=-1)
+    assert tour_length(local_search(np.array([0, 3, 1, 2, 4, 5]), cost), cost) == pytest.approx(10.0)
+
+
+def test_genetic_algorithm_is_seeded_and_finds_a_small_polygon():
+    cost, optimum = _circle(10, 1)
+    a = solve_genetic(cost, np.random.default_rng(5), population=60, generations=200)
+    b = solve_genetic(cost, np.random.default_rng(5), population=60, generations=200)
+    np.testing.assert_array_equal(a, b)
+    assert sorted(a.tolist()) == list(range(10))
+    assert tour_length(a, cost) == pytest.approx(optimum, rel=1e-6)
+
+
+def test_open_at_longest_edge():
+    cost = np.array([[0, 1, 9, 1], [1, 0, 1, 9], [9, 1, 0, 5], [1, 9, 5, 0]], dtype=float)
+    order = open_at_longest_edge(np.array([0, 1, 2, 3]), cost)   # edges 1, 1, 5, 1: cut 2 -> 3
+    assert order.tolist() == [3, 0, 1, 2]

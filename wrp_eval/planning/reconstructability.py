@@ -1,0 +1,158 @@
+"""Reconstructability of samples from view pairs (Smith et al. 2018, "Aerial path planning for urban scene
+reconstruction", Sec. 4; set form as in Zhou et al. 2020; DESIGN.md).
+
+q(s, v1, v2) = w1(alpha) w2(d_m) w3(alpha) cos(theta_m), with alpha the angle between the two viewing rays
+at s, d_m the larger view distance, theta_m the larger angle between a ray and the normal n, and
+w1 = 1/(1+exp(-k1 (alpha - alpha1))), w2 = 1 - min(d_m/d_max, 1), w3 = 1 - 1/(1+exp(-k3 (alpha - alpha3))).
+h(s, V) = sum of q over all pairs of views in V that see s.
+
+:class:`SlotTable` lays the visibility out per sample ("slots" = the views that see it, padded to the
+largest count), so that q of one view against every other view of a sample is one vectorised row and
+removing / adding / swapping a view updates h incrementally.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+K1, ALPHA1 = 32.0, np.pi / 16.0   # Smith et al. 2018
+K3, ALPHA3 = 8.0, np.pi / 4.0
+
+
+def pair_reconstructability(cos_alpha: np.ndarray, d_max_pair: np.ndarray, cos_theta_max: np.ndarray,
+                            d_max: float) -> np.ndarray:
+    """q from the cosine of the triangulation angle, the larger distance (m) and the cosine of the larger
+    incidence angle (all broadcastable arrays)."""
+    alpha = np.arccos(np.clip(cos_alpha, -1.0, 1.0))
+    w1 = 1.0 / (1.0 + np.exp(-K1 * (alpha - ALPHA1)))
+    w2 = 1.0 - np.minimum(d_max_pair / d_max, 1.0)
+    w3 = 1.0 - 1.0 / (1.0 + np.exp(-K3 * (alpha - ALPHA3)))
+    return w1 * w2 * w3 * cos_theta_max
+
+
+def pair_reconstructability_points(point: np.ndarray, normal: np.ndarray, view_a: np.ndarray,
+                                   view_b: np.ndarray, d_max: float) -> np.ndarray:
+    """q(s, v1, v2) straight from positions: point, normal (n, 3) and two view positions (n, 3) each."""
+    ra, rb = view_a - point, view_b - point
+    da, db = np.linalg.norm(ra, axis=-1), np.linalg.norm(rb, axis=-1)
+    cos_alpha = np.einsum("...i,...i->...", ra, rb) / (da * db)
+    cos_ta = np.einsum("...i,...i->...", ra, normal) / da
+    cos_tb = np.einsum("...i,...i->...", rb, normal) / db
+    return pair_reconstructability(cos_alpha, np.maximum(da, db), np.minimum(cos_ta, cos_tb), d_max)
+
+
+def set_reconstructability(point: np.ndarray, normal: np.ndarray, views: np.ndarray, d_max: float) -> float:
+    """h(s, V) for one sample and the views (k, 3) that see it (reference form, for tests and checks)."""
+    ia, ib = np.triu_indices(len(views), k=1)
+    q = pair_reconstructability_points(point[None], normal[None], views[ia], views[ib], d_max)
+    return float(q.sum())
+
+
+@dataclass
+class SlotTable:
+    """Per-sample view slots of a visibility matrix.
+
+    slot_view (n_s, M) int view index or -1; ray (n_s, M, 3) unit sample->view; dist (n_s, M) m;
+    cos_theta (n_s, M); view_ptr (n_v + 1,), view_sample, view_slot (nnz,): CSR from a view to its
+    (sample, slot) pairs; d_max m. ``cache`` (n_s, M, M) float32 holds all q when built with cache=True.
+    """
+
+    slot_view: np.ndarray
+    ray: np.ndarray
+    dist: np.ndarray
+    cos_theta: np.ndarray
+    view_ptr: np.ndarray
+    view_sample: np.ndarray
+    view_slot: np.ndarray
+    d_max: float
+    cache: np.ndarray | None = None
+
+    @classmethod
+    def build(cls, visible: np.ndarray, points: np.ndarray, normals: np.ndarray, positions: np.ndarray,
+              d_max: float, cache: bool = False) -> "SlotTable":
+        """From a boolean visibility (n_v, n_s) and the geometry."""
+        n_v, n_s = visible.shape
+        si, vi = np.nonzero(visible.T)                     # sorted by sample, then view
+        counts = np.bincount(si, minlength=n_s)
+        width = max(int(counts.max(initial=0)), 1)
+        starts = np.concatenate([[0], np.cumsum(counts)[:-1]])
+        slot = np.arange(si.size) - starts[si]
+        slot_view = np.full((n_s, width), -1, dtype=np.int64)
+        slot_view[si, slot] = vi
+        rel = positions[vi] - points[si]
+        d = np.linalg.norm(rel, axis=1)
+        ray = np.zeros((n_s, width, 3))
+        dist = np.full((n_s, width), np.inf)
+        cos_theta = np.zeros((n_s, width))
+        ray[si, slot] = rel / d[:, None]
+        dist[si, slot] = d
+        cos_theta[si, slot] = np.einsum("ni,ni->n", ray[si, slot], normals[si])
+        order = np.argsort(vi, kind="stable")
+        view_ptr = np.concatenate([[0], np.cumsum(np.bincount(vi, minlength=n_v))])
+        table = cls(slot_view, ray, dist, cos_theta, view_ptr, si[order], slot[order], float(d_max))
+        if cache:
+            s_all = np.repeat(np.arange(n_s), width)
+            table.cache = table.q_rows(s_all, np.tile(np.arange(width), n_s)).reshape(n_s, width, width)
+            table.cache = table.cache.astype(np.float32)
+        return table
+
+    @property
+    def n_samples(self) -> int:
+        return int(self.slot_view.shape[0])
+
+    def entries(self, view: int) -> tuple[np.ndarray, np.ndarray]:
+        """(samples, slots) where ``view`` sits."""
+        a, b = self.view_ptr[view], self.view_ptr[view + 1]
+        return self.view_sample[a:b], self.view_slot[a:b]
+
+    def q_rows(self, samples: np.ndarray, slots: np.ndarray) -> np.ndarray:
+        """q (T, M) of the view in (samples[t], slots[t]) paired with every slot of that sample (0 for pads
+        and for itself)."""
+        if self.cache is not None:
+            return self.cache[samples, slots].astype(float)
+        ray_a = self.ray[samples, slots]                                   # (T, 3)
+        cos_alpha = np.einsum("ti,tmi->tm", ray_a, self.ray[samples])
+        d_pair = np.maximum(self.dist[samples, slots][:, None], self.dist[samples])
+        cos_t = np.minimum(self.cos_theta[samples, slots][:, None], self.cos_theta[samples])
+        q = pair_reconstructability(cos_alpha, np.where(np.isfinite(d_pair), d_pair, self.d_max), cos_t,
+                                    self.d_max)
+        q[self.slot_view[samples] < 0] = 0.0
+        q[np.arange(len(samples)), slots] = 0.0
+        return q
+
+    def q_sums(self, samples: np.ndarray, slots: np.ndarray, mask: np.ndarray) -> np.ndarray:
+        """sum over b of q(s_t, slot_t, b) * mask[t, b] (T,): the h contribution of one view against the
+        masked (e.g. active) views of its sample. Only masked slots are evaluated: rows are compacted to
+        the largest masked count, far below M when few views are active."""
+        if samples.size == 0:
+            return np.zeros(0)
+        if self.cache is not None:
+            return (self.cache[samples, slots] * mask).sum(axis=1)
+        width = int(mask.sum(axis=1).max())
+        if width == 0:
+            return np.zeros(len(samples))
+        cols = np.argsort(~mask, axis=1, kind="stable")[:, :width]        # masked slots first
+        valid = np.take_along_axis(mask, cols, axis=1)
+        valid &= cols != slots[:, None]
+        s2 = np.broadcast_to(samples[:, None], cols.shape)
+        cos_alpha = np.einsum("ti,tki->tk", self.ray[samples, slots], self.ray[s2, cols])
+        d_pair = np.maximum(self.dist[samples, slots][:, None], self.dist[s2, cols])
+        cos_t = np.minimum(self.cos_theta[samples, slots][:, None], self.cos_theta[s2, cols])
+        d_pair = np.where(valid, d_pair, self.d_max)
+        q = pair_reconstructability(cos_alpha, d_pair, cos_t, self.d_max)
+        return np.where(valid, q, 0.0).sum(axis=1)
+
+    def active_slots(self, active_views: np.ndarray) -> np.ndarray:
+        """Boolean (n_s, M): slot holds a view with ``active_views[view]`` True."""
+        return (self.slot_view >= 0) & active_views[np.maximum(self.slot_view, 0)]
+
+    def h(self, active_views: np.ndarray) -> np.ndarray:
+        """h(s, U) (n_s,) for the views flagged in ``active_views`` (n_v,) bool."""
+        act = self.active_slots(active_views)
+        s, k = np.nonzero(act)
+        if s.size == 0:
+            return np.zeros(self.n_samples)
+        contrib = self.q_sums(s, k, act[s])
+        return 0.5 * np.bincount(s, weights=contrib, minlength=self.n_samples)

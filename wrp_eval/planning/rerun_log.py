@@ -1,0 +1,54 @@
+"""Log a plan to a rerun recording (.rrd): proxy, samples, candidate views, chosen views as camera frusta
+(``rr.Transform3D`` + ``rr.Pinhole``, OpenCV camera axes RDF), transition views and the tour."""
+
+from __future__ import annotations
+
+import os
+from pathlib import Path as FsPath
+
+import rerun as rr
+
+from wrp_eval.camera import camera_rotations
+from wrp_eval.planning.path import KIND_TRANSITION
+from wrp_eval.planning.planner import PlanResult
+from wrp_eval.ship.proxy import Proxy
+
+_FRUSTUM_DEPTH_M = 4.0  # drawn image-plane distance
+
+
+def save_plan_recording(result: PlanResult, proxy: Proxy, file: str | FsPath,
+                        application_id: str = "wrp-eval") -> FsPath:
+    """Write ``file`` atomically with entities plan/proxy, plan/no_fly, plan/samples, plan/candidates,
+    plan/views/<i> (frusta), plan/tour."""
+    file = FsPath(file)
+    file.parent.mkdir(parents=True, exist_ok=True)
+    tmp = file.with_name(f".{file.name}.{os.getpid()}.tmp")
+    rec = rr.RecordingStream(application_id)
+    rec.save(tmp)
+    rec.log("plan", rr.ViewCoordinates.RIGHT_HAND_Z_UP, static=True)
+    lo, hi = proxy.bounds
+    rec.log("plan/proxy", rr.Boxes3D(mins=[lo], sizes=[hi - lo], colors=[[40, 200, 80]]), static=True)
+    nlo, nhi = proxy.no_fly_bounds()
+    rec.log("plan/no_fly", rr.Boxes3D(mins=[nlo], sizes=[nhi - nlo], colors=[[220, 60, 60]]), static=True)
+    if result.samples is not None:
+        rec.log("plan/samples", rr.Points3D(result.samples.points, radii=0.3,
+                                            class_ids=result.samples.face), static=True)
+    if result.candidates is not None:
+        rec.log("plan/candidates", rr.Points3D(result.candidates.positions, radii=0.2,
+                                               colors=[[150, 150, 150]]), static=True)
+    path = result.path
+    cam = path.camera
+    rot = camera_rotations(path.yaw, path.pitch)
+    for i in range(len(path)):  # one entity per chosen view: rerun draws a frustum per Pinhole entity
+        colour = [255, 160, 0] if path.kind[i] == KIND_TRANSITION else [30, 120, 255]
+        rec.log(f"plan/views/{i:04d}", rr.Transform3D(translation=path.positions[i], mat3x3=rot[i]), static=True)
+        rec.log(f"plan/views/{i:04d}", rr.Pinhole(focal_length=cam.focal_px,
+                                                  width=cam.image_width_px, height=cam.image_height_px,
+                                                  camera_xyz=rr.ViewCoordinates.RDF,
+                                                  image_plane_distance=_FRUSTUM_DEPTH_M, color=colour),
+                static=True)
+    rec.log("plan/tour", rr.LineStrips3D([path.positions], colors=[[255, 255, 255]]), static=True)
+    rec.flush()
+    rec.disconnect()
+    tmp.replace(file)
+    return file

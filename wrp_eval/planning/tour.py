@@ -1,0 +1,249 @@
+"""The closed tour through the views (paper Sec. 3.3: a TSP; the paper uses a genetic algorithm).
+
+Flight cost between two views is the Euclidean distance when the straight segment stays outside the
+no-fly box; otherwise the "over the top" detour: climb vertically to ``clearance`` above the box, fly
+level, descend (an upper bound on the shortest way round, always flyable). ``detour_waypoints`` gives the
+two corner points of such a detour so that the path can include them.
+
+Solvers: ``multistart`` (default; deterministic for a seeded generator): the OR-Tools greedy-descent tour
+and random tours, each taken to a 2-opt / Or-opt local optimum (moves evaluated vectorised), then iterated
+local search from the best; ``ortools``: OR-Tools routing with guided local search under a time limit;
+``ga``: a seeded genetic algorithm in the paper's spirit (order crossover + inversion mutation, elitism,
+tournament selection).
+"""
+
+from __future__ import annotations
+
+import numpy as np
+from ortools.constraint_solver import pywrapcp, routing_enums_pb2
+
+_COST_SCALE = 100.0  # OR-Tools works in integers: centimetres
+_CLEARANCE_M = 2.0
+
+
+def segments_hit_box(a: np.ndarray, b: np.ndarray, box: np.ndarray) -> np.ndarray:
+    """Boolean (...): segment a->b (..., 3) passes through the open box (2, 3) (slab test, vectorised)."""
+    d = b - a
+    with np.errstate(divide="ignore", invalid="ignore"):
+        t1 = (box[0] - a) / d
+        t2 = (box[1] - a) / d
+    lo = np.where(d != 0, np.minimum(t1, t2), np.where((a > box[0]) & (a < box[1]), -np.inf, np.inf))
+    hi = np.where(d != 0, np.maximum(t1, t2), np.where((a > box[0]) & (a < box[1]), np.inf, -np.inf))
+    t_in = np.maximum(lo.max(axis=-1), 0.0)
+    t_out = np.minimum(hi.min(axis=-1), 1.0)
+    return t_out - t_in > 1e-9
+
+
+def detour_height(box: np.ndarray) -> float:
+    return float(box[1, 2] + _CLEARANCE_M)
+
+
+def flight_costs(positions: np.ndarray, box: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """(cost (n, n) m, blocked (n, n) bool): Euclidean, or the over-the-top detour where blocked."""
+    a = positions[:, None, :]
+    b = positions[None, :, :]
+    euclid = np.linalg.norm(a - b, axis=-1)
+    blocked = segments_hit_box(np.broadcast_to(a, euclid.shape + (3,)), np.broadcast_to(b, euclid.shape + (3,)),
+                               box)
+    z_top = np.maximum(detour_height(box), np.maximum(a[..., 2], b[..., 2]))
+    level = np.linalg.norm(a[..., :2] - b[..., :2], axis=-1)
+    detour = (z_top - a[..., 2]) + level + (z_top - b[..., 2])
+    return np.where(blocked, detour, euclid), blocked
+
+
+def detour_waypoints(a: np.ndarray, b: np.ndarray, box: np.ndarray) -> np.ndarray:
+    """The two corners (2, 3) of the over-the-top detour from a to b."""
+    z = max(detour_height(box), a[2], b[2])
+    return np.array([[a[0], a[1], z], [b[0], b[1], z]])
+
+
+def tour_length(order: np.ndarray, cost: np.ndarray) -> float:
+    """Closed-tour cost of ``order`` (n,)."""
+    return float(cost[order, np.roll(order, -1)].sum())
+
+
+def _ortools_route(icost: list, strategy: str, time_limit_s: float) -> tuple[int, np.ndarray]:
+    """One OR-Tools routing solve: (integer cost, order). time_limit_s <= 0: greedy descent to a local
+    optimum (deterministic); > 0: guided local search until the time limit."""
+    n = len(icost)
+    manager = pywrapcp.RoutingIndexManager(n, 1, 0)
+    routing = pywrapcp.RoutingModel(manager)
+    index_to_node = manager.IndexToNode
+
+    def arc(i: int, j: int) -> int:
+        return icost[index_to_node(i)][index_to_node(j)]
+
+    routing.SetArcCostEvaluatorOfAllVehicles(routing.RegisterTransitCallback(arc))
+    params = pywrapcp.DefaultRoutingSearchParameters()
+    params.first_solution_strategy = getattr(routing_enums_pb2.FirstSolutionStrategy, strategy)
+    metaheuristics = routing_enums_pb2.LocalSearchMetaheuristic
+    if time_limit_s > 0:
+        params.local_search_metaheuristic = metaheuristics.GUIDED_LOCAL_SEARCH
+        params.time_limit.FromMilliseconds(max(1, int(round(time_limit_s * 1000))))
+    else:
+        params.local_search_metaheuristic = metaheuristics.GREEDY_DESCENT
+    solution = routing.SolveWithParameters(params)
+    if solution is None:  # cannot happen for a complete graph; keep the identity tour then
+        return 2 ** 62, np.arange(n)
+    order, index = [], routing.Start(0)
+    while not routing.IsEnd(index):
+        order.append(manager.IndexToNode(index))
+        index = solution.Value(routing.NextVar(index))
+    return int(solution.ObjectiveValue()), np.array(order, dtype=int)
+
+
+def _two_opt_move(order: np.ndarray, cost: np.ndarray) -> np.ndarray | None:
+    """The best improving 2-opt move of a closed tour (symmetric cost), all pairs evaluated at once."""
+    n = len(order)
+    a, b = order, np.roll(order, -1)
+    edge = cost[a, b]
+    delta = cost[a[:, None], a[None, :]] + cost[b[:, None], b[None, :]] - edge[:, None] - edge[None, :]
+    i, j = np.triu_indices(n, k=2)
+    keep = ~((i == 0) & (j == n - 1))
+    i, j = i[keep], j[keep]
+    k = int(np.argmin(delta[i, j]))
+    if delta[i[k], j[k]] >= -1e-9:
+        return None
+    new = order.copy()
+    new[i[k] + 1:j[k] + 1] = order[i[k] + 1:j[k] + 1][::-1]
+    return new
+
+
+def _or_opt_move(order: np.ndarray, cost: np.ndarray, max_len: int = 3) -> np.ndarray | None:
+    """The best improving Or-opt move (a run of 1..max_len views moved elsewhere, either way round)."""
+    n = len(order)
+    best, best_move = -1e-9, None
+    pos = np.arange(n)
+    u, v = order, np.roll(order, -1)                          # insertion edges (u_j, v_j)
+    for length in range(1, min(max_len, n - 3) + 1):
+        first, last = order, np.roll(order, -(length - 1))   # run i .. i+length-1
+        prev, nxt = np.roll(order, 1), np.roll(order, -length)
+        gain = cost[prev, first] + cost[last, nxt] - cost[prev, nxt]              # (n,) per start i
+        fwd = cost[u[None, :], first[:, None]] + cost[last[:, None], v[None, :]] - cost[u, v][None, :]
+        rev = cost[u[None, :], last[:, None]] + cost[first[:, None], v[None, :]] - cost[u, v][None, :]
+        # edge j must lie outside the run and not be the edge just before it
+        offset = (pos[None, :] - pos[:, None]) % n
+        valid = (offset >= length) & (offset != n - 1)
+        for delta, reverse in ((fwd, False), (rev, True)):
+            d = np.where(valid, delta - gain[:, None], np.inf)
+            k = int(np.argmin(d))
+            if d.flat[k] < best:
+                best, best_move = d.flat[k], (k // n, k % n, length, reverse)
+    if best_move is None:
+        return None
+    i, j, length, reverse = best_move
+    run_idx = (i + np.arange(length)) % n
+    run = order[run_idx][::-1] if reverse else order[run_idx]
+    rest = np.delete(order, run_idx)
+    after = int(np.flatnonzero(rest == order[j])[0])
+    return np.concatenate([rest[:after + 1], run, rest[after + 1:]])
+
+
+def local_search(order: np.ndarray, cost: np.ndarray) -> np.ndarray:
+    """2-opt and Or-opt best-improvement descent to a local optimum (vectorised move evaluation)."""
+    while True:
+        new = _two_opt_move(order, cost)
+        if new is None:
+            new = _or_opt_move(order, cost)
+            if new is None:
+                return order
+        order = new
+
+
+_KICK_SPAN = 12        # views spanned by a local kick: local kicks suit tours that sweep face after face
+_ACCEPT_WORSE = 0.01   # threshold acceptance: a kicked tour up to 1 % longer becomes the current one
+
+
+def iterated_local_search(order: np.ndarray, cost: np.ndarray, kicks: int,
+                          rng: np.random.Generator) -> np.ndarray:
+    """Iterated local search (double-bridge kicks, Martin, Otto & Felten 1991) for a fixed number of kicks:
+    deterministic for a seeded ``rng``. Returns the best tour found, starting at node 0."""
+    n = len(order)
+    best = local_search(np.asarray(order), cost)
+    best_len = tour_length(best, cost)
+    if n < 8:
+        return np.roll(best, -int(np.flatnonzero(best == 0)[0]))
+    span = min(n - 1, _KICK_SPAN)
+    current, current_len = best, best_len
+    for kick in range(kicks):
+        rolled = np.roll(current, -int(rng.integers(0, n)))
+        # alternate a global double bridge and a local one (inside ``span`` consecutive views)
+        a, b = np.sort(rng.choice(np.arange(2, n if kick % 2 == 0 else span), size=2, replace=False))
+        kicked = np.concatenate([rolled[:1], rolled[a:b], rolled[1:a], rolled[b:]])
+        cand = local_search(kicked, cost)
+        cand_len = tour_length(cand, cost)
+        # threshold acceptance (Dueck & Scheuer 1990): wander over slightly worse tours, keep the best
+        if cand_len < current_len * (1.0 + _ACCEPT_WORSE):
+            current, current_len = cand, cand_len
+        if cand_len < best_len - 1e-9:
+            best, best_len = cand, cand_len
+    return np.roll(best, -int(np.flatnonzero(best == 0)[0]))
+
+
+def solve_ortools(cost: np.ndarray, time_limit_s: float = 0.0) -> np.ndarray:
+    """Closed tour (permutation starting at 0) by OR-Tools routing from the cheapest-arc start:
+    time_limit_s = 0: greedy descent (2-opt, Or-opt, relocate, exchange ...) to a local optimum
+    (deterministic); > 0: guided local search for that long (how far it gets depends on the load)."""
+    n = len(cost)
+    if n <= 3:
+        return np.arange(n)
+    icost = np.rint(cost * _COST_SCALE).astype(np.int64).tolist()
+    return _ortools_route(icost, "PATH_CHEAPEST_ARC", time_limit_s)[1]
+
+
+def solve_multistart(cost: np.ndarray, rng: np.random.Generator, random_starts: int = 16,
+                     kicks: int = 60) -> np.ndarray:
+    """Default tour solver, deterministic for a seeded ``rng``: the OR-Tools descent tour plus
+    ``random_starts`` random tours, each taken to a 2-opt/Or-opt local optimum, then iterated local search
+    from the best. On the reference ship it matches a 10 s OR-Tools guided local search (bench)."""
+    n = len(cost)
+    if n <= 3:
+        return np.arange(n)
+    starts = [solve_ortools(cost)] + [rng.permutation(n) for _ in range(random_starts)]
+    optima = [local_search(s, cost) for s in starts]
+    best = min(optima, key=lambda o: tour_length(o, cost))
+    return iterated_local_search(best, cost, kicks, rng)
+
+
+def solve_genetic(cost: np.ndarray, rng: np.random.Generator, population: int = 120,
+                  generations: int = 600, mutation_rate: float = 0.3, elite: int = 4) -> np.ndarray:
+    """Closed tour by a genetic algorithm (the paper's solver, Sec. 3.3; its operators are not given:
+    order crossover (Davis 1985), inversion mutation, tournament selection of size 3, elitism)."""
+    n = len(cost)
+    if n <= 3:
+        return np.arange(n)
+    pop = np.argsort(rng.random((population, n)), axis=1)
+    for _ in range(generations):
+        fitness = cost[pop, np.roll(pop, -1, axis=1)].sum(axis=1)
+        rank = np.argsort(fitness)
+        children = [pop[rank[:elite]]]
+        n_children = population - elite
+        contenders = rng.integers(0, population, size=(2, n_children, 3))
+        parents = [contenders[k][np.arange(n_children), np.argmin(fitness[contenders[k]], axis=1)]
+                   for k in range(2)]
+        cuts = np.sort(rng.integers(0, n + 1, size=(n_children, 2)), axis=1)
+        kids = np.empty((n_children, n), dtype=pop.dtype)
+        for i in range(n_children):  # order crossover: one child per pair (the loop is over the population)
+            p1, p2 = pop[parents[0][i]], pop[parents[1][i]]
+            a, b = cuts[i]
+            middle = p1[a:b]
+            rest = p2[~np.isin(p2, middle)]
+            kids[i] = np.concatenate([rest[:a], middle, rest[a:]])
+        mutate = rng.random(n_children) < mutation_rate
+        seg = np.sort(rng.integers(0, n, size=(n_children, 2)), axis=1)
+        for i in np.flatnonzero(mutate):
+            a, b = seg[i]
+            kids[i, a:b + 1] = kids[i, a:b + 1][::-1]
+        children.append(kids)
+        pop = np.concatenate(children)
+    fitness = cost[pop, np.roll(pop, -1, axis=1)].sum(axis=1)
+    best = pop[int(np.argmin(fitness))]
+    return np.roll(best, -int(np.flatnonzero(best == 0)[0]))
+
+
+def open_at_longest_edge(order: np.ndarray, cost: np.ndarray) -> np.ndarray:
+    """The closed tour as an open sequence, cut at its most expensive edge (the shortest flight)."""
+    if len(order) < 2:
+        return order
+    edges = cost[order, np.roll(order, -1)]
+    return np.roll(order, -(int(np.argmax(edges)) + 1))
