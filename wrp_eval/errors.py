@@ -16,3 +16,7 @@ class InputError(Exception):
         self.source = str(source)
         self.problem = " ".join(str(problem).split())  # always one line
         super().__init__(f"{self.source}: {self.problem}")
+
+    def __reduce__(self):
+        # survive pickling between worker processes (the default would call __init__ with one argument)
+        return (InputError, (self.source, self.problem))

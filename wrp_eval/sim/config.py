@@ -24,15 +24,20 @@ class SimSection(StrictModel):
     drag_coefficient: float = Field(1.0, gt=0.0, le=3.0, description="C_d of the windward area")
     air_density_kg_m3: float = Field(1.225, gt=0.0, le=2.0, description="rho (ISA sea level)")
     acceleration_m_s2: float = Field(2.5, gt=0.0, le=10.0, description="reference accel/decel along a segment")
-    settle_position_m: float = Field(0.10, gt=0.0, description="settled when within this of the viewpoint")
-    settle_speed_m_s: float = Field(0.15, gt=0.0, description="... slower than this")
-    settle_yaw_deg: float = Field(2.0, gt=0.0, description="... and yaw within this")
-    settle_timeout_s: float = Field(8.0, gt=0.0,
+    settle_position_m: float = Field(0.5, gt=0.0, description="settled when within this of the viewpoint "
+                                                                "(a waypoint's acceptance radius)")
+    settle_speed_m_s: float = Field(0.5, gt=0.0, description="... slower than this")
+    settle_yaw_deg: float = Field(5.0, gt=0.0, description="... and yaw within this")
+    settle_timeout_s: float = Field(4.0, gt=0.0,
                                     description="take the photo anyway after this long trying to settle "
                                                 "(what a waypoint mission does in gusts)")
     dwell_s: float | None = Field(None, ge=0.0, description="hover before each photo; None: the path's dwell")
     fail_distance_m: float = Field(5.0, gt=0.0, description="lost position: farther than this from the "
                                                                "reference ...")
     fail_time_s: float = Field(3.0, gt=0.0, description="... for longer than this -> failed flight")
+    leash_m: float = Field(2.0, gt=0.0, description="in transit the reference waits while the vehicle is "
+                                                    "farther than this behind it (head wind)")
+    stall_time_s: float = Field(20.0, gt=0.0, description="held back by the leash for longer than this -> "
+                                                          "failed flight (no headway against the wind)")
     record_interval_s: float = Field(0.2, gt=0.0, description="trajectory down-sampling interval")
     max_flight_time_s: float = Field(3600.0, gt=0.0, description="abort a flight after this (failed)")

@@ -11,8 +11,10 @@ held over the chunk (zero-order hold, 20 ms by default: the controller runs at 5
 Flight logic per viewpoint: TRANSIT along the straight segment at the cruise speed (accel-limited), then
 SETTLE until within the tolerances (or a timeout: a waypoint mission in gusts takes the photo anyway),
 then DWELL, then the photo is triggered and the capture pose recorded. A flight farther than
-``fail_distance_m`` from its reference for longer than ``fail_time_s``, below the sea surface, or not
-finished after ``max_flight_time_s`` is a failed flight (reason recorded); its remaining views are not taken.
+``fail_distance_m`` from its reference for longer than ``fail_time_s``, held back more than ``leash_m``
+behind a waiting reference for longer than ``stall_time_s`` (no headway against the wind), below the sea
+surface, or not finished after ``max_flight_time_s`` is a failed flight (reason recorded); its remaining
+views are not taken.
 """
 
 from __future__ import annotations
@@ -169,6 +171,7 @@ class FlightSimulator:
         seg_dir = np.zeros((batch, 3))
         seg_duration = np.zeros(batch)
         lost_time = np.zeros(batch)
+        held_time = np.zeros(batch)
         reasons = [""] * batch
         flight_time = np.zeros(batch)
 
@@ -206,8 +209,12 @@ class FlightSimulator:
             s, v, a, _ = _trapezoid(seg_len, phase_time, v_cruise, a_max)
             transit = phase == TRANSIT
             ref_pos = np.where(transit[:, None], seg_start + seg_dir * s[:, None], seg_end)
-            ref_vel = np.where(transit[:, None], seg_dir * v[:, None], 0.0)
-            ref_acc = np.where(transit[:, None], seg_dir * a[:, None], 0.0)
+            # Leash: a vehicle held back by a head wind is not "lost"; its reference waits for it (what a
+            # waypoint autopilot does: it flies towards the next waypoint as fast as it can).
+            held = transit & (((p_b - ref_pos) ** 2).sum(axis=1) > sec.leash_m ** 2)
+            moving = transit & ~held
+            ref_vel = np.where(moving[:, None], seg_dir * v[:, None], 0.0)
+            ref_acc = np.where(moving[:, None], seg_dir * a[:, None], 0.0)
             frac = np.where(transit, np.clip(phase_time / np.maximum(seg_duration, 1e-9), 0.0, 1.0), 1.0)
             ref_yaw = seg_yaw0 + seg_dyaw * frac
 
@@ -215,8 +222,10 @@ class FlightSimulator:
             active = phase < DONE
             dist = np.sqrt(((p_b - ref_pos) ** 2).sum(axis=1))
             lost_time = np.where(active & (dist > sec.fail_distance_m), lost_time + dt, 0.0)
+            held_time = np.where(held, held_time + dt, 0.0)
             bad = ~np.isfinite(p_b.sum(axis=1) + v_b.sum(axis=1))
-            newly = active & ((lost_time > sec.fail_time_s) | (p_b[:, 2] < 0.0) | bad)
+            stalled = held_time > sec.stall_time_s
+            newly = active & ((lost_time > sec.fail_time_s) | stalled | (p_b[:, 2] < 0.0) | bad)
             if chunk == max_chunks:
                 newly |= active
             for i in np.flatnonzero(newly):
@@ -224,6 +233,9 @@ class FlightSimulator:
                     reasons[i] = f"non-finite state at t={t:.2f}s"
                 elif p_b[i, 2] < 0.0:
                     reasons[i] = f"ditched (below sea level) at t={t:.2f}s"
+                elif stalled[i]:
+                    reasons[i] = (f"no headway: > {sec.leash_m:g} m behind the reference for "
+                                  f"> {sec.stall_time_s:g} s at t={t:.2f}s (before view {idx[i]})")
                 elif lost_time[i] > sec.fail_time_s:
                     reasons[i] = (f"lost position: > {sec.fail_distance_m:g} m from the reference for "
                                   f"> {sec.fail_time_s:g} s at t={t:.2f}s (before view {idx[i]})")
@@ -328,7 +340,7 @@ class FlightSimulator:
                                skip_checks=True, nstep=sec.chunk_steps, state=out_buf, chunk_size=task_size)
             state = np.ascontiguousarray(out_buf[:, -1])
             flat_state = state.reshape(-1)
-            phase_time = phase_time + dt
+            phase_time = phase_time + np.where(held, 0.0, dt)
 
         captures = tuple(
             CaptureSet(cap_pos[i, taken[i]], cap_yaw[i, taken[i]], cap_pitch[i, taken[i]],

@@ -1,0 +1,105 @@
+"""Running and resuming campaigns with the analytic stand-in evaluator (tests of the campaign machinery)."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from wrp_eval.campaign.records import column_array
+from wrp_eval.campaign.runner import campaign_status, resolve_config
+from wrp_eval.campaign.store import TrialStore
+from wrp_eval.errors import InputError
+
+
+
+def test_resume_skips_stored_trials_and_never_duplicates(tmp_path, path_file, make_config, comparable, run_analytic, tiny_path):
+    first = run_analytic(make_config(path_file, n_trials=6), tmp_path / "c")
+    assert (first.done, first.ran) == (6, 6)
+    again = run_analytic(make_config(path_file, n_trials=6), tmp_path / "c")
+    assert again.ran == 0 and again.done == 6
+    extended = run_analytic(resolve_config(make_config(path_file, n_trials=6), n_trials=14), tmp_path / "c")
+    assert extended.ran == 8
+    ids = TrialStore(tmp_path / "c").stored_ids()
+    np.testing.assert_array_equal(ids, np.arange(14))
+    # the whole campaign in one go gives the same records as 6 + 8
+    whole = run_analytic(make_config(path_file, n_trials=14), tmp_path / "whole")
+    assert comparable(TrialStore(whole.out_dir).read_table()) == comparable(TrialStore(tmp_path / "c").read_table())
+
+
+def test_results_do_not_depend_on_batching(tmp_path, path_file, make_config, comparable, run_analytic, tiny_path):
+    a = run_analytic(make_config(path_file, batch_size=1), tmp_path / "a")
+    b = run_analytic(make_config(path_file, batch_size=5), tmp_path / "b")
+    assert comparable(TrialStore(a.out_dir).read_table()) == comparable(TrialStore(b.out_dir).read_table())
+
+
+def test_a_raising_trial_is_recorded_failed_with_its_error_and_the_rest_goes_on(tmp_path, path_file, make_config, comparable, run_analytic, tiny_path):
+    config = make_config(path_file, n_trials=9, batch_size=3, backend={"max_attempts": 3})
+    summary = run_analytic(config, tmp_path / "c", fail_trial_ids=[4])
+    assert (summary.done, summary.failed, summary.errors) == (9, 1, 1)
+    table = TrialStore(tmp_path / "c").read_table().sort_by("trial_id")
+    rows = table.to_pylist()
+    assert rows[4]["failed"] and "told to fail trial 4" in rows[4]["error"] and rows[4]["attempts"] == 3
+    assert all(r["error"] is None and not r["failed"] and r["attempts"] == 1 for r in rows if r["trial_id"] != 4)
+    assert np.isnan(rows[4]["error_m"]) and np.all(np.isnan(column_array(table, "flown_offsets")[4]))
+
+
+def test_flight_failures_are_results_not_errors(tmp_path, path_file, make_config, comparable, run_analytic, tiny_path):
+    config = make_config(path_file, wind={"speed_10m_m_s": {"dist": "uniform", "low": 0, "high": 10}})
+    summary = run_analytic(config, tmp_path / "c", fail_speed_m_s=5.0)
+    table = TrialStore(tmp_path / "c").read_table()
+    speed = table.column("wind_speed_10m_m_s").to_numpy()
+    np.testing.assert_array_equal(table.column("failed").to_numpy(zero_copy_only=False), speed > 5.0)
+    assert summary.errors == 0 and 0 < summary.failed < summary.done
+
+
+def test_common_random_numbers_across_paths(tmp_path, path_file, make_config, comparable, run_analytic, tiny_path):
+    other = tmp_path / "other.json"
+    tiny_path(9).save(other)
+    a = TrialStore(run_analytic(make_config(path_file), tmp_path / "a").out_dir).read_table().sort_by("trial_id")
+    b = TrialStore(run_analytic(make_config(other), tmp_path / "b").out_dir).read_table().sort_by("trial_id")
+    for col in ("wind_speed_10m_m_s", "wind_direction_deg", "turbulence_severity", "wind_seed"):
+        assert a.column(col).to_pylist() == b.column(col).to_pylist()
+    assert a.column("path_digest")[0] != b.column("path_digest")[0]
+
+
+def test_a_folder_of_another_campaign_is_refused(tmp_path, path_file, make_config, comparable, run_analytic, tiny_path):
+    run_analytic(make_config(path_file, n_trials=3), tmp_path / "c")
+    with pytest.raises(InputError, match="different config"):
+        run_analytic(make_config(path_file, n_trials=3, seed=8), tmp_path / "c")
+
+
+def test_status_counts(tmp_path, path_file, make_config, comparable, run_analytic, tiny_path):
+    run_analytic(make_config(path_file, n_trials=5), tmp_path / "c", fail_trial_ids=[1])
+    status = campaign_status(tmp_path / "c")
+    assert status["done"] == 5 and status["errors"] == 1 and status["failed"] == 1 and status["remaining"] == 0
+    assert status["duplicates"] == 0
+    with pytest.raises(InputError, match="not a campaign folder"):
+        campaign_status(tmp_path / "nothing")
+
+
+def test_local_process_pool_matches_in_process(tmp_path, path_file, make_config, comparable, run_analytic, tiny_path):
+    serial = run_analytic(make_config(path_file, n_trials=8), tmp_path / "s")
+    pooled = run_analytic(make_config(path_file, n_trials=8, backend={"workers": 2}), tmp_path / "p")
+    assert pooled.done == 8
+    workers = set(TrialStore(pooled.out_dir).read_table().column("worker").to_pylist())
+    assert len(workers) >= 1 and all(":" in w for w in workers)
+    assert comparable(TrialStore(serial.out_dir).read_table()) == comparable(TrialStore(pooled.out_dir).read_table())
+
+
+def test_a_worker_set_up_error_stops_the_campaign_with_its_message(tmp_path, path_file, make_config):
+    """A bad input found while a worker builds its evaluator (here: the ship mesh file) is the campaign's
+    InputError, not a pile of crashed trials (the real evaluator, in a process pool)."""
+    from wrp_eval.campaign.runner import run_campaign
+    from wrp_eval.config import ExperimentConfig
+    doc = make_config(path_file, backend={"workers": 1}).model_dump(mode="json")
+    doc["ship"]["mesh"] = {"path": str(tmp_path / "no_such_ship.stl")}
+    with pytest.raises(InputError, match="no_such_ship"):
+        run_campaign(ExperimentConfig.model_validate(doc), out_dir=tmp_path / "c", progress=False)
+    assert TrialStore(tmp_path / "c").stored_ids().size == 0
+
+
+def test_active_time_is_the_union_of_busy_intervals():
+    from wrp_eval.campaign.runner import active_seconds
+    start, end = np.array([5.0, 0.0, 1.0, 1.5]), np.array([6.0, 2.0, 3.0, 2.5])
+    assert active_seconds(start, end) == 4.0      # [0, 3] and [5, 6]
+    assert active_seconds(np.array([]), np.array([])) == 0.0

@@ -1,0 +1,122 @@
+"""The real trial evaluator: batched MuJoCo flights of the (perturbed) path through each trial's wind, then
+the reconstruction oracle on each trial's capture poses.
+
+Per batch of trials: one wind model for the batch (:mod:`trial_wind`), one ``FlightSimulator.fly`` call with
+the commanded offsets, then per trial the paper's extra disturbance of the wind-induced deviation, the
+capture set and one oracle call. Offsets are measured from the planned viewpoints:
+    flown = commanded + disturbance * (sim_offset - commanded)
+(``sim_offset`` = the simulator's actual capture pose minus the plan). With ``flown_disturbance: 0`` the
+capture poses are exactly the simulator's.
+"""
+
+from __future__ import annotations
+
+import json
+import tempfile
+import time
+from pathlib import Path
+
+import numpy as np
+
+from wrp_eval.campaign.evaluators import CampaignContext
+from wrp_eval.campaign.records import TrialOutcome
+from wrp_eval.campaign.sampling import TrialInputs
+from wrp_eval.sim.captures import CaptureSet
+
+
+def load_path_doc(doc: dict):
+    """A :class:`wrp_eval.planning.path.Path` from its JSON document (through the planning stage's own
+    loader, so the same checks apply)."""
+    from wrp_eval.planning.path import Path as FlightPath
+    with tempfile.TemporaryDirectory() as tmp:
+        file = Path(tmp) / "path.json"
+        file.write_text(json.dumps(doc))
+        return FlightPath.load(file)
+
+
+def trajectory_until(times: np.ndarray, positions: np.ndarray, end_s: np.ndarray, points: int) -> list[np.ndarray]:
+    """Per flight, its recorded positions up to its own end time (last photo or failure; a batch keeps
+    recording until its last flight ends), down-sampled to at most ``points`` evenly spaced samples
+    including the first and the last. times (T,) s; positions (batch, T, 3); end_s (batch,)."""
+    out = []
+    for i in range(positions.shape[0]):  # per trial, not per sample: a handful of slices
+        count = max(1, int(np.searchsorted(times, end_s[i], side="right")))
+        idx = np.round(np.linspace(0, count - 1, min(count, points))).astype(int)
+        out.append(positions[i, idx])
+    return out
+
+
+def values_at_times(times: np.ndarray, series: np.ndarray, query: np.ndarray) -> np.ndarray:
+    """Nearest-earlier samples of ``series`` (batch, T, k) recorded at ``times`` (T,) at ``query`` (batch, n);
+    NaN where the query is NaN."""
+    idx = np.clip(np.searchsorted(times, np.nan_to_num(query, nan=0.0), side="right") - 1, 0, times.size - 1)
+    out = np.take_along_axis(series, idx[..., None], axis=1)
+    out[~np.isfinite(query)] = np.nan
+    return out
+
+
+class FlightEvaluator:
+    """Built once per worker: the ship, the path, the simulator and the oracle stay loaded between batches."""
+
+    def __init__(self, context: CampaignContext):
+        from wrp_eval.config import ExperimentConfig
+        from wrp_eval.recon import make_oracle
+        from wrp_eval.ship.resolve import resolve_ship_full
+        from wrp_eval.sim.flight import FlightSimulator
+        self.config = ExperimentConfig.model_validate(context.config)
+        self.config_dir = context.config_dir or "."
+        self.path = load_path_doc(context.path)
+        ship = resolve_ship_full(self.config.ship, self.config_dir)
+        self.particulars, self.mesh = ship.particulars, ship.mesh
+        sim_section = self.config.sim.model_copy(update={"threads": max(1, int(context.threads))})
+        self.sim = FlightSimulator(sim_section)
+        self.dt_s = sim_section.timestep_s * sim_section.chunk_steps
+        self.oracle = make_oracle(self.config.oracle, self.config.campaign.oracle)
+        self.trajectory_points = self.config.campaign.outputs.trajectory_points
+
+    def evaluate(self, batch: list[TrialInputs]) -> list[TrialOutcome]:
+        from wrp_eval.campaign.trial_wind import build_trial_wind
+        start = time.perf_counter()
+        wind = build_trial_wind(self.config.wind, [t.wind for t in batch], self.particulars, self.dt_s,
+                                self.config_dir)
+        commanded = np.stack([t.commanded_offsets for t in batch])           # (b, n, 4)
+        result = self.sim.fly(self.path, wind, len(batch), view_offsets=commanded)
+        flight_s = (time.perf_counter() - start) / len(batch)
+        disturbance = np.stack([t.disturbance for t in batch])
+        flown = commanded + disturbance * (result.offsets - commanded)         # NaN stays NaN (views not taken)
+        traj = result.trajectory
+        wind_at_views = values_at_times(traj.time, traj.wind, result.capture_time_s)
+        trajectories = trajectory_until(traj.time, traj.position, result.flight_time_s, self.trajectory_points)
+        planned = np.concatenate([self.path.positions, self.path.yaw[:, None]], axis=1)
+
+        outcomes = []
+        for i, inputs in enumerate(batch):
+            t0 = time.perf_counter()
+            taken = result.taken[i]
+            pose = planned[taken] + flown[i, taken]
+            captures = CaptureSet(pose[:, :3], pose[:, 3], result.camera_pitch[i, taken], np.flatnonzero(taken),
+                                  self.path.camera)
+            recon = self.oracle.evaluate(captures, self.mesh, seed=int(inputs.oracle_seed % (2**31 - 1)))
+            reasons = []
+            if result.failed[i]:
+                reasons.append(f"flight: {result.failure_reason[i]}")
+            if recon.failed:
+                reasons.append(f"reconstruction: {recon.reason}")
+            metrics = {"error_m": recon.error_m, "accuracy_m": recon.accuracy_m,
+                       "completeness": recon.completeness, "precision": recon.precision, "fscore": recon.fscore,
+                       "registered_fraction": recon.registered_views / max(1, len(self.path))}
+            outcomes.append(TrialOutcome(
+                flown_offsets=flown[i], metrics=metrics, failed=bool(result.failed[i] or recon.failed),
+                reason="; ".join(reasons), trajectory=trajectories[i], wind_at_views=wind_at_views[i],
+                timings={"flight_s": flight_s, "oracle_s": time.perf_counter() - t0}))
+        return outcomes
+
+    def close(self) -> None:
+        self.sim.close()
+
+
+def make_flight_evaluator(context: CampaignContext, **options) -> FlightEvaluator:
+    if options:
+        from wrp_eval.errors import InputError
+        raise InputError("evaluator", f"the flight evaluator takes no options, got {sorted(options)}")
+    return FlightEvaluator(context)

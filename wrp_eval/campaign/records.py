@@ -1,0 +1,128 @@
+"""Trial records: what an evaluator returns for a trial, and the one Parquet row stored per trial.
+
+Per-viewpoint arrays are stored as nested lists (``list<fixed_size_list<float64, k>>``); read them back as
+``(batch, n_views, k)`` arrays with :func:`column_array`. Offsets are (dx, dy, dz) m and dyaw rad, from the
+PLANNED viewpoint (so flown = commanded + wind-induced deviation). Views never taken are NaN.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+
+import numpy as np
+import pyarrow as pa
+import pyarrow.compute as pc
+
+METRIC_NAMES = ("error_m", "accuracy_m", "completeness", "precision", "fscore", "registered_fraction")
+
+
+@dataclass
+class TrialOutcome:
+    """What an evaluator hands back for one trial.
+
+    flown_offsets (n_views, 4): capture pose minus planned viewpoint (dx, dy, dz m, dyaw rad), NaN rows for
+    views not taken; metrics: oracle figures by name (``METRIC_NAMES``; missing ones are stored as NaN);
+    failed/reason: the flight or the reconstruction failed (a result, not an error); trajectory (m, 3) m:
+    down-sampled flown positions; wind_at_views (n_views, 3) m/s: the wind felt at each capture;
+    timings: seconds by phase (e.g. flight_s, oracle_s)."""
+
+    flown_offsets: np.ndarray
+    metrics: dict[str, float]
+    failed: bool = False
+    reason: str = ""
+    trajectory: np.ndarray = field(default_factory=lambda: np.zeros((0, 3)))
+    wind_at_views: np.ndarray | None = None
+    timings: dict[str, float] = field(default_factory=dict)
+
+
+def _nested(k: int) -> pa.DataType:
+    return pa.list_(pa.list_(pa.float64(), k))
+
+
+SCHEMA = pa.schema([
+    pa.field("trial_id", pa.int64(), nullable=False),
+    pa.field("root_seed", pa.int64()),
+    pa.field("path_digest", pa.string()),
+    # inputs drawn
+    pa.field("wind_speed_10m_m_s", pa.float64()),
+    pa.field("wind_direction_deg", pa.float64()),
+    pa.field("turbulence_severity", pa.string()),
+    pa.field("turbulence_sigma_w_mps", pa.float64()),
+    pa.field("mesoscale_file", pa.string()),
+    pa.field("mesoscale_time", pa.string()),
+    pa.field("wind_seed", pa.uint64()),
+    pa.field("flight_seed", pa.uint64()),
+    pa.field("oracle_seed", pa.uint64()),
+    pa.field("n_views", pa.int32()),
+    pa.field("commanded_offsets", _nested(4)),
+    pa.field("disturbance", _nested(4)),
+    # flown
+    pa.field("flown_offsets", _nested(4)),
+    pa.field("wind_at_views", _nested(3)),
+    pa.field("trajectory", _nested(3)),
+    # oracle
+    *[pa.field(name, pa.float64()) for name in METRIC_NAMES],
+    pa.field("failed", pa.bool_()),
+    pa.field("failure_reason", pa.string()),
+    pa.field("error", pa.string()),          # the exception of a trial that raised (then failed is true)
+    pa.field("attempts", pa.int32()),
+    # timings
+    pa.field("flight_s", pa.float64()),
+    pa.field("oracle_s", pa.float64()),
+    pa.field("trial_s", pa.float64()),
+    pa.field("worker", pa.string()),
+    pa.field("finished_unix", pa.float64()),
+])
+TIMING_COLUMNS = ("flight_s", "oracle_s", "trial_s", "worker", "finished_unix")
+
+
+def _rows(a: np.ndarray | None, k: int) -> list | None:
+    return None if a is None else np.asarray(a, dtype=float).reshape(-1, k).tolist()
+
+
+def make_record(inputs, outcome: TrialOutcome | None, *, root_seed: int, path_digest: str, n_views: int,
+                attempts: int, trial_s: float, worker: str, finished_unix: float,
+                error: str | None = None) -> dict:
+    """One row of :data:`SCHEMA` from a trial's inputs and its outcome (None when the trial raised)."""
+    wind = inputs.wind
+    row = {
+        "trial_id": inputs.trial_id, "root_seed": root_seed, "path_digest": path_digest,
+        "wind_speed_10m_m_s": wind.speed_10m_m_s, "wind_direction_deg": wind.direction_deg,
+        "turbulence_severity": wind.severity, "turbulence_sigma_w_mps": wind.sigma_w_mps,
+        "mesoscale_file": wind.file, "mesoscale_time": wind.time, "wind_seed": wind.seed,
+        "flight_seed": inputs.flight_seed, "oracle_seed": inputs.oracle_seed, "n_views": n_views,
+        "commanded_offsets": _rows(inputs.commanded_offsets, 4), "disturbance": _rows(inputs.disturbance, 4),
+        "attempts": attempts, "trial_s": trial_s, "worker": worker, "finished_unix": finished_unix,
+    }
+    if outcome is None:
+        nan = np.full((n_views, 4), np.nan)
+        row.update({"flown_offsets": _rows(nan, 4), "wind_at_views": None, "trajectory": None,
+                    **{m: float("nan") for m in METRIC_NAMES}, "failed": True,
+                    "failure_reason": "error", "error": error, "flight_s": None, "oracle_s": None})
+        return row
+    row.update({
+        "flown_offsets": _rows(outcome.flown_offsets, 4), "wind_at_views": _rows(outcome.wind_at_views, 3),
+        "trajectory": _rows(outcome.trajectory, 3),
+        **{m: float(outcome.metrics.get(m, float("nan"))) for m in METRIC_NAMES},
+        "failed": bool(outcome.failed), "failure_reason": outcome.reason, "error": None,
+        "flight_s": outcome.timings.get("flight_s"), "oracle_s": outcome.timings.get("oracle_s"),
+    })
+    return row
+
+
+def records_to_table(records: list[dict]) -> pa.Table:
+    return pa.Table.from_pylist(records, schema=SCHEMA)
+
+
+def column_array(table: pa.Table, name: str) -> np.ndarray:
+    """(rows, n_views, k) float array of a per-viewpoint column (``commanded_offsets``, ``flown_offsets``,
+    ``disturbance``, ``wind_at_views``); a null cell (a trial that raised) becomes NaN rows."""
+    col = table.column(name).combine_chunks()
+    k = col.type.value_type.list_size
+    n = int(pc.max(table.column("n_views")).as_py()) if len(table) else 0
+    out = np.full((len(table), n, k), np.nan)
+    valid = col.is_valid().to_numpy(zero_copy_only=False)
+    if valid.any():
+        values = pc.list_flatten(pc.list_flatten(col.filter(pa.array(valid)))).to_numpy(zero_copy_only=False)
+        out[valid] = values.reshape(-1, n, k)
+    return out

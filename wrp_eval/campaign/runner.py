@@ -1,0 +1,243 @@
+"""Run a campaign (resumably) and summarise a campaign folder.
+
+``run_campaign`` = resolve the config -> path -> fingerprint -> take the folder's lock -> skip stored trials
+-> batches of the remaining trial ids -> backend -> records buffered and written in atomic chunks, each one
+logged to rerun and counted by the progress bar -> close. Re-running the same call resumes.
+"""
+
+from __future__ import annotations
+
+import hashlib
+import json
+import time
+from dataclasses import dataclass
+from pathlib import Path
+
+import numpy as np
+
+from wrp_eval.campaign import backends
+from wrp_eval.campaign.config import CampaignSection
+from wrp_eval.campaign.evaluators import DEFAULT_EVALUATOR, CampaignContext, resolve_factory
+from wrp_eval.campaign.progress import CampaignProgress
+from wrp_eval.campaign.store import TrialStore
+from wrp_eval.config import ExperimentConfig
+from wrp_eval.errors import InputError
+from wrp_eval.planning.path import Path as FlightPath
+
+# settings that do not change any trial's result: excluded from the fingerprint
+_NEUTRAL_KEYS = ("n_trials", "batch_size", "backend", "outputs")
+
+
+@dataclass(frozen=True)
+class CampaignSummary:
+    """out_dir; n_trials; done (stored now), failed, errors (trials that raised); ran: trials run this call;
+    wall_s of this call; trials_per_min of this call; rerun_s: time spent logging to rerun this call."""
+
+    out_dir: Path
+    n_trials: int
+    done: int
+    failed: int
+    errors: int
+    ran: int
+    wall_s: float
+    trials_per_min: float
+    rerun_s: float
+
+
+def path_digest(path_doc: dict) -> str:
+    """Content hash of a path's JSON document (viewpoints, camera, speed, dwell)."""
+    key = {k: path_doc[k] for k in ("viewpoints", "camera", "speed_m_s", "dwell_s")}
+    return hashlib.sha256(json.dumps(key, sort_keys=True).encode()).hexdigest()[:16]
+
+
+def load_path(config: ExperimentConfig, config_dir: Path | None = None) -> FlightPath:
+    """The campaign's path: ``campaign.path`` (relative to the config's folder) or planned from ``planning:``."""
+    if config.campaign.path is not None:
+        file = Path(config.campaign.path)
+        if not file.is_absolute() and config_dir is not None and not file.exists():
+            file = config_dir / file
+        return FlightPath.load(file)
+    # as `wrp-eval plan` does: the ship stage's proxy and complexity, the planning stage's seed stream
+    from wrp_eval.planning.commands import planning_rng
+    from wrp_eval.planning.planner import plan
+    from wrp_eval.ship.resolve import resolve_ship_full
+    ship = resolve_ship_full(config.ship, config_dir or ".")
+    return plan(ship.proxy, ship.complexity.complexity, config.planning, planning_rng(config.run.seed)).path
+
+
+def resolve_config(config: ExperimentConfig, *, n_trials: int | None = None, backend: str | None = None,
+                   workers: int | None = None, rerun: bool | None = None) -> ExperimentConfig:
+    """Apply command-line overrides to the ``campaign:`` section (validated again)."""
+    section = config.campaign.model_dump()
+    if n_trials is not None:
+        section["n_trials"] = n_trials
+    if backend is not None:
+        section["backend"]["kind"] = backend
+    if workers is not None:
+        section["backend"]["workers"] = workers
+    if rerun is not None:
+        section["outputs"]["rerun"] = rerun
+    doc = config.model_dump(mode="json")
+    doc["campaign"] = CampaignSection.model_validate(section).model_dump(mode="json")
+    return ExperimentConfig.model_validate(doc)
+
+
+def fingerprint(config_doc: dict, digest: str, root_seed: int, evaluator: str, options: dict) -> str:
+    """Hash of everything that decides a trial's result (an LHS design also depends on n_trials)."""
+    doc = json.loads(json.dumps(config_doc))
+    campaign = doc["campaign"]
+    lhs = campaign["perturbation"]["design"] == "box" and campaign["perturbation"]["sampler"] == "lhs"
+    for key in _NEUTRAL_KEYS:
+        if not (key == "n_trials" and lhs):
+            campaign.pop(key, None)
+    doc.get("run", {}).pop("name", None)
+    key = {"config": doc, "path": digest, "seed": root_seed, "evaluator": evaluator, "options": options}
+    return hashlib.sha256(json.dumps(key, sort_keys=True, default=str).encode()).hexdigest()[:16]
+
+
+def default_out_dir(config: ExperimentConfig) -> Path:
+    return Path(config.campaign.outputs.dir or Path("logs") / config.run.name / "campaign")
+
+
+def versions() -> dict:
+    """Python, machine and the versions of the libraries a trial depends on (from package metadata: no
+    heavy imports)."""
+    import platform
+    from importlib.metadata import PackageNotFoundError, version
+    found = {"python": platform.python_version(), "wrp-eval": __import__("wrp_eval").__version__}
+    for name in ("numpy", "scipy", "mujoco", "open3d", "torch", "trimesh", "rerun-sdk", "pyarrow", "ray"):
+        try:
+            found[name] = version(name)
+        except PackageNotFoundError:
+            pass
+    return {"machine": platform.machine(), "system": platform.platform(), "versions": found}
+
+
+def _ship_mesh(config: ExperimentConfig, config_dir: Path | None):
+    """The true ship mesh for the recording."""
+    from wrp_eval.ship.resolve import resolve_ship_full
+    return resolve_ship_full(config.ship, config_dir or ".").mesh
+
+
+def run_campaign(config: ExperimentConfig, *, out_dir: str | Path | None = None, config_dir: Path | None = None,
+                 evaluator: str = DEFAULT_EVALUATOR, evaluator_options: dict | None = None,
+                 progress: bool = True, path: FlightPath | None = None) -> CampaignSummary:
+    """Run (or resume) the campaign of ``config`` into ``out_dir``. ``config`` already carries any overrides
+    (see :func:`resolve_config`). ``evaluator`` names the factory ``"module:function"`` of the trial
+    evaluator; ``path`` overrides the path source (used by callers that hold a Path already)."""
+    wall_start = time.perf_counter()
+    section = config.campaign
+    evaluator_options = dict(evaluator_options or {})
+    resolve_factory(evaluator)  # fail early, in the calling process, on a bad name
+    flight_path = path if path is not None else load_path(config, config_dir)
+    path_doc = flight_path.to_json_dict()
+    digest = path_digest(path_doc)
+    root_seed = section.seed if section.seed is not None else config.run.seed
+    config_doc = config.model_dump(mode="json")
+    print_ = fingerprint(config_doc, digest, root_seed, evaluator, evaluator_options)
+    out = Path(out_dir) if out_dir is not None else default_out_dir(config)
+    workers = section.backend.workers if section.backend.workers is not None else backends.default_workers()
+
+    store = TrialStore(out)
+    with store:
+        previous = store.read_meta()
+        if previous is not None and previous.get("fingerprint") != print_:
+            raise InputError(out, "holds a campaign with a different config, path or seed "
+                                  f"(fingerprint {previous.get('fingerprint')} vs {print_}); use another --out")
+        store.write_meta({"fingerprint": print_, "config": config_doc, "root_seed": root_seed,
+                          "path_digest": digest, "n_views": len(flight_path), "n_trials": section.n_trials,
+                          "evaluator": evaluator, "evaluator_options": evaluator_options,
+                          "environment": versions(), "updated_unix": time.time()}, path_doc)
+        stored = store.stored_ids()
+        todo = np.setdiff1d(np.arange(section.n_trials), stored)
+        batches = [todo[i:i + section.batch_size].tolist() for i in range(0, todo.size, section.batch_size)]
+        spec = {"key": f"{print_}-{workers}", "evaluator": evaluator, "evaluator_options": evaluator_options,
+                "max_attempts": section.backend.max_attempts,
+                "context": CampaignContext(config=config_doc, path=path_doc, root_seed=root_seed,
+                                           path_digest=digest, threads=1,
+                                           config_dir=str(Path(config_dir or ".").resolve())).__dict__}
+
+        recorder = None
+        if section.outputs.rerun:
+            from wrp_eval.campaign.rerun_log import CampaignRecorder
+            recorder = CampaignRecorder(out, {**path_doc, "digest": digest}, _ship_mesh(config, config_dir))
+            if stored.size:
+                for row in store.read_table().to_pylist():
+                    recorder.log_trial(row)
+
+        bar = CampaignProgress(section.n_trials, int(np.unique(stored).size), enabled=progress)
+        if section.backend.kind == "ray":
+            stream = backends.run_ray(spec, batches, max(1, workers), section.backend.address)
+        elif workers == 0:
+            stream = backends.run_serial(spec, batches)
+        else:
+            stream = backends.run_local(spec, batches, workers)
+
+        buffer: list[dict] = []
+        last_flush = time.perf_counter()
+        ran = 0
+        try:
+            for records in stream:
+                buffer.extend(records)
+                ran += len(records)
+                if recorder is not None:
+                    for row in records:
+                        recorder.log_trial(row)
+                bar.update(len(records), sum(bool(r["failed"]) for r in records))
+                if len(buffer) >= section.outputs.chunk_trials or \
+                        time.perf_counter() - last_flush >= section.outputs.flush_s:
+                    store.append(buffer)
+                    buffer = []
+                    last_flush = time.perf_counter()
+            store.append(buffer)
+            buffer = []
+        finally:
+            stream.close()
+            bar.close()
+        rerun_s = 0.0
+        if recorder is not None:
+            recorder.close()
+            rerun_s = recorder.seconds
+        table = store.read_table(["trial_id", "failed", "error"])
+
+    wall = time.perf_counter() - wall_start
+    errors = int(table.column("error").is_valid().to_numpy(zero_copy_only=False).sum())
+    return CampaignSummary(out_dir=out, n_trials=section.n_trials, done=len(table),
+                           failed=int(np.sum(table.column("failed").to_numpy(zero_copy_only=False))),
+                           errors=errors, ran=ran, wall_s=wall,
+                           trials_per_min=60.0 * ran / wall if wall > 0 else 0.0, rerun_s=rerun_s)
+
+
+def active_seconds(start: np.ndarray, end: np.ndarray) -> float:
+    """Length of the union of the intervals [start_i, end_i] (s): the time something was running."""
+    if start.size == 0:
+        return 0.0
+    order = np.argsort(start)
+    start, end = start[order], np.maximum.accumulate(end[order])
+    gaps = np.clip(start[1:] - end[:-1], 0.0, None)
+    return float(end[-1] - start[0] - gaps.sum())
+
+
+def campaign_status(out_dir: str | Path) -> dict:
+    """done / failed / errors / remaining of a campaign folder, and its rate in trials/min over the time it
+    was running: each trial's batch occupied [finished - trial_s * batch_size, finished]; the union of those
+    intervals is the running time (gaps between resumes are left out; parallel workers overlap)."""
+    store = TrialStore(out_dir)
+    meta = store.read_meta()
+    if meta is None:
+        raise InputError(out_dir, "not a campaign folder (no campaign.json)")
+    table = store.read_table(["trial_id", "failed", "error", "finished_unix", "trial_s"])
+    ids = table.column("trial_id").to_numpy()
+    finished = table.column("finished_unix").to_numpy(zero_copy_only=False).astype(float)
+    batch = int(meta.get("config", {}).get("campaign", {}).get("batch_size", 1))
+    busy = np.nan_to_num(table.column("trial_s").to_numpy(zero_copy_only=False).astype(float)) * batch
+    active = active_seconds(finished - busy, finished)
+    n_trials = int(meta["n_trials"])
+    done = int(np.unique(ids).size)
+    return {"out_dir": str(out_dir), "n_trials": n_trials, "done": done,
+            "failed": int(np.sum(table.column("failed").to_numpy(zero_copy_only=False))),
+            "errors": int(table.column("error").is_valid().to_numpy(zero_copy_only=False).sum()),
+            "remaining": int(np.setdiff1d(np.arange(n_trials), ids).size),
+            "duplicates": int(ids.size - done),
+            "trials_per_min": 60.0 * done / active if active > 0 else None,
+            "n_views": meta.get("n_views"), "fingerprint": meta.get("fingerprint")}

@@ -1,0 +1,150 @@
+"""What each trial draws: its wind scenario, its commanded viewpoint offsets and its flown-offset disturbance.
+
+Seeding (reproducible, independent of which other trials run, of the batching and of the backend): every draw
+of trial k comes from ``SeedSequence(root_seed, spawn_key=(stream, k, ...))`` -- the same numbers as
+``SeedSequence(root_seed).spawn`` produces for child k, addressed directly so that trial k never needs the
+others. Streams:
+
+* ``WIND_STREAM``: the scenario inputs (one child per input, so changing one input's distribution leaves the
+  others' draws unchanged) and the wind realisation's seed. Nothing here depends on the path, so trials with
+  the same id of different paths fly the same wind (common random numbers).
+* ``PERTURB_STREAM``: the box design (one scrambled Sobol / LHS design per campaign; trial k takes point k).
+* ``DISTURB_STREAM``: the paper's extra random disturbance of the flown offsets.
+* ``FLIGHT_STREAM``: seeds handed to the flight and the oracle for any randomness of their own.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from functools import lru_cache
+
+import numpy as np
+from scipy.stats import qmc
+
+from wrp_eval.campaign.config import CampaignSection, Choice, Normal, Uniform
+
+WIND_STREAM, PERTURB_STREAM, DISTURB_STREAM, FLIGHT_STREAM = 0, 1, 2, 3
+# child index of each wind input within the trial's WIND_STREAM children
+_WIND_INPUTS = ("speed_10m_m_s", "direction_deg", "severity", "sigma_w_mps", "file", "time", "seed")
+
+
+def trial_rng(root_seed: int, *key: int) -> np.random.Generator:
+    """The generator of one stream of one trial: ``SeedSequence(root_seed, spawn_key=key)``."""
+    return np.random.default_rng(np.random.SeedSequence(root_seed, spawn_key=tuple(int(k) for k in key)))
+
+
+def draw_value(spec, rng: np.random.Generator):
+    """One draw of a config value: a fixed value is returned as is, a distribution is sampled."""
+    if isinstance(spec, Uniform):
+        return float(rng.uniform(spec.low, spec.high))
+    if isinstance(spec, Normal):
+        value = float(rng.normal(spec.mean, spec.std))
+        return float(np.clip(value, *spec.clip)) if spec.clip is not None else value
+    if isinstance(spec, Choice):
+        p = None
+        if spec.weights is not None:
+            p = np.asarray(spec.weights, dtype=float) / float(np.sum(spec.weights))
+        return spec.values[int(rng.choice(len(spec.values), p=p))]
+    return spec
+
+
+@dataclass(frozen=True)
+class WindDraw:
+    """The wind scenario of one trial, in the wind stage's conventions. speed_10m_m_s: mean wind at 10 m
+    above the sea; direction_deg: meteorological (blowing FROM, clockwise from north); severity: Dryden
+    severity; sigma_w_mps: explicit turbulence intensity or None; file/time: mesoscale output (None: the
+    ``wind:`` section's); seed: of the turbulence (and gust) realisation."""
+
+    speed_10m_m_s: float
+    direction_deg: float
+    severity: str
+    sigma_w_mps: float | None
+    file: str | None
+    time: str | None
+    seed: int
+
+
+def draw_wind(section: CampaignSection, root_seed: int, trial_id: int) -> WindDraw:
+    """The wind of trial ``trial_id``; depends only on (root_seed, trial_id, section.wind), not on the path."""
+    spec = section.wind
+    specs = {"speed_10m_m_s": spec.speed_10m_m_s, "direction_deg": spec.direction_deg,
+             "severity": spec.turbulence.severity, "sigma_w_mps": spec.turbulence.sigma_w_mps,
+             "file": spec.mesoscale.file, "time": spec.mesoscale.time}
+    values = {name: draw_value(specs[name], trial_rng(root_seed, WIND_STREAM, trial_id, j))
+              for j, name in enumerate(_WIND_INPUTS[:-1])}
+    seed = int(trial_rng(root_seed, WIND_STREAM, trial_id, len(_WIND_INPUTS) - 1).integers(2**63 - 1))
+    sigma = values["sigma_w_mps"]
+    return WindDraw(speed_10m_m_s=float(values["speed_10m_m_s"]),
+                    direction_deg=float(values["direction_deg"]) % 360.0,
+                    severity=str(values["severity"]), sigma_w_mps=None if sigma is None else max(0.0, float(sigma)),
+                    file=None if values["file"] is None else str(values["file"]),
+                    time=None if values["time"] is None else str(values["time"]), seed=seed)
+
+
+@lru_cache(maxsize=8)
+def _lhs_design(root_seed: int, n_trials: int, dims: int) -> np.ndarray:
+    """(n_trials, dims) Latin hypercube in [0, 1): one per campaign, cached per process."""
+    engine = qmc.LatinHypercube(d=dims, seed=np.random.default_rng(
+        np.random.SeedSequence(root_seed, spawn_key=(PERTURB_STREAM,))))
+    return engine.random(n_trials)
+
+
+@lru_cache(maxsize=8)
+def _sobol_engine(root_seed: int, dims: int) -> qmc.Sobol:
+    return qmc.Sobol(d=dims, scramble=True, seed=np.random.default_rng(
+        np.random.SeedSequence(root_seed, spawn_key=(PERTURB_STREAM,))))
+
+
+def unit_design_point(sampler: str, root_seed: int, n_trials: int, trial_id: int, dims: int) -> np.ndarray:
+    """Point ``trial_id`` of the campaign's design in [0, 1)^dims."""
+    if sampler == "lhs":
+        return _lhs_design(root_seed, n_trials, dims)[trial_id]
+    engine = _sobol_engine(root_seed, dims)
+    engine.reset()
+    if trial_id:  # scipy's fast_forward(0) overflows
+        engine.fast_forward(trial_id)
+    return engine.random(1)[0]
+
+
+def commanded_offsets(section: CampaignSection, root_seed: int, trial_id: int, n_views: int) -> np.ndarray:
+    """(n_views, 4) commanded offsets (dx, dy, dz m, dyaw rad) of trial ``trial_id`` from the planned views."""
+    pert = section.perturbation
+    if pert.design == "none":
+        return np.zeros((n_views, 4))
+    u = unit_design_point(pert.sampler, root_seed, section.n_trials, trial_id, 4 * n_views).reshape(n_views, 4)
+    half = np.array([pert.position_half_width_m] * 3 + [np.radians(pert.yaw_half_width_deg)])
+    return (2.0 * u - 1.0) * half
+
+
+def disturbance_factors(section: CampaignSection, root_seed: int, trial_id: int, n_views: int) -> np.ndarray:
+    """(n_views, 4) factors (1 + e), e ~ U(-f, f), applied to the wind-induced part of the flown offsets."""
+    f = section.perturbation.flown_disturbance
+    rng = trial_rng(root_seed, DISTURB_STREAM, trial_id)
+    e = rng.uniform(-f, f, size=(n_views, 4)) if f > 0 else np.zeros((n_views, 4))
+    return 1.0 + e
+
+
+@dataclass(frozen=True)
+class TrialInputs:
+    """Everything a trial's evaluation needs besides the campaign context (path, ship, models).
+
+    commanded_offsets (n_views, 4): dx, dy, dz m, dyaw rad, added to the planned viewpoints before flying;
+    disturbance (n_views, 4): factors on the wind-induced part of the flown offsets; flight_seed/oracle_seed:
+    for randomness of the flight and the oracle."""
+
+    trial_id: int
+    wind: WindDraw
+    commanded_offsets: np.ndarray
+    disturbance: np.ndarray
+    flight_seed: int
+    oracle_seed: int
+    extra: dict = field(default_factory=dict)
+
+
+def trial_inputs(section: CampaignSection, root_seed: int, trial_id: int, n_views: int) -> TrialInputs:
+    """All draws of one trial (pure function of its arguments)."""
+    seeds = trial_rng(root_seed, FLIGHT_STREAM, trial_id).integers(2**63 - 1, size=2)
+    return TrialInputs(trial_id=int(trial_id), wind=draw_wind(section, root_seed, trial_id),
+                       commanded_offsets=commanded_offsets(section, root_seed, trial_id, n_views),
+                       disturbance=disturbance_factors(section, root_seed, trial_id, n_views),
+                       flight_seed=int(seeds[0]), oracle_seed=int(seeds[1]))
