@@ -1,0 +1,54 @@
+"""Shared fixtures: trial data from a known function, a small trained surrogate, a campaign folder."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+import torch
+
+from wrp_eval.surrogate.config import SurrogateSection
+from wrp_eval.surrogate.data import known_function_trials
+from wrp_eval.surrogate.model import Surrogate, SurrogateMeta, ViewSequenceCNN
+
+torch.set_num_threads(1)
+
+N_VIEWS = 8
+
+
+@pytest.fixture(scope="session")
+def known_data():
+    """600 trials of 8 viewpoints from the known quadratic function (noise 0.005 m) and its parameters."""
+    return known_function_trials(600, N_VIEWS, np.random.default_rng(42), noise_m=0.005)
+
+
+@pytest.fixture(scope="session")
+def fast_section():
+    return SurrogateSection(epochs=300, patience=40, batch_size=32, lr=3e-3, channels=32, kernel=3, hidden=64)
+
+
+@pytest.fixture(scope="session")
+def trained(known_data, fast_section):
+    from wrp_eval.surrogate.train import train_surrogate
+    data, _ = known_data
+    return train_surrogate(data, fast_section, seed=3)
+
+
+def random_surrogate(n_views: int, channels: int = 8, kernel: int = 3, layers: int = 2, seed: int = 0,
+                     pose: bool = True, digest: str | None = None) -> Surrogate:
+    """An untrained network with non-trivial standardisation (for exactness and checkpoint tests)."""
+    rng = np.random.default_rng(seed)
+    arch = {"in_channels": 11 if pose else 4, "channels": channels, "kernel": kernel, "layers": layers,
+            "hidden": 16, "outputs": 1}
+    with torch.random.fork_rng(devices=[]):
+        torch.manual_seed(seed)
+        net = ViewSequenceCNN(**arch)
+    planned = rng.normal(size=(n_views, 7))
+    meta = SurrogateMeta(n_views=n_views, path_digest=digest, architecture=arch,
+                         offset_mean=rng.normal(0, 0.1, 4).tolist(), offset_std=rng.uniform(0.5, 2, 4).tolist(),
+                         error_mean=0.7, error_std=0.2,
+                         pose_mean=planned.mean(0).tolist() if pose else None,
+                         pose_std=planned.std(0).tolist() if pose else None,
+                         planned_pose=planned.tolist() if pose else None,
+                         offset_low=[-2, -2, -2, -0.35], offset_high=[2, 2, 2, 0.35])
+    return Surrogate(net, meta)
+

@@ -1,0 +1,45 @@
+import numpy as np
+import pytest
+
+from wrp_eval.errors import InputError
+from wrp_eval.surrogate.data import TrialData, load_campaign_trials, planned_pose_features, split_indices
+
+from .helpers import make_campaign
+
+
+def test_load_campaign_trials_reads_the_store(tmp_path):
+    path, digest, commanded, flown, error = make_campaign(tmp_path, 20, 5, nan_trials=(3,), failed_trials=(4,))
+    data = load_campaign_trials(tmp_path)
+    keep = [k for k in range(20) if k != 3]
+    assert data.n_trials == 19 and data.n_views == 5
+    np.testing.assert_allclose(data.offsets, flown[keep])
+    np.testing.assert_allclose(data.deviation, flown[keep] - commanded[keep])
+    assert np.isnan(data.error[keep.index(4)]) and data.failed[keep.index(4)]
+    assert data.path_digest == digest
+    np.testing.assert_allclose(data.planned_pose[:, :3], path.positions)
+    assert list(data.trial_id) == keep
+
+
+def test_load_campaign_refuses_non_campaign(tmp_path):
+    with pytest.raises(InputError, match="not a campaign folder"):
+        load_campaign_trials(tmp_path)
+
+
+def test_split_indices_partition():
+    tr, va, te = split_indices(100, 0.1, 0.2, np.random.default_rng(0))
+    assert len(va) == 10 and len(te) == 20 and len(tr) == 70
+    assert sorted(np.concatenate([tr, va, te])) == list(range(100))
+    with pytest.raises(InputError):
+        split_indices(3, 0.3, 0.3, np.random.default_rng(0))
+
+
+def test_trial_data_shape_checks():
+    with pytest.raises(InputError, match="offsets"):
+        TrialData(np.zeros((3, 4, 3)), np.zeros(3), np.zeros(3, bool))
+    with pytest.raises(InputError, match="error"):
+        TrialData(np.zeros((3, 4, 4)), np.zeros(2), np.zeros(3, bool))
+
+
+def test_planned_pose_features_hand_computed():
+    f = planned_pose_features(np.array([[1.0, 2, 3], [4, 5, 6]]), np.array([0.0, np.pi / 2]), np.array([-0.1, 0]))
+    np.testing.assert_allclose(f, [[1, 2, 3, 1, 0, -0.1, 0], [4, 5, 6, 0, 1, 0, 1]], atol=1e-12)

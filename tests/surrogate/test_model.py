@@ -1,0 +1,92 @@
+import numpy as np
+import pytest
+import torch
+
+from wrp_eval.errors import InputError
+from wrp_eval.surrogate.model import Surrogate, ViewQuery
+
+from .conftest import random_surrogate
+
+
+@pytest.mark.parametrize("kernel,layers", [(3, 2), (5, 2), (3, 3), (1, 1)])
+def test_view_query_matches_full_forward(kernel, layers):
+    """The incremental one-view evaluation equals a full forward pass, at the ends and in the middle."""
+    s = random_surrogate(9, kernel=kernel, layers=layers)
+    rng = np.random.default_rng(1)
+    base = rng.normal(0, 1, (9, 4))
+    query = ViewQuery(s, base)
+    for view in (0, 1, 4, 7, 8):
+        cand = rng.normal(0, 1, (6, 4))
+        full = np.repeat(base[None], 6, axis=0)
+        full[:, view] = cand
+        np.testing.assert_allclose(query.errors(view, cand), s.predict(full), atol=2e-5)
+    assert query.forward_calls == 5 and query.queries == 30
+
+
+def test_view_query_update_view_moves_the_base():
+    s = random_surrogate(6)
+    query = ViewQuery(s, np.zeros((6, 4)))
+    off = np.array([0.5, -0.2, 0.1, 0.05])
+    query.update_view(2, off)
+    expect = np.zeros((1, 6, 4))
+    expect[0, 2] = off
+    cand = np.array([[0.1, 0.1, 0.1, 0.0]])
+    expect_q = expect.copy()
+    expect_q[0, 4] = cand[0]
+    np.testing.assert_allclose(query.errors(4, cand), s.predict(expect_q), atol=2e-5)
+
+
+def test_checkpoint_round_trip(tmp_path):
+    s = random_surrogate(7, digest="abc123")
+    file = tmp_path / "s.pt"
+    s.save(file)
+    loaded = Surrogate.load(file, n_views=7, path_digest="abc123")
+    x = np.random.default_rng(0).normal(size=(5, 7, 4))
+    np.testing.assert_array_equal(loaded.predict(x), s.predict(x))
+    assert loaded.meta == s.meta
+    assert not list(tmp_path.glob("*.tmp"))
+
+
+def test_checkpoint_refuses_other_path(tmp_path):
+    s = random_surrogate(7, digest="abc123")
+    s.save(tmp_path / "s.pt")
+    with pytest.raises(InputError, match="7 viewpoints"):
+        Surrogate.load(tmp_path / "s.pt", n_views=8)
+    with pytest.raises(InputError, match="trained for path abc123"):
+        Surrogate.load(tmp_path / "s.pt", n_views=7, path_digest="ffff")
+
+
+def test_checkpoint_refuses_corrupt_foreign_and_old_files(tmp_path):
+    s = random_surrogate(5)
+    good = tmp_path / "s.pt"
+    s.save(good)
+    data = good.read_bytes()
+    (tmp_path / "cut.pt").write_bytes(data[: len(data) // 2])
+    (tmp_path / "text.pt").write_text("hello")
+    torch.save({"weights": torch.zeros(2)}, tmp_path / "foreign.pt")
+    doc = torch.load(good, weights_only=True)
+    doc["version"] = 99
+    torch.save(doc, tmp_path / "old.pt")
+    doc["version"] = 1
+    doc["state_dict"] = {k: v for k, v in list(doc["state_dict"].items())[:-1]}
+    torch.save(doc, tmp_path / "missing.pt")
+    for name, pattern in [("cut.pt", "not a readable"), ("text.pt", "not a readable"),
+                          ("foreign.pt", "not a wrp-eval surrogate"), ("old.pt", "version 99"),
+                          ("missing.pt", "damaged"), ("absent.pt", "no such")]:
+        with pytest.raises(InputError, match=pattern) as err:
+            Surrogate.load(tmp_path / name)
+        assert "\n" not in str(err.value)
+
+
+def test_checkpoint_is_not_a_pickle_of_objects(tmp_path):
+    """A file holding an arbitrary Python object is refused by weights_only loading."""
+    import argparse
+    torch.save({"format": "wrp-eval-surrogate", "obj": argparse.Namespace(a=1)}, tmp_path / "evil.pt")
+    with pytest.raises(InputError, match="not a readable"):
+        Surrogate.load(tmp_path / "evil.pt")
+
+
+def test_predict_checks_shape():
+    s = random_surrogate(4)
+    with pytest.raises(ValueError):
+        s.predict(np.zeros((2, 5, 4)))

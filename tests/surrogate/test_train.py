@@ -1,0 +1,91 @@
+import json
+
+import numpy as np
+import pytest
+
+from wrp_eval.errors import InputError
+from wrp_eval.surrogate.data import known_function, known_function_trials
+from wrp_eval.surrogate.train import regression_metrics, train_surrogate, write_outputs
+
+
+def test_regression_metrics_hand_computed():
+    m = regression_metrics(np.array([1.0, 2.0, 3.0]), np.array([1.0, 2.0, 4.0]))
+    assert m["r2"] == pytest.approx(1 - 1 / 2)
+    assert m["rmse"] == pytest.approx(np.sqrt(1 / 3))
+    assert m["mae"] == pytest.approx(1 / 3)
+    assert m["n"] == 3
+
+
+def test_learner_fits_known_function_on_held_out_trials(trained, known_data):
+    data, params = known_data
+    test = trained.metrics["test"]
+    assert test["r2"] > 0.88, test   # noise ceiling of this data: ~0.99
+    # and on fresh trials of the same function (noise-free truth)
+    fresh, _ = known_function_trials(200, data.n_views, np.random.default_rng(7), noise_m=0.0)
+    pred = trained.surrogate.predict(fresh.offsets)
+    assert regression_metrics(known_function(fresh.offsets, params), pred)["r2"] > 0.88
+
+
+def test_split_is_by_trial_and_disjoint(trained, known_data):
+    data, _ = known_data
+    sets = [set(trained.split[k]) for k in ("train", "val", "test")]
+    assert not (sets[0] & sets[1] or sets[0] & sets[2] or sets[1] & sets[2])
+    assert len(sets[0] | sets[1] | sets[2]) == data.n_trials
+    assert trained.metrics["test"]["n"] == len(sets[2])
+
+
+def test_same_seed_same_weights_other_seed_differs(known_data):
+    from wrp_eval.surrogate.config import SurrogateSection
+    data, _ = known_data
+    section = SurrogateSection(epochs=3, patience=3, batch_size=64, channels=8)
+    a = train_surrogate(data, section, seed=5)
+    b = train_surrogate(data, section, seed=5)
+    c = train_surrogate(data, section, seed=6)
+    for k, v in a.surrogate.net.state_dict().items():
+        assert (v == b.surrogate.net.state_dict()[k]).all()
+    assert a.split == b.split and a.split != c.split
+    x = data.offsets[:4]
+    assert not np.allclose(a.surrogate.predict(x), c.surrogate.predict(x))
+
+
+def test_early_stopping_restores_best_epoch(known_data):
+    from wrp_eval.surrogate.config import SurrogateSection
+    data, _ = known_data
+    r = train_surrogate(data, SurrogateSection(epochs=40, patience=2, lr=0.5, channels=4), seed=0)
+    assert r.metrics["epochs_run"] < 40 or r.metrics["best_epoch"] <= 40
+    best = int(np.argmin(r.history["val_loss"])) + 1
+    assert r.metrics["best_epoch"] == best
+    assert r.metrics["epochs_run"] - best <= 2
+
+
+def test_failed_trials_are_left_out_of_the_error_fit(known_data):
+    from wrp_eval.surrogate.config import SurrogateSection
+    from wrp_eval.surrogate.data import TrialData
+    data, _ = known_data
+    failed = np.zeros(data.n_trials, bool)
+    failed[::3] = True
+    error = data.error.copy()
+    error[::3] = np.nan
+    d2 = TrialData(data.offsets, error, failed, data.planned_pose)
+    r = train_surrogate(d2, SurrogateSection(epochs=2, channels=4), seed=0)
+    assert r.metrics["n_used"] == data.n_trials - failed.sum()
+    r2 = train_surrogate(d2, SurrogateSection(epochs=2, channels=4, predict_failure=True), seed=0)
+    assert 0 <= r2.metrics["test"]["failure_brier"] <= 1
+    assert r2.surrogate.predict_failure(data.offsets[:3]).shape == (3,)
+
+
+def test_too_few_trials_is_input_error(known_data):
+    from wrp_eval.surrogate.data import TrialData
+    data, _ = known_data
+    with pytest.raises(InputError, match="usable trials"):
+        train_surrogate(TrialData(data.offsets[:5], data.error[:5], data.failed[:5], data.planned_pose))
+
+
+def test_write_outputs(trained, tmp_path):
+    files = write_outputs(trained, tmp_path)
+    doc = json.loads((tmp_path / "metrics.json").read_text())
+    assert {"r2", "rmse", "mae", "n"} <= set(doc["test"])
+    assert (tmp_path / "parity.png").read_bytes()[:4] == b"\x89PNG"
+    from wrp_eval.surrogate.model import Surrogate
+    s = Surrogate.load(files["checkpoint"], n_views=trained.surrogate.n_views)
+    assert s.meta.metrics["test"]["r2"] == trained.metrics["test"]["r2"]

@@ -1,0 +1,88 @@
+import json
+
+import numpy as np
+import pytest
+
+from wrp_eval.cli import main
+from wrp_eval.planning.path import Path as FlightPath
+
+from .conftest import helpers
+
+CONFIG = """
+run: {name: t, seed: 3}
+surrogate: {epochs: 4, patience: 2, channels: 8, hidden: 16, batch_size: 32}
+wrp: {iterations: 24, attitude_samples: 5, neighbourhood_samples: 4, block_iterations: 8,
+      e_original_m: 0.6, oracle_error: false}
+"""
+
+
+@pytest.fixture(scope="module")
+def trained_campaign(tmp_path_factory):
+    root = tmp_path_factory.mktemp("cli")
+    campaign = root / "campaign"
+    helpers.make_campaign(campaign, 60, 6, seed=1)
+    cfg = root / "cfg.yaml"
+    cfg.write_text(CONFIG)
+    assert main(["train", str(cfg), "--campaign", str(campaign), "--out", str(root / "sur"), "--quiet"]) == 0
+    return root, cfg, campaign
+
+
+def test_train_writes_checkpoint_metrics_and_plot(trained_campaign):
+    root, _, _ = trained_campaign
+    doc = json.loads((root / "sur" / "metrics.json").read_text())
+    assert doc["n_views"] == 6 and doc["test"]["n"] >= 1 and doc["path_digest"]
+    assert (root / "sur" / "parity.png").stat().st_size > 0 and (root / "sur" / "surrogate.pt").is_file()
+
+
+@pytest.mark.parametrize("kind", ["iswrp", "swrp"])
+def test_optimize_writes_wrp_path_and_table3(trained_campaign, kind):
+    root, cfg, campaign = trained_campaign
+    out = root / f"wrp-{kind}"
+    rc = main(["optimize", str(cfg), "--kind", kind, "--threshold", "0.5", "--out", str(out), "--campaign",
+               str(campaign), "--checkpoint", str(root / "sur" / "surrogate.pt"), "--quiet"])
+    assert rc == 0
+    doc = json.loads((out / "wrp_metrics.json").read_text())
+    t = doc["table3"]
+    assert {"offset_rate_pct", "position_offset_m", "rotation_offset_deg", "time_s", "oracle_error_m"} <= set(t)
+    assert t["kind"] == kind and t["threshold_m"] == 0.5 and t["e_original_m"] == 0.6
+    assert doc["sample_radius_source"].startswith("campaign")
+    # r_s = 0.95 quantile of |N(0, 0.3^2 I_3)| = 0.3 sqrt(chi2_3(0.95)) = 0.84 m (60 trials: loose)
+    assert np.allclose(doc["sample_radius_m"], 0.84, atol=0.25)
+    original = FlightPath.load(campaign / "path.json")
+    wrp = FlightPath.load(out / "path.json")
+    moved = np.array([v["moved"] for v in doc["viewpoints"]])
+    delta = wrp.positions - original.positions
+    assert np.allclose(np.abs(delta).sum(1) > 0, moved)
+    assert t["position_offset_m"] == pytest.approx(np.linalg.norm(delta, axis=1).sum(), rel=1e-9)
+
+
+def test_optimize_refuses_a_checkpoint_of_another_path(trained_campaign, tmp_path, capsys):
+    root, cfg, _ = trained_campaign
+    other = tmp_path / "other"
+    helpers.make_campaign(other, 12, 5, seed=2)
+    rc = main(["optimize", str(cfg), "--out", str(tmp_path / "o"), "--campaign", str(other),
+               "--checkpoint", str(root / "sur" / "surrogate.pt"), "--quiet"])
+    assert rc == 2
+    err = capsys.readouterr().err.strip()
+    assert "6 viewpoints" in err and "\n" not in err
+
+
+def test_optimize_refuses_a_negative_threshold(trained_campaign, capsys):
+    root, cfg, campaign = trained_campaign
+    assert main(["optimize", str(cfg), "--threshold", "-1", "--campaign", str(campaign), "--quiet"]) == 2
+
+
+def test_optimize_e_original_from_the_surrogate(trained_campaign, tmp_path):
+    root, _, campaign = trained_campaign
+    cfg = tmp_path / "cfg.yaml"
+    cfg.write_text(CONFIG.replace("e_original_m: 0.6,", "e_original_source: surrogate,"))
+    out = tmp_path / "o"
+    assert main(["optimize", str(cfg), "--out", str(out), "--campaign", str(campaign), "--checkpoint",
+                 str(root / "sur" / "surrogate.pt"), "--quiet"]) == 0
+    doc = json.loads((out / "wrp_metrics.json").read_text())
+    from wrp_eval.surrogate.model import Surrogate
+    s = Surrogate.load(root / "sur" / "surrogate.pt")
+    assert doc["table3"]["e_original_m"] == pytest.approx(s.predict(np.zeros((1, 6, 4)))[0])
+    assert doc["e_original_source"] == "surrogate at zero offsets"
+    # default threshold: 0.08 x E_original
+    assert doc["table3"]["threshold_m"] == pytest.approx(0.08 * doc["table3"]["e_original_m"])

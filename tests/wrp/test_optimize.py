@@ -1,0 +1,140 @@
+import numpy as np
+import pytest
+
+from wrp_eval.planning.path import Path as FlightPath
+from wrp_eval.wrp.optimize import (WrpParams, apply_offsets, interval_optimise, iteration_draws,
+                                   neighbourhood_statistic, sample_radii)
+
+from .conftest import params_for, small_surrogate
+
+
+def reference_optimise(s, p: WrpParams, seed: int) -> np.ndarray:
+    """Alg. 3 / 4 written as the paper's sequential loop, one iteration at a time, full forward passes,
+    the last accepted iteration kept (line 16 overwrites)."""
+    n = s.n_views
+    offsets = np.zeros((n, 4))
+    for i in range(n):
+        kept = np.zeros(4)
+        for j in range(p.iterations):
+            d = iteration_draws(seed, i, j // p.block_iterations, p)
+            r = j % p.block_iterations
+            cand = offsets.copy()
+            errs = []
+            for a in d.yaw[r]:                                             # Alg. 4, one query at a time
+                cand[i] = [*d.position[r], a]
+                errs.append(s.predict(cand[None])[0])
+            best = int(np.argmin(errs))
+            e = errs[best]
+            if abs(e - p.e_original_m) > p.threshold_m:
+                continue
+            sample_errors = []
+            for k in range(p.neighbourhood_samples):
+                centre = d.position[r] + d.neighbour_offset[r, k]
+                ek = []
+                for a in d.neighbour_yaw[r, k]:
+                    cand[i] = [*centre, a]
+                    ek.append(s.predict(cand[None])[0])
+                sample_errors.append(min(ek))
+            if neighbourhood_statistic(np.array(sample_errors), p) <= p.threshold_m:
+                kept = np.array([*d.position[r], d.yaw[r, best]])
+        offsets[i] = kept
+    return offsets
+
+
+@pytest.mark.parametrize("kind,threshold,gain,error_std", [("iswrp", 0.002, 20.0, 1.0), ("swrp", 1e-5, 1.0, 0.05)])
+def test_batched_scan_equals_the_sequential_algorithm(kind, threshold, gain, error_std):
+    s = small_surrogate(5, seed=1, gain=gain, error_std=error_std)
+    p = params_for(s, kind, threshold, iterations=20, block_iterations=6)
+    result = interval_optimise(s, p, seed=11)
+    expect = reference_optimise(s, p, seed=11)
+    np.testing.assert_allclose(result.offsets, expect, atol=1e-9)
+    assert 0 < result.moved.sum() < 5                              # the case is not trivial
+    assert np.any((result.accepted_iteration >= 0) & (result.accepted_iteration < p.iterations - 1))
+
+
+@pytest.mark.parametrize("kind,threshold", [("iswrp", 0.004), ("swrp", 1e-3)])
+def test_accepted_moves_satisfy_the_criterion_and_bounds(kind, threshold):
+    surrogate = small_surrogate(6, seed=0, error_std=1.0, gain=20.0)
+    p = params_for(surrogate, kind, threshold)
+    r = interval_optimise(surrogate, p, seed=2)
+    assert r.moved.any()
+    assert np.all(np.abs(r.offsets[:, :3]) <= p.step_m)
+    assert np.all(np.abs(r.offsets[:, 3]) <= p.yaw_range_rad)
+    for i in np.flatnonzero(r.moved):
+        context = r.offsets.copy()
+        context[i + 1:] = 0.0                 # later viewpoints were still at their planned pose
+        e = surrogate.predict(context[None])[0]
+        assert e == pytest.approx(r.stage1_error[i], abs=2e-5)
+        assert abs(e - p.e_original_m) <= p.threshold_m + 1e-9
+        assert r.neighbourhood_stat[i] <= p.threshold_m
+    assert np.all(r.offsets[~r.moved] == 0)
+    assert r.predicted_error_m == pytest.approx(surrogate.predict(r.offsets[None])[0])
+
+
+def test_threshold_zero_moves_nothing_and_scores_every_iteration_once_per_block(surrogate):
+    p = params_for(surrogate, "iswrp", 0.0)
+    r = interval_optimise(surrogate, p, seed=0)
+    assert not r.moved.any() and np.all(r.offsets == 0)
+    blocks = -(-p.iterations // p.block_iterations)
+    # one batched forward pass per block of iterations (every attitude sample of the block together)
+    assert r.forward_calls == surrogate.n_views * blocks
+    assert r.queries == surrogate.n_views * p.iterations * p.attitude_samples
+    assert r.iterations_scored == surrogate.n_views * p.iterations
+
+
+def test_forward_pass_count_with_stage_two(surrogate):
+    p = params_for(surrogate, "swrp", 1.0, stage2_batch=100)          # everything passes at once
+    r = interval_optimise(surrogate, p, seed=0)
+    assert r.moved.all()
+    # per viewpoint: one stage-1 pass over the last block, one stage-2 pass over all its survivors
+    assert r.forward_calls == 2 * surrogate.n_views
+    assert np.all(r.accepted_iteration == p.iterations - 1)           # the last iteration wins
+
+
+def test_same_seed_same_result_and_batching_does_not_matter(surrogate):
+    p = params_for(surrogate, "iswrp", 0.01)
+    a = interval_optimise(surrogate, p, seed=4)
+    b = interval_optimise(surrogate, p, seed=4)
+    c = interval_optimise(surrogate, WrpParams(**{**p.__dict__, "stage2_batch": 1}), seed=4)
+    d = interval_optimise(surrogate, p, seed=5)
+    np.testing.assert_array_equal(a.offsets, b.offsets)
+    np.testing.assert_array_equal(a.offsets, c.offsets)
+    assert not np.array_equal(a.offsets, d.offsets)
+
+
+def test_neighbourhood_statistic_hand_computed():
+    e = np.array([[1.0, 2.0, 3.0]])
+    p = WrpParams("iswrp", 0.1, 1.5, np.ones(1))
+    assert neighbourhood_statistic(e, p)[0] == pytest.approx(0.5)
+    assert neighbourhood_statistic(e, WrpParams("swrp", 0.1, 1.5, np.ones(1)))[0] == pytest.approx(2 / 3)
+    assert neighbourhood_statistic(e, WrpParams("swrp", 0.1, 1.5, np.ones(1), swrp_spread="std"))[0] == \
+        pytest.approx(np.sqrt(2 / 3))
+
+
+def test_draws_respect_radii_and_ranges():
+    p = WrpParams("iswrp", 0.1, 1.0, np.array([0.3, 2.0]), attitude_samples=7, neighbourhood_samples=50,
+                  step_m=1.2, block_iterations=30)
+    for view, radius in ((0, 0.3), (1, 2.0)):
+        d = iteration_draws(1, view, 0, p)
+        assert np.all(np.linalg.norm(d.neighbour_offset, axis=-1) <= radius + 1e-12)
+        assert np.linalg.norm(d.neighbour_offset, axis=-1).max() > 0.8 * radius
+        assert np.all(np.abs(d.position) <= 1.2) and np.all(np.abs(d.yaw) <= p.yaw_range_rad)
+        assert d.yaw.shape == (30, 7) and d.neighbour_yaw.shape == (30, 50, 7)
+
+
+def test_sample_radii_quantile():
+    dev = np.zeros((5, 2, 4))
+    dev[:, 0, 0] = [0.1, 0.2, 0.3, 0.4, 0.5]
+    dev[:, 1, 1] = [1, 1, 1, 1, np.nan]
+    np.testing.assert_allclose(sample_radii(dev, 0.5), [0.3, 1.0])
+
+
+def test_apply_offsets_moves_positions_and_wraps_yaw():
+    n = 3
+    path = FlightPath(np.zeros((n, 3)), np.array([3.0, 0.0, -3.0]), np.full(n, -0.2), np.zeros(n, int),
+                      np.zeros(n, int), np.zeros(n, int))
+    off = np.array([[1, 0, 0, 0.3], [0, 2, 0, 0.0], [0, 0, -1, -0.3]])
+    wrp = apply_offsets(path, off, {"wrp": {"kind": "iswrp"}})
+    np.testing.assert_allclose(wrp.positions, off[:, :3])
+    np.testing.assert_allclose(wrp.yaw, [3.3 - 2 * np.pi, 0.0, -3.3 + 2 * np.pi])
+    assert wrp.metadata["wrp"]["kind"] == "iswrp" and np.all(wrp.pitch == path.pitch)

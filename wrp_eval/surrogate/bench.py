@@ -1,0 +1,79 @@
+"""``wrp-eval bench --only surrogate``: held-out accuracy, training time and query throughput of the surrogate.
+
+Data: the campaign folder named by the environment variable ``WRP_EVAL_BENCH_SURROGATE_CAMPAIGN`` (real MuJoCo
+flights scored by the oracle), else SYNTHETIC trials of a known quadratic function of the offsets (2,000
+trials x 49 viewpoints, noise 0.01 m) -- a test of the learner, NOT a figure comparable with the paper's
+R^2 0.98; the record's note says which.
+
+surrogate.r2_test / rmse_test: held-out test trials (15 %), default ``surrogate:`` section, seed 0.
+surrogate.train_s: wall time of that training (early stopping included).
+surrogate.queries_per_s: candidates per second scored by the optimiser's exact incremental evaluator
+(:class:`ViewQuery`, batches of 3,200 = 64 iterations x 50 attitudes); surrogate.full_queries_per_s: plain
+full forward passes of the same network, for comparison.
+"""
+
+from __future__ import annotations
+
+import os
+import time
+from functools import lru_cache
+
+import numpy as np
+
+from wrp_eval.bench import BenchRecord
+
+BENCH_ENV = "WRP_EVAL_BENCH_SURROGATE_CAMPAIGN"
+
+
+@lru_cache(maxsize=1)
+def bench_surrogate():
+    """(TrainResult, TrialData, description) for the bench data (cached: the wrp group reuses it)."""
+    import torch
+    from wrp_eval.surrogate.config import SurrogateSection
+    from wrp_eval.surrogate.data import known_function_trials, load_campaign_trials
+    from wrp_eval.surrogate.train import train_surrogate
+    torch.set_num_threads(1)
+    folder = os.environ.get(BENCH_ENV)
+    if folder:
+        data = load_campaign_trials(folder)
+        what = f"campaign data: {data.source}"
+    else:
+        data, _ = known_function_trials(2000, 49, np.random.default_rng(0), noise_m=0.01)
+        what = ("SYNTHETIC known-function data (2000 trials x 49 views), not real campaign data: NOT comparable "
+                f"with the paper's R^2; set {BENCH_ENV}=<campaign dir> for the real figure")
+    return train_surrogate(data, SurrogateSection(), seed=0), data, what
+
+
+def _rate(fn, queries: int, min_s: float = 1.0) -> float:
+    fn()
+    count, start = 0, time.perf_counter()
+    while time.perf_counter() - start < min_s:
+        fn()
+        count += 1
+    return queries * count / (time.perf_counter() - start)
+
+
+def run_bench() -> list[BenchRecord]:
+    from wrp_eval.surrogate.model import ViewQuery
+    result, data, what = bench_surrogate()
+    s = result.surrogate
+    test = result.metrics["test"]
+    arch = s.meta.architecture
+    note = f"{what}; {test['n']} held-out trials; arch {arch}"
+    rng = np.random.default_rng(1)
+    cand = rng.uniform(-1, 1, (3200, 4)) * np.array([2, 2, 2, 0.35])
+    query = ViewQuery(s, np.zeros((s.n_views, 4)))
+    incremental = _rate(lambda: query.errors(s.n_views // 2, cand), len(cand))
+    full_batch = np.repeat(np.zeros((1, s.n_views, 4)), 3200, axis=0)
+    full = _rate(lambda: s.predict(full_batch), len(full_batch))
+    return [
+        BenchRecord("surrogate.r2_test", test["r2"], "", "paper Sec. 4.1 (300 experiments, MATLAB CNN)", 0.98, note),
+        BenchRecord("surrogate.rmse_test", test["rmse"], "m", "paper Sec. 4.1 (error ~3 m scale)", 0.16, note),
+        BenchRecord("surrogate.train_s", result.seconds, "s", None, None,
+                    f"{result.metrics['epochs_run']} epochs (best {result.metrics['best_epoch']}), "
+                    f"{result.metrics['n_used']} trials, 1 torch thread"),
+        BenchRecord("surrogate.queries_per_s", incremental, "queries/s", None, None,
+                    f"one-viewpoint candidates, exact incremental evaluation, {s.n_views} views, batches of 3200"),
+        BenchRecord("surrogate.full_queries_per_s", full, "queries/s", None, None,
+                    f"full forward passes, {s.n_views} views, batches of 3200"),
+    ]

@@ -1,0 +1,55 @@
+"""``wrp-eval train CONFIG``: fit the surrogate on a campaign's trials (the ``surrogate:`` section).
+
+    wrp-eval train CONFIG [--campaign DIR] [--out DIR] [--quiet]
+
+Writes <out>/surrogate.pt (state_dict + metadata, loaded with torch.load(weights_only=True)),
+<out>/metrics.json (R^2, RMSE, MAE of the held-out test trials; train/val too) and <out>/parity.png.
+"""
+
+from __future__ import annotations
+
+import argparse
+from pathlib import Path
+
+
+def default_campaign_dir(config) -> Path:
+    """The campaign folder the surrogate learns from: ``surrogate.campaign_dir``, else the campaign stage's
+    default ``campaign.outputs.dir`` or logs/<run.name>/campaign."""
+    if config.surrogate.campaign_dir is not None:
+        return Path(config.surrogate.campaign_dir)
+    return Path(config.campaign.outputs.dir or Path("logs") / config.run.name / "campaign")
+
+
+def default_out_dir(config) -> Path:
+    return Path(config.surrogate.out_dir or Path("logs") / config.run.name / "surrogate")
+
+
+def _train(args: argparse.Namespace) -> int:
+    from wrp_eval.config import load_experiment
+    from wrp_eval.surrogate.data import load_campaign_trials
+    from wrp_eval.surrogate.train import train_surrogate, write_outputs
+    config = load_experiment(args.config)
+    section = config.surrogate
+    campaign = Path(args.campaign) if args.campaign else default_campaign_dir(config)
+    out = Path(args.out) if args.out else default_out_dir(config)
+    data = load_campaign_trials(campaign)
+    seed = section.seed if section.seed is not None else config.run.seed
+    result = train_surrogate(data, section, seed=seed, progress=not args.quiet)
+    files = write_outputs(result, out)
+    m = result.metrics["test"]
+    print(f"surrogate {files['checkpoint']}: test R^2 {m['r2']:.4f}, RMSE {m['rmse']:.4g} m, MAE {m['mae']:.4g} m "
+          f"on {m['n']} held-out trials ({result.metrics['n_used']} used of {data.n_trials}; "
+          f"{result.metrics['epochs_run']} epochs, {result.seconds:.1f} s)")
+    return 0
+
+
+def register(sub: argparse._SubParsersAction) -> None:
+    p = sub.add_parser("train", help="train the surrogate (offsets -> reconstruction error) on a campaign",
+                       description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+    p.add_argument("config", metavar="CONFIG")
+    p.add_argument("--campaign", default=None, help="campaign folder (default surrogate.campaign_dir or the "
+                                                    "campaign's default folder)")
+    p.add_argument("--out", default=None, help="output folder (default surrogate.out_dir or "
+                                               "logs/<run.name>/surrogate)")
+    p.add_argument("--quiet", action="store_true", help="no progress output")
+    p.set_defaults(func=_train)

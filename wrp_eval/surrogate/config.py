@@ -1,0 +1,51 @@
+"""The ``surrogate:`` section of an experiment config: training data, split, optimiser, architecture, seed."""
+
+from __future__ import annotations
+
+from pydantic import Field, model_validator
+
+from wrp_eval.validation import StrictModel
+
+
+class SurrogateSection(StrictModel):
+    """How ``wrp-eval train`` fits the surrogate.
+
+    campaign_dir: the campaign folder whose ``trials/`` Parquet store is the training data (none:
+    ``logs/<run.name>/campaign``, the campaign stage's default). Splits are by trial (a trial is never in two
+    splits); the test split is held out and only scored at the end. Early stopping watches the validation
+    loss and restores the best epoch's weights.
+    """
+
+    campaign_dir: str | None = None
+    out_dir: str | None = Field(None, description="checkpoint, metrics and plot folder "
+                                "(none: logs/<run.name>/surrogate)")
+    val_fraction: float = Field(0.15, gt=0, lt=1)
+    test_fraction: float = Field(0.15, gt=0, lt=1)
+    epochs: int = Field(400, ge=1, le=100_000)
+    patience: int = Field(40, ge=1, description="epochs without a better validation loss before stopping")
+    lr: float = Field(3e-3, gt=0, le=1)
+    weight_decay: float = Field(0.0, ge=0)
+    batch_size: int = Field(128, ge=1, le=65_536)
+    channels: int = Field(16, ge=1, le=1024, description="feature channels of every conv layer (16 and kernel 3: "
+                          "fast enough for the optimiser's ~10^6 queries; see README)")
+    kernel: int = Field(3, ge=1, le=31, description="conv kernel size along the viewpoint sequence (odd)")
+    layers: int = Field(2, ge=1, le=8, description="conv layers")
+    hidden: int = Field(64, ge=1, le=4096, description="units of the head's hidden layer")
+    pose_channels: bool = Field(True, description="add the planned pose of every viewpoint (x, y, z, cos yaw, "
+                                "sin yaw, pitch, index) as constant input channels, so that the network knows "
+                                "WHICH viewpoint an offset belongs to")
+    predict_failure: bool = Field(False, description="second output: logit of the trial failing")
+    use_failed_trials: bool = Field(False, description="train the error output on failed trials whose error is "
+                                    "finite too (default: only trials that did not fail)")
+    seed: int | None = Field(None, ge=0, description="seed of the split, the initial weights and the batch "
+                             "order (none: run.seed)")
+    threads: int = Field(1, ge=1, le=2, description="torch CPU threads (1: on this shared 2-core machine two "
+                         "threads measured 10-20x SLOWER than one, OpenMP threads spin-waiting for a busy core)")
+
+    @model_validator(mode="after")
+    def _checks(self) -> "SurrogateSection":
+        if self.kernel % 2 == 0:
+            raise ValueError(f"kernel must be odd (a centred 'same' convolution), got {self.kernel}")
+        if self.val_fraction + self.test_fraction >= 0.9:
+            raise ValueError("val_fraction + test_fraction must leave at least 10 % of the trials for training")
+        return self

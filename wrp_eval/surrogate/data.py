@@ -1,0 +1,163 @@
+"""Training data of the surrogate: a small value type, the campaign adapter, the split, a known test function.
+
+Offsets are measured from the PLANNED viewpoints of one path: (dx, dy, dz) m in the ship frame and dyaw rad
+(the campaign stage's convention, wrp_eval/campaign/records.py). The surrogate learns the flown offsets ->
+oracle error map (the paper's fit function f(p, a), Sec. 4.1).
+"""
+
+from __future__ import annotations
+
+import json
+from dataclasses import dataclass
+from pathlib import Path
+
+import numpy as np
+
+from wrp_eval.errors import InputError
+
+OFFSET_NAMES = ("dx_m", "dy_m", "dz_m", "dyaw_rad")
+POSE_NAMES = ("x_m", "y_m", "z_m", "cos_yaw", "sin_yaw", "pitch_rad", "index")
+
+
+@dataclass(frozen=True)
+class TrialData:
+    """Trials of one path.
+
+    offsets (n_trials, n_views, 4): flown offsets (dx, dy, dz m, dyaw rad); error (n_trials,) m: the oracle's
+    reconstruction error (NaN where none); failed (n_trials,) bool; planned_pose (n_views, 7) or None: the
+    planned pose features of every viewpoint (:data:`POSE_NAMES`); trial_id (n_trials,) int;
+    path_digest: the campaign's content hash of the path (None for data not tied to a stored path);
+    deviation (n_trials, n_views, 4) or None: the wind-induced part (flown - commanded), for r_s.
+    """
+
+    offsets: np.ndarray
+    error: np.ndarray
+    failed: np.ndarray
+    planned_pose: np.ndarray | None = None
+    trial_id: np.ndarray | None = None
+    path_digest: str | None = None
+    deviation: np.ndarray | None = None
+    source: str = ""
+
+    @property
+    def n_trials(self) -> int:
+        return int(self.offsets.shape[0])
+
+    @property
+    def n_views(self) -> int:
+        return int(self.offsets.shape[1])
+
+    def __post_init__(self) -> None:
+        off = np.asarray(self.offsets)
+        if off.ndim != 3 or off.shape[2] != 4:
+            raise InputError(self.source or "trial data", f"offsets must be (n_trials, n_views, 4), got {off.shape}")
+        if np.asarray(self.error).shape != (off.shape[0],):
+            raise InputError(self.source or "trial data",
+                             f"error must be ({off.shape[0]},), got {np.asarray(self.error).shape}")
+        if self.planned_pose is not None and np.asarray(self.planned_pose).shape[0] != off.shape[1]:
+            raise InputError(self.source or "trial data", "planned_pose has a different number of viewpoints")
+
+
+def planned_pose_features(positions: np.ndarray, yaw: np.ndarray, pitch: np.ndarray) -> np.ndarray:
+    """(n_views, 7) pose features of a path: x, y, z (m), cos yaw, sin yaw, pitch (rad), index / (n - 1)."""
+    n = positions.shape[0]
+    index = np.arange(n) / max(1, n - 1)
+    return np.column_stack([positions, np.cos(yaw), np.sin(yaw), pitch, index]).astype(float)
+
+
+def path_pose_features(path) -> np.ndarray:
+    """Pose features of a :class:`wrp_eval.planning.path.Path`."""
+    return planned_pose_features(np.asarray(path.positions, float), np.asarray(path.yaw, float),
+                                 np.asarray(path.pitch, float))
+
+
+def load_campaign_trials(campaign_dir: str | Path) -> TrialData:
+    """The trials of a campaign folder (the campaign stage's ``TrialStore``): flown offsets, error_m, failed.
+
+    Trials whose flown offsets are not all finite (views never taken, or a trial that raised) have no input
+    the network can take: they are dropped here and counted in ``source``. The planned pose comes from the
+    folder's path.json; trials are returned in trial-id order.
+    """
+    from wrp_eval.campaign.records import column_array
+    from wrp_eval.campaign.store import TrialStore
+    from wrp_eval.planning.path import Path as FlightPath
+
+    folder = Path(campaign_dir)
+    store = TrialStore(folder)
+    meta = store.read_meta()
+    if meta is None:
+        raise InputError(folder, "not a campaign folder (no campaign.json); run `wrp-eval campaign` first")
+    table = store.read_table(["trial_id", "n_views", "path_digest", "commanded_offsets", "flown_offsets",
+                              "error_m", "failed"])
+    if len(table) == 0:
+        raise InputError(folder, "the campaign has no stored trials yet")
+    path = FlightPath.load(folder / "path.json")
+    flown = column_array(table, "flown_offsets")
+    commanded = column_array(table, "commanded_offsets")
+    if flown.shape[1] != len(path):
+        raise InputError(folder, f"trials have {flown.shape[1]} viewpoints but path.json has {len(path)}")
+    digests = set(table.column("path_digest").to_pylist())
+    if len(digests) != 1:
+        raise InputError(folder, f"trials of {len(digests)} different paths in one store")
+    error = table.column("error_m").to_numpy(zero_copy_only=False).astype(float)
+    failed = table.column("failed").to_numpy(zero_copy_only=False).astype(bool)
+    trial_id = table.column("trial_id").to_numpy().astype(int)
+    complete = np.all(np.isfinite(flown), axis=(1, 2))
+    order = np.argsort(trial_id[complete], kind="stable")
+    keep = np.flatnonzero(complete)[order]
+    dropped = int((~complete).sum())
+    return TrialData(offsets=flown[keep], error=error[keep], failed=failed[keep],
+                     planned_pose=path_pose_features(path), trial_id=trial_id[keep],
+                     path_digest=str(meta.get("path_digest", digests.pop())),
+                     deviation=flown[keep] - commanded[keep],
+                     source=f"{folder} ({len(keep)} trials with every view taken, {dropped} without)")
+
+
+def split_indices(n: int, val_fraction: float, test_fraction: float,
+                  rng: np.random.Generator) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """A random partition of ``range(n)`` trials into (train, val, test) index arrays (each sorted)."""
+    n_test = max(1, int(round(test_fraction * n)))
+    n_val = max(1, int(round(val_fraction * n)))
+    if n - n_test - n_val < 2:
+        raise InputError("surrogate data", f"{n} usable trials are too few to split into train/val/test")
+    perm = rng.permutation(n)
+    return np.sort(perm[n_test + n_val:]), np.sort(perm[n_test:n_test + n_val]), np.sort(perm[:n_test])
+
+
+def known_function_trials(n_trials: int, n_views: int, rng: np.random.Generator, *,
+                          position_half_width_m: float = 2.0, yaw_half_width_rad: float = np.radians(20.0),
+                          noise_m: float = 0.01) -> tuple[TrialData, dict]:
+    """Trials from a KNOWN smooth function of the offsets, for testing and timing the learner (NOT a model of
+    reconstruction): error = base + sum_i w_i (dx_i^2 + dy_i^2 + 0.5 dz_i^2) + sum_i u_i dyaw_i^2
+    + c * sum_i (dx_i dx_{i+1}) / n + N(0, noise). Offsets uniform in the box; w_i, u_i > 0 vary smoothly
+    along the path so that the planned-pose channels matter. Returns the data and the function's parameters.
+    """
+    half = np.array([position_half_width_m] * 3 + [yaw_half_width_rad])
+    offsets = rng.uniform(-1.0, 1.0, size=(n_trials, n_views, 4)) * half
+    s = np.linspace(0.0, 2.0 * np.pi, n_views)
+    w = (0.02 + 0.015 * np.sin(s)) / n_views * 10.0
+    u = (0.5 + 0.4 * np.cos(s)) / n_views * 10.0
+    params = {"base": 0.5, "w": w, "u": u, "c": 0.05}
+    error = known_function(offsets, params) + rng.normal(0.0, noise_m, n_trials)
+    positions = np.column_stack([70.0 * np.cos(s), 20.0 * np.sin(s), 15.0 + 5.0 * np.sin(2 * s)])
+    pose = planned_pose_features(positions, s + np.pi, np.full(n_views, -0.3))
+    data = TrialData(offsets=offsets, error=error, failed=np.zeros(n_trials, bool), planned_pose=pose,
+                     trial_id=np.arange(n_trials), path_digest=None, source="known function")
+    return data, params
+
+
+def known_function(offsets: np.ndarray, params: dict) -> np.ndarray:
+    """The noiseless error of :func:`known_function_trials` for offsets (batch, n_views, 4)."""
+    dx, dy, dz, dyaw = (offsets[..., k] for k in range(4))
+    n = offsets.shape[-2]
+    return (params["base"] + (params["w"] * (dx ** 2 + dy ** 2 + 0.5 * dz ** 2)).sum(-1)
+            + (params["u"] * dyaw ** 2).sum(-1) + params["c"] * (dx[..., :-1] * dx[..., 1:]).sum(-1) / n)
+
+
+def write_json_atomic(target: Path, doc: dict) -> None:
+    """JSON to ``target`` through a temporary name, then rename."""
+    target = Path(target)
+    target.parent.mkdir(parents=True, exist_ok=True)
+    tmp = target.with_name(target.name + ".tmp")
+    tmp.write_text(json.dumps(doc, indent=1))
+    tmp.replace(target)

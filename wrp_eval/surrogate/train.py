@@ -1,0 +1,236 @@
+"""Training of the surrogate: split by trial, standardise, Adam with early stopping, held-out metrics, plot.
+
+Seeding: the split comes from ``numpy.random.default_rng(SeedSequence(seed, spawn_key=(0,)))``; the initial
+weights and the batch order from torch generators seeded with ``seed`` (the global torch RNG is forked, not
+touched). Same data + same config + same seed -> the same weights (on this CPU build: torch CPU kernels are
+deterministic for these layers).
+"""
+
+from __future__ import annotations
+
+import copy
+import sys
+import time
+from dataclasses import dataclass, field
+from pathlib import Path
+
+import numpy as np
+import torch
+from torch.nn import functional as F
+
+from wrp_eval.errors import InputError
+from wrp_eval.surrogate.config import SurrogateSection
+from wrp_eval.surrogate.data import TrialData, split_indices, write_json_atomic
+from wrp_eval.surrogate.model import Surrogate, SurrogateMeta, ViewSequenceCNN
+
+CHECKPOINT_NAME = "surrogate.pt"
+METRICS_NAME = "metrics.json"
+PARITY_NAME = "parity.png"
+
+
+@dataclass
+class TrainResult:
+    """surrogate: the trained model (best validation epoch); metrics: per split R^2, RMSE, MAE (m), counts;
+    history: per-epoch train and validation loss (standardised MSE); split: trial indices of each split;
+    test_true / test_pred (m): the held-out test trials, for the parity plot; seconds: training wall time."""
+
+    surrogate: Surrogate
+    metrics: dict
+    history: dict
+    split: dict
+    test_true: np.ndarray
+    test_pred: np.ndarray
+    seconds: float
+    extra: dict = field(default_factory=dict)
+
+
+def regression_metrics(y_true: np.ndarray, y_pred: np.ndarray) -> dict:
+    """R^2 (coefficient of determination), RMSE and MAE (units of y), n."""
+    y_true, y_pred = np.asarray(y_true, float), np.asarray(y_pred, float)
+    resid = y_true - y_pred
+    ss_tot = float(((y_true - y_true.mean()) ** 2).sum()) if y_true.size else 0.0
+    r2 = 1.0 - float((resid ** 2).sum()) / ss_tot if ss_tot > 0 else float("nan")
+    return {"r2": r2, "rmse": float(np.sqrt((resid ** 2).mean())) if resid.size else float("nan"),
+            "mae": float(np.abs(resid).mean()) if resid.size else float("nan"), "n": int(y_true.size)}
+
+
+class _Progress:
+    """A rich progress bar on a terminal, plain lines (about 10 per run) otherwise."""
+
+    def __init__(self, total: int, enabled: bool):
+        self.total, self.enabled = total, enabled
+        self.tty = enabled and sys.stderr.isatty()
+        self.bar = None
+        if self.tty:
+            from rich.progress import BarColumn, MofNCompleteColumn, Progress, TextColumn, TimeElapsedColumn
+            self.bar = Progress(TextColumn("train"), BarColumn(), MofNCompleteColumn(), TimeElapsedColumn(),
+                                TextColumn("{task.fields[info]}"), transient=False)
+            self.bar.start()
+            self.task = self.bar.add_task("train", total=total, info="")
+        self.every = max(1, total // 10)
+
+    def update(self, epoch: int, info: str) -> None:
+        if self.bar is not None:
+            self.bar.update(self.task, completed=epoch, info=info)
+        elif self.enabled and (epoch % self.every == 0 or epoch == 1):
+            print(f"train epoch {epoch}/{self.total} {info}", flush=True)
+
+    def close(self) -> None:
+        if self.bar is not None:
+            self.bar.stop()
+
+
+def _standardise(values: np.ndarray, axis) -> tuple[np.ndarray, np.ndarray]:
+    mean = values.mean(axis=axis)
+    std = values.std(axis=axis)
+    return mean, np.where(std > 1e-12, std, 1.0)
+
+
+def train_surrogate(data: TrialData, section: SurrogateSection = SurrogateSection(), seed: int = 0,
+                    progress: bool = False) -> TrainResult:
+    """Fit the surrogate on ``data`` (see :class:`SurrogateSection` for every knob)."""
+    start = time.perf_counter()
+    torch.set_num_threads(section.threads)
+    error = np.asarray(data.error, float)
+    usable = np.isfinite(error) & (section.use_failed_trials | ~np.asarray(data.failed, bool))
+    if section.predict_failure:
+        rows = np.arange(data.n_trials)       # every trial teaches the failure output
+    else:
+        rows = np.flatnonzero(usable)
+    if rows.size < 10:
+        raise InputError(data.source or "surrogate data", f"only {rows.size} usable trials; need at least 10")
+    split_rng = np.random.default_rng(np.random.SeedSequence(seed, spawn_key=(0,)))
+    tr, va, te = (rows[i] for i in split_indices(rows.size, section.val_fraction, section.test_fraction, split_rng))
+
+    offsets = np.asarray(data.offsets, float)
+    off_mean, off_std = _standardise(offsets[tr].reshape(-1, 4), 0)
+    err_train = error[tr][usable[tr]]
+    if err_train.size < 2:
+        raise InputError(data.source or "surrogate data", "too few training trials with a finite error")
+    err_mean, err_std = float(err_train.mean()), float(max(err_train.std(), 1e-12))
+    pose_mean = pose_std = planned = None
+    if section.pose_channels:
+        if data.planned_pose is None:
+            raise InputError("surrogate.pose_channels", "the data has no planned poses; set pose_channels: false")
+        pose = np.asarray(data.planned_pose, float)
+        pose_mean, pose_std = _standardise(pose, 0)
+        planned = pose.tolist()
+        pose_mean, pose_std = pose_mean.tolist(), pose_std.tolist()
+    outputs = 2 if section.predict_failure else 1
+    arch = {"in_channels": 4 + (7 if section.pose_channels else 0), "channels": section.channels,
+            "kernel": section.kernel, "layers": section.layers, "hidden": section.hidden, "outputs": outputs}
+    meta = SurrogateMeta(n_views=data.n_views, path_digest=data.path_digest, architecture=arch,
+                         offset_mean=off_mean.tolist(), offset_std=off_std.tolist(), error_mean=err_mean,
+                         error_std=err_std, pose_mean=pose_mean, pose_std=pose_std, planned_pose=planned,
+                         offset_low=offsets[tr].reshape(-1, 4).min(0).tolist(),
+                         offset_high=offsets[tr].reshape(-1, 4).max(0).tolist())
+    with torch.random.fork_rng(devices=[]):
+        torch.manual_seed(seed)
+        net = ViewSequenceCNN(**arch)
+    surrogate = Surrogate(net, meta)
+
+    x_all = surrogate.input_tensor(offsets)                                 # (N, Cin, n)
+    y_all = torch.as_tensor(np.nan_to_num((error - err_mean) / err_std), dtype=torch.float32)
+    w_all = torch.as_tensor(usable, dtype=torch.float32)                     # error-loss mask
+    f_all = torch.as_tensor(np.asarray(data.failed, bool), dtype=torch.float32)
+
+    def loss_of(idx: torch.Tensor) -> torch.Tensor:
+        out = net(x_all[idx])
+        w = w_all[idx]
+        loss = ((out[:, 0] - y_all[idx]) ** 2 * w).sum() / w.sum().clamp(min=1.0)
+        if outputs == 2:
+            loss = loss + F.binary_cross_entropy_with_logits(out[:, 1], f_all[idx])
+        return loss
+
+    opt = torch.optim.Adam(net.parameters(), lr=section.lr, weight_decay=section.weight_decay)
+    gen = torch.Generator().manual_seed(seed)
+    tr_t, va_t = torch.as_tensor(tr), torch.as_tensor(va)
+    best, best_state, best_epoch, stale = float("inf"), copy.deepcopy(net.state_dict()), 0, 0
+    history = {"train_loss": [], "val_loss": []}
+    bar = _Progress(section.epochs, progress)
+    epoch = 0
+    try:
+        for epoch in range(1, section.epochs + 1):
+            net.train()
+            perm = tr_t[torch.randperm(tr_t.numel(), generator=gen)]
+            total = 0.0
+            for i in range(0, perm.numel(), section.batch_size):
+                idx = perm[i:i + section.batch_size]
+                opt.zero_grad(set_to_none=True)
+                loss = loss_of(idx)
+                loss.backward()
+                opt.step()
+                total += float(loss.detach()) * idx.numel()
+            net.eval()
+            with torch.no_grad():
+                val = float(loss_of(va_t))
+            history["train_loss"].append(total / perm.numel())
+            history["val_loss"].append(val)
+            if val < best - 1e-7:
+                best, best_epoch, stale = val, epoch, 0
+                best_state = copy.deepcopy(net.state_dict())
+            else:
+                stale += 1
+            bar.update(epoch, f"train {history['train_loss'][-1]:.4f} val {val:.4f} best {best:.4f}@{best_epoch}")
+            if stale >= section.patience:
+                break
+    finally:
+        bar.close()
+    net.load_state_dict(best_state)
+    net.eval()
+
+    metrics = {}
+    preds = {}
+    for name, idx in (("train", tr), ("val", va), ("test", te)):
+        keep = idx[usable[idx]]
+        preds[name] = (error[keep], surrogate.predict(offsets[keep]))
+        metrics[name] = regression_metrics(*preds[name])
+    if outputs == 2:
+        p = surrogate.predict_failure(offsets[te])
+        f = np.asarray(data.failed, bool)[te]
+        metrics["test"]["failure_brier"] = float(((p - f) ** 2).mean())
+    seconds = time.perf_counter() - start
+    metrics.update({"epochs_run": epoch, "best_epoch": best_epoch, "train_s": seconds, "seed": seed,
+                    "n_trials": int(data.n_trials), "n_used": int(rows.size), "n_views": data.n_views,
+                    "data": data.source})
+    final_meta = SurrogateMeta(**{**meta.__dict__, "metrics": metrics,
+                                  "extra": {"seed": seed, "data": data.source}})
+    surrogate = Surrogate(net, final_meta)
+    return TrainResult(surrogate, metrics, history, {"train": tr.tolist(), "val": va.tolist(), "test": te.tolist()},
+                       preds["test"][0], preds["test"][1], seconds)
+
+
+def parity_plot(result: TrainResult, file: str | Path, title: str = "surrogate: held-out test trials") -> None:
+    """Predicted vs oracle error of the test split, with the y = x line (PNG, written atomically)."""
+    import matplotlib
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+    file = Path(file)
+    fig, ax = plt.subplots(figsize=(4.5, 4.5), dpi=120)
+    t, p = result.test_true, result.test_pred
+    ax.scatter(t, p, s=10, alpha=0.7)
+    if t.size:
+        lo, hi = float(min(t.min(), p.min())), float(max(t.max(), p.max()))
+        ax.plot([lo, hi], [lo, hi], "k--", lw=1)
+    m = result.metrics["test"]
+    ax.set_xlabel("oracle error (m)")
+    ax.set_ylabel("surrogate error (m)")
+    ax.set_title(f"{title}\nR$^2$ {m['r2']:.3f}  RMSE {m['rmse']:.4f} m  n={m['n']}", fontsize=9)
+    fig.tight_layout()
+    tmp = file.with_name(file.name + ".tmp.png")
+    fig.savefig(tmp)
+    plt.close(fig)
+    tmp.replace(file)
+
+
+def write_outputs(result: TrainResult, out_dir: str | Path) -> dict:
+    """surrogate.pt, metrics.json (with the history and the split) and parity.png into ``out_dir``."""
+    out = Path(out_dir)
+    out.mkdir(parents=True, exist_ok=True)
+    result.surrogate.save(out / CHECKPOINT_NAME)
+    write_json_atomic(out / METRICS_NAME, {**result.metrics, "history": result.history, "split": result.split,
+                                           "architecture": result.surrogate.meta.architecture,
+                                           "path_digest": result.surrogate.meta.path_digest})
+    parity_plot(result, out / PARITY_NAME)
+    return {"checkpoint": str(out / CHECKPOINT_NAME), "metrics": str(out / METRICS_NAME),
+            "parity": str(out / PARITY_NAME)}

@@ -1,0 +1,67 @@
+"""The ``wrp:`` section of an experiment config: the interval optimisation (paper Alg. 3 / 4) and the
+robustness evaluation. Angles in degrees here (the edge of the system)."""
+
+from __future__ import annotations
+
+from typing import Literal
+
+from pydantic import Field
+
+from wrp_eval.validation import StrictModel
+
+
+class EvaluateSection(StrictModel):
+    """``wrp-eval evaluate``: the initial path, ISWRP and SWRP flown as campaigns with the same config and root
+    seed (so trial k of every path sees the same wind: common random numbers)."""
+
+    n_trials: int = Field(100, ge=2, le=1_000_000)
+    thresholds_m: list[float] | None = Field(None, description="one threshold per WRP kind [iswrp, swrp] "
+                                             "(none: the optimisation's threshold for both)")
+    bootstrap: int = Field(2000, ge=100, le=1_000_000, description="bootstrap resamples of the CIs")
+    confidence: float = Field(0.95, gt=0.5, lt=1)
+    out_dir: str | None = Field(None, description="none: logs/<run.name>/evaluate")
+
+
+class WrpSection(StrictModel):
+    """Interval optimisation of a planned path against a trained surrogate (see wrp_eval/wrp/README.md).
+
+    path: the path.json (none: the campaign folder's path.json, the path the surrogate was trained on);
+    checkpoint: the surrogate (none: <surrogate.out_dir or logs/<run.name>/surrogate>/surrogate.pt);
+    campaign_dir: where r_s is measured (none: surrogate.campaign_dir or logs/<run.name>/campaign).
+    threshold_m: t in metres of reconstruction error (none: ``threshold_fraction`` x E_original; the paper's
+    0.2-0.3 on E_original 3.185 is 6-9 %). e_original_m: the wind-free path's error (none: from the oracle).
+    """
+
+    kind: Literal["iswrp", "swrp"] = "iswrp"
+    path: str | None = None
+    checkpoint: str | None = None
+    campaign_dir: str | None = None
+    threshold_m: float | None = Field(None, ge=0)
+    threshold_fraction: float = Field(0.08, ge=0, le=10)
+    e_original_m: float | None = Field(None, gt=0)
+    e_original_source: Literal["oracle", "surrogate"] = Field("oracle", description="when e_original_m is none: "
+                                                             "the oracle on the wind-free path (the paper), or "
+                                                             "the surrogate at zero offsets (the surrogate's own "
+                                                             "scale, free of any oracle-vs-flight bias)")
+    iterations: int = Field(1000, ge=1, le=1_000_000, description="K of Alg. 3: iterations per viewpoint")
+    attitude_samples: int = Field(50, ge=1, le=10_000, description="yaw samples of Alg. 4 (the paper's 50)")
+    yaw_range_deg: float = Field(20.0, gt=0, le=180, description="Alg. 4 samples yaw offsets in +-this")
+    neighbourhood_samples: int = Field(16, ge=2, le=10_000, description="M of Alg. 3 (the paper gives none)")
+    step_m: float | None = Field(None, gt=0, description="position moves in +-step per axis (none: the "
+                                 "surrogate's training range, so that candidates stay where it has data)")
+    step_fallback_m: float = Field(2.0, gt=0)
+    sample_radius: Literal["campaign", "fixed"] = Field("campaign", description="r_s per viewpoint: the "
+                                                        "campaign's measured wind-induced offset spread, or fixed")
+    sample_radius_m: float = Field(0.5, gt=0, description="r_s when fixed, or when no campaign is available")
+    sample_radius_quantile: float = Field(0.95, gt=0, le=1, description="r_s = this quantile of the "
+                                          "wind-induced position offset |flown - commanded| per viewpoint")
+    swrp_spread: Literal["variance", "std"] = Field("variance", description="SWRP accepts when this spread of "
+                                                    "the neighbourhood's errors is <= t (paper: variance)")
+    block_iterations: int = Field(64, ge=1, le=100_000, description="iterations drawn and scored per batch")
+    stage2_batch: int = Field(8, ge=1, le=100_000, description="stage-1 survivors whose neighbourhoods are "
+                              "scored per batch")
+    seed: int | None = Field(None, ge=0, description="none: run.seed")
+    oracle_error: bool = Field(True, description="score the WRP with the oracle (Table 3's error column)")
+    out_dir: str | None = Field(None, description="none: logs/<run.name>/wrp-<kind>")
+    threads: int = Field(1, ge=1, le=2)
+    evaluate: EvaluateSection = EvaluateSection()
