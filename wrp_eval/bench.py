@@ -20,7 +20,16 @@ from pathlib import Path
 from wrp_eval.errors import InputError
 
 # group name -> module with run_bench()
-BENCH_GROUPS: dict[str, str] = {}
+BENCH_GROUPS: dict[str, str] = {
+    "sim": "wrp_eval.sim.bench",
+    "campaign": "wrp_eval.campaign.bench",
+    "wind": "wrp_eval.wind.bench",
+    "ship": "wrp_eval.ship.bench",
+    "plan": "wrp_eval.planning.bench",
+    "oracle": "wrp_eval.recon.bench",
+    "surrogate": "wrp_eval.surrogate.bench",
+    "wrp": "wrp_eval.wrp.bench",
+}
 
 
 @dataclass(frozen=True)

@@ -14,8 +14,17 @@ import sys
 from wrp_eval import __version__
 from wrp_eval.errors import InputError
 
-COMMAND_MODULES = (
+COMMAND_MODULES = (   # in pipeline order; `wrp-eval --help` lists them so
+    "wrp_eval.pipeline",
     "wrp_eval.ship.commands",
+    "wrp_eval.planning.commands",
+    "wrp_eval.wind.commands",
+    "wrp_eval.sim.commands",
+    "wrp_eval.recon.commands",
+    "wrp_eval.campaign.commands",
+    "wrp_eval.surrogate.commands",
+    "wrp_eval.wrp.commands",
+    "wrp_eval.export.commands",
     "wrp_eval.bench",
 )
 

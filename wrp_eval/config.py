@@ -11,8 +11,16 @@ from pathlib import Path
 
 from pydantic import Field
 
+from wrp_eval.campaign.config import CampaignSection
+from wrp_eval.export.config import ExportSection
+from wrp_eval.recon.config import OracleSection
+from wrp_eval.planning.config import PlanningSection
 from wrp_eval.ship.config import ShipSection
+from wrp_eval.sim.config import SimSection
+from wrp_eval.surrogate.config import SurrogateSection
 from wrp_eval.validation import StrictModel, load_model
+from wrp_eval.wind.config import WindSection
+from wrp_eval.wrp.config import WrpSection
 
 
 class RunSection(StrictModel):
@@ -28,6 +36,14 @@ class ExperimentConfig(StrictModel):
 
     run: RunSection = RunSection()
     ship: ShipSection = ShipSection()
+    planning: PlanningSection = PlanningSection()
+    wind: WindSection = WindSection()
+    sim: SimSection = SimSection()
+    campaign: CampaignSection = CampaignSection()
+    oracle: OracleSection = OracleSection()
+    surrogate: SurrogateSection = SurrogateSection()
+    wrp: WrpSection = WrpSection()
+    export: ExportSection = ExportSection()
 
 
 def load_experiment(path: str | Path) -> ExperimentConfig:

@@ -83,27 +83,34 @@ def _ship_pose(config, config_dir: Path, args) -> tuple[float, float, float]:
     return float(lat or 0.0), float(lon or 0.0), float(heading or 0.0)
 
 
-def _cmd_field(args: argparse.Namespace) -> int:
-    from wrp_eval.config import load_experiment
+def sample_mean_field(section, pose, config_dir: Path):
+    """The configured mean field on its grid nodes above the sea: x (nx,), y (ny,), z (nz,) m and velocity
+    (nx, ny, nz, 3) m/s in the ship frame. ``pose``: ShipParticulars or (lat, lon, heading) degrees."""
     from wrp_eval.wind.field import build_mean_grid, grid_axes
     from wrp_eval.wind.grid import GriddedMeanWind
-
-    config_path = Path(args.config)
-    config = load_experiment(config_path)
-    section = config.wind
-    pose = _ship_pose(config, config_path.parent, args)
-    mean = GriddedMeanWind(build_mean_grid(section, pose, config_path.parent), section.interpolation,
+    mean = GriddedMeanWind(build_mean_grid(section, pose, config_dir), section.interpolation,
                            section.idw_power, section.clamp)
     x, y, z = grid_axes(section.grid)
     z = z[z > 0] if np.any(z > 0) else z
     gx, gy, gz = np.meshgrid(x, y, z, indexing="ij")
     points = np.stack([gx, gy, gz], -1).reshape(-1, 3)
-    velocity = mean.velocity(points, 0.0).reshape(gx.shape + (3,))
+    return x, y, z, mean.velocity(points, 0.0).reshape(gx.shape + (3,))
+
+
+def _cmd_field(args: argparse.Namespace) -> int:
+    from wrp_eval.config import load_experiment
+
+    config_path = Path(args.config)
+    config = load_experiment(config_path)
+    section = config.wind
+    pose = _ship_pose(config, config_path.parent, args)
+    x, y, z, velocity = sample_mean_field(section, pose, config_path.parent)
+    points = np.stack(np.meshgrid(x, y, z, indexing="ij"), -1).reshape(-1, 3)
     out = Path(args.out)
     out.mkdir(parents=True, exist_ok=True)
     save_npz_atomic(out / "wind_field.npz", x_m=x, y_m=y, z_m=z, velocity_mps=velocity,
                     ship_lat_lon_heading_deg=np.array(pose), source=np.array(section.source))
-    _quiver_png(out / "wind_field.png", x, y, z, velocity, section.source)
+    quiver_png(out / "wind_field.png", x, y, z, velocity, section.source)
     if args.rerun:
         _log_rerun(Path(args.rerun), points, velocity.reshape(-1, 3), args.rerun_fraction)
     speed = np.linalg.norm(velocity, axis=-1)
@@ -112,7 +119,7 @@ def _cmd_field(args: argparse.Namespace) -> int:
     return 0
 
 
-def _quiver_png(path: Path, x, y, z, velocity, source: str) -> None:
+def quiver_png(path: Path, x, y, z, velocity, source: str) -> None:
     import matplotlib
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
@@ -121,10 +128,14 @@ def _quiver_png(path: Path, x, y, z, velocity, source: str) -> None:
     fig, axes = plt.subplots(1, len(levels), figsize=(5 * len(levels), 4.6), squeeze=False)
     step = max(1, int(np.ceil(max(len(x), len(y)) / 25)))          # at most ~25 arrows per side
     speed = np.linalg.norm(velocity, axis=-1)
+    # the fastest arrow spans ~90 % of the spacing between drawn arrows (readable whatever the speeds)
+    spacing = step * (float(np.min(np.diff(x))) if len(x) > 1 else 1.0)
+    arrow_scale = max(float(speed.max()), 1e-6) / (0.9 * spacing)
     for ax, k in zip(axes[0], levels):
         sl = (slice(None, None, step), slice(None, None, step), k)
         q = ax.quiver(x[::step, None] * np.ones(len(y[::step])), np.ones(len(x[::step]))[:, None] * y[None, ::step],
-                      velocity[sl][..., 0], velocity[sl][..., 1], speed[sl], cmap="viridis")
+                      velocity[sl][..., 0], velocity[sl][..., 1], speed[sl], cmap="viridis",
+                      angles="xy", scale_units="xy", scale=arrow_scale)
         fig.colorbar(q, ax=ax, label="speed (m/s)")
         ax.plot([-5, 5], [0, 0], "r-", lw=3)
         ax.annotate("bow", (5, 0), color="r")

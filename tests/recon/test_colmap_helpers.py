@@ -1,0 +1,26 @@
+"""Pieces of the photogrammetric oracle that do not need a COLMAP run (that one is in bench / validate)."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from wrp_eval.recon.colmap import _similarity_from_centres, sparse_surfels
+
+
+def test_similarity_from_camera_centres_recovers_a_known_transform():
+    rng = np.random.default_rng(0)
+    src = rng.uniform(-50, 50, (20, 3))
+    angle = np.radians(30)
+    rot = np.array([[np.cos(angle), -np.sin(angle), 0], [np.sin(angle), np.cos(angle), 0], [0, 0, 1]])
+    dst = 2.5 * src @ rot.T + [10.0, -4.0, 3.0]
+    t = _similarity_from_centres(src, dst)
+    np.testing.assert_allclose(src @ t[:3, :3].T + t[:3, 3], dst, atol=1e-8)
+
+
+def test_sparse_surfels_of_a_plane_have_plane_normals_and_neighbour_radii():
+    xy = np.stack(np.meshgrid(np.arange(10.0), np.arange(10.0)), -1).reshape(-1, 2)  # 1 m grid
+    surfels = sparse_surfels(np.column_stack([xy, np.full(len(xy), 2.0)]))
+    np.testing.assert_allclose(np.abs(surfels.normals[:, 2]), 1.0, atol=1e-6)
+    inner = (xy[:, 0] > 0) & (xy[:, 0] < 9) & (xy[:, 1] > 0) & (xy[:, 1] < 9)
+    assert surfels.radii[inner] == pytest.approx(1.0)  # the 4th neighbour of a grid point is 1 m away

@@ -1,0 +1,168 @@
+"""``wrp-eval run CONFIG``: the whole job, stage after stage, into ``logs/<run.name>/``.
+
+ship -> plan -> campaign (perturbed flights scored by the oracle) -> surrogate -> ISWRP and SWRP ->
+evaluation of the three paths under the same winds -> mission export -> report.md + run.rrd.
+
+Each step calls the stage's own function (the same code as the stage's sub-command) and writes where that
+sub-command would, so a step can be re-run or inspected on its own. The campaign steps resume: re-running
+the same config reuses the stored trials (same config and seed give the same numbers).
+"""
+
+from __future__ import annotations
+
+import argparse
+import dataclasses
+import json
+import subprocess
+import sys
+import time
+from pathlib import Path
+
+from wrp_eval.errors import InputError
+
+RUN_RECORDING = "run.rrd"
+
+
+def write_json_atomic(file: Path, doc: dict) -> None:
+    file.parent.mkdir(parents=True, exist_ok=True)
+    tmp = file.with_name(file.name + ".tmp")
+    tmp.write_text(json.dumps(doc, indent=1, default=float))
+    tmp.replace(file)
+
+
+def merge_recordings(parts: list[Path], target: Path) -> Path:
+    """One .rrd of the stage recordings, merged by rerun's own CLI (written atomically)."""
+    tmp = target.with_name(target.name + ".tmp")
+    cmd = [sys.executable, "-m", "rerun", "rrd", "merge", *map(str, parts), "-o", str(tmp)]
+    done = subprocess.run(cmd, capture_output=True, text=True)
+    if done.returncode != 0 or not tmp.is_file():
+        raise RuntimeError(f"rerun rrd merge failed: {done.stderr.strip()[-500:]}")
+    tmp.replace(target)
+    return target
+
+
+class Step:
+    """Prints one line per step with its wall time (the job's progress on a terminal and in CI logs)."""
+
+    def __init__(self, timings: dict, name: str, what: str):
+        self.timings, self.name, self.what = timings, name, what
+
+    def __enter__(self):
+        print(f"[wrp-eval run] {self.name}: {self.what} ...", flush=True)
+        self.start = time.perf_counter()
+        return self
+
+    def __exit__(self, *exc):
+        self.timings[self.name] = time.perf_counter() - self.start
+        if exc[0] is None:
+            print(f"[wrp-eval run] {self.name}: done in {self.timings[self.name]:.1f} s", flush=True)
+        return False
+
+
+def run_pipeline(config_path: Path, *, quiet: bool = True) -> dict:
+    """Run every stage of the config at ``config_path``; returns the run summary (also run_summary.json)."""
+    from wrp_eval.campaign.runner import run_campaign
+    from wrp_eval.config import load_experiment
+    from wrp_eval.export.formats import FORMATS, export_path
+    from wrp_eval.planning.commands import planning_rng
+    from wrp_eval.planning.path import Path as FlightPath
+    from wrp_eval.planning.planner import plan
+    from wrp_eval.planning.rerun_log import save_plan_recording
+    from wrp_eval.report import write_report
+    from wrp_eval.ship.commands import ship_report
+    from wrp_eval.ship.resolve import resolve_ship_full
+    from wrp_eval.ship.rerun_log import save_ship_recording
+    from wrp_eval.surrogate.data import load_campaign_trials
+    from wrp_eval.surrogate.train import train_surrogate, write_outputs
+    from wrp_eval.wrp.commands import run_evaluate
+
+    config = load_experiment(config_path)
+    config_dir = config_path.parent
+    # the stages' own defaults put their outputs under logs/<run.name>/...; the pipeline relies on them
+    out = Path("logs") / config.run.name
+    out.mkdir(parents=True, exist_ok=True)
+    timings: dict[str, float] = {}
+    summary: dict = {"config": str(config_path), "seed": config.run.seed, "out": str(out)}
+    job_start = time.perf_counter()
+
+    with Step(timings, "ship", "particulars, proxy, mesh, surface complexity"):
+        ship = resolve_ship_full(config.ship, config_dir, str(config_path))
+        write_json_atomic(out / "ship.json", ship_report(ship))
+        save_ship_recording(ship, out / "ship.rrd")
+
+    with Step(timings, "plan", f"{config.planning.method} reconstruction path (paper Sec. 3)"):
+        result = plan(ship.proxy, ship.complexity.complexity, config.planning, planning_rng(config.run.seed))
+        path = dataclasses.replace(result.path, metadata={**result.path.metadata, "config": str(config_path),
+                                                          "seed": config.run.seed})
+        path.save(out / "plan" / "path.json")
+        write_json_atomic(out / "plan" / "plan_metrics.json", result.metrics)
+        save_plan_recording(result, ship.proxy, out / "plan.rrd")
+        summary["plan"] = result.metrics
+
+    campaign_dir = Path(config.campaign.outputs.dir or out / "campaign")
+    with Step(timings, "campaign", f"{config.campaign.n_trials} perturbed flights scored by the "
+                                   f"{config.campaign.oracle} oracle"):
+        camp = run_campaign(config, out_dir=campaign_dir, config_dir=config_dir, path=path, progress=not quiet)
+        summary["campaign"] = {"dir": str(campaign_dir), "trials": camp.done, "failed": camp.failed,
+                               "trials_per_min": camp.trials_per_min}
+
+    surrogate_dir = Path(config.surrogate.out_dir or out / "surrogate")
+    with Step(timings, "surrogate", "train the CNN surrogate on the campaign"):
+        data = load_campaign_trials(campaign_dir)
+        seed = config.surrogate.seed if config.surrogate.seed is not None else config.run.seed
+        trained = train_surrogate(data, config.surrogate, seed=seed, progress=not quiet)
+        write_outputs(trained, surrogate_dir)
+        summary["surrogate"] = trained.metrics["test"]
+
+    evaluate_dir = Path(config.wrp.evaluate.out_dir or out / "evaluate")
+    with Step(timings, "wrp", "ISWRP and SWRP, then the three paths flown under the same winds"):
+        evaluation = run_evaluate(config, config_dir, evaluate_dir, checkpoint=str(surrogate_dir / "surrogate.pt"),
+                                  campaign=str(campaign_dir), quiet=quiet)
+        summary["evaluate"] = evaluation
+
+    with Step(timings, "export", "missions of the three paths"):
+        missions = {}
+        paths = {"initial": out / "plan" / "path.json", "iswrp": evaluate_dir / "wrp-iswrp" / "path.json",
+                 "swrp": evaluate_dir / "wrp-swrp" / "path.json"}
+        for name, file in paths.items():
+            flight_path = FlightPath.load(file)
+            for fmt, spec in FORMATS.items():
+                written = export_path(flight_path, ship.particulars, ship.proxy, fmt,
+                                      out / "missions" / f"{name}{spec.suffix}", config.export, str(file))
+                missions.setdefault(name, []).extend(str(f) for f, _ in written)
+        summary["missions"] = missions
+
+    with Step(timings, "report", "report.md, figures and run.rrd"):
+        parts = [out / "ship.rrd", out / "plan.rrd"]
+        if (campaign_dir / "campaign.rrd").is_file():
+            parts.append(campaign_dir / "campaign.rrd")
+        merge_recordings(parts, out / RUN_RECORDING)
+        timings["total"] = time.perf_counter() - job_start
+        summary["timings_s"] = timings
+        report = write_report(out, config, ship, path, summary)
+    timings["total"] = time.perf_counter() - job_start
+    write_json_atomic(out / "run_summary.json", summary)
+    summary["report"] = str(report)
+    return summary
+
+
+def _cmd_run(args: argparse.Namespace) -> int:
+    config_path = Path(args.config)
+    if not config_path.is_file():
+        raise InputError(config_path, "no such config file")
+    summary = run_pipeline(config_path, quiet=not args.progress)
+    out = Path(summary["out"])
+    print(f"\nwrp-eval run finished in {summary['timings_s']['total']:.0f} s.")
+    print(f"Report:    {summary['report']}")
+    print(f"Recording: {out / RUN_RECORDING}  (open it with: rerun {out / RUN_RECORDING})")
+    return 0
+
+
+def register(sub: argparse._SubParsersAction) -> None:
+    p = sub.add_parser("run", help="the whole job: plan, campaign, surrogate, ISWRP/SWRP, evaluation, "
+                                   "export, report", description=__doc__,
+                       formatter_class=argparse.RawDescriptionHelpFormatter)
+    p.add_argument("config", help="experiment YAML (e.g. experiments/quickstart.yaml)")
+    p.add_argument("--progress", action="store_true", help="show the stages' own progress bars and lines")
+    p.set_defaults(func=_cmd_run)
+

@@ -1,0 +1,292 @@
+"""Synthetic multi-view-stereo oracle: a campaign-speed stand-in for ContextCapture + CloudCompare.
+
+For one capture set on the true ship mesh:
+
+1. **Observe.** Every view casts a ``rays_x x rays_y`` grid of rays through its image (pixel centres of the
+   grid cells), all views in one batched open3d ``RaycastingScene.cast_rays`` call against the ship plus a
+   sea plane at z = 0 (the sea occludes the hull below it). A hit counts when it is on the ship, nearer than
+   the range at which a pixel covers ``max_gsd_m`` (Smith et al. 2018 d_max) and seen at an incidence below
+   ``incidence_max_deg`` (Smith et al. 2018 keep views within 85 deg of the normal; photo-consistency
+   degrades with foreshortening, Furukawa & Hernandez 2015, "Multi-View Stereo: A Tutorial").
+2. **Co-visibility.** Hits are hashed into surface cells (``cell_m``); the view x cell incidence matrix
+   gives the cells each pair of views sees in common; each view keeps its ``max_partners`` best partners
+   (bounded source views, as real MVS), and a hit's candidates are those of them that saw its cell.
+3. **Match.** A hit p of view i is seen by a candidate view j when it projects inside j's image, in front
+   of it, and j's own ray at that image cell hits the same surface (within a slope-scaled distance of p and
+   on p's tangent plane: a shadow-map test, so occlusion comes from j's ray cast, not from extra rays).
+   The pair is *matchable* when the change of viewing direction (parallax) alpha <= ``parallax_max_deg``
+   (60 deg: SIFT matching breaks down beyond ~50-60 deg of viewpoint change, Lowe 2004; Morel & Yu 2009
+   "ASIFT") and both incidences are within range; it *triangulates* when also alpha >=
+   ``parallax_min_deg`` (5 deg: where Smith et al. 2018's w1, k1 = 32, alpha1 = pi/16, is ~0, i.e. the
+   smallest angle that contributes any reconstructability). Between 45 and 60 deg (past Smith's w3
+   midpoint pi/4) points still reconstruct, with the noise of step 5.
+4. **Register.** Views i, j are linked when their overlap (Hepp et al. 2018: shared observations over the
+   mean of both views' observations, counted in matchable rays) reaches ``min_overlap`` and they share at
+   least ``min_matched_rays`` matchable rays on average; the reconstruction is the largest connected component
+   (``scipy.sparse.csgraph.connected_components``). Fewer than 3 views, or fewer than half the views,
+   registered = failed (ContextCapture / COLMAP leave unregistered images out; the paper's "Failed").
+5. **Reconstruct.** A hit of a registered view is reconstructed when a registered partner triangulates it;
+   its depth gets Gaussian noise from the best partner (smallest sigma):
+   sigma = d_m * sigma_px / (f_px * sin(alpha)), the stereo depth error z^2 sigma_d / (f B) (e.g. Gallup
+   et al. 2008, "Variable baseline/resolution stereo") written for a verging pair (B/z ~ sin alpha),
+   d_m the larger of the two distances, floored at ``noise_floor_gsd`` x the GSD.
+6. **Score.** Surfels (hit, normal, footprint radius) -> ICP with scale -> metrics (:mod:`base`).
+
+Every random draw comes from ``numpy.random.default_rng(seed)``: same inputs and seed, same result.
+"""
+
+from __future__ import annotations
+
+import time
+from dataclasses import dataclass
+
+import numpy as np
+import open3d as o3d
+import scipy.sparse as sp
+import trimesh
+from scipy.sparse.csgraph import connected_components, minimum_spanning_tree
+
+from wrp_eval.camera import Camera, camera_rotations, optical_axes
+from wrp_eval.recon.base import (GroundTruth, GroundTruthCache, ReconResult, Surfels, check_inputs,
+                                 score_reconstruction)
+from wrp_eval.recon.config import OracleSection
+from wrp_eval.sim.captures import CaptureSet
+
+_SURFEL_MIN_COS = np.cos(np.radians(70.0))  # cap on the footprint stretch 1/cos(incidence) of a surfel
+
+
+@dataclass(frozen=True)
+class Observations:
+    """Ray hits on the ship, flattened over views (h hits).
+
+    view (h,) view index; ray (h,) ray index in the view's grid; points (h, 3) m; normals (h, 3) unit,
+    turned to face the camera; dirs (h, 3) unit ray directions; dist (h,) m camera-to-hit;
+    hit_map (n, r, 3) hit point per view and ray (NaN where none); normal_map (n, r, 3) likewise.
+    """
+
+    view: np.ndarray
+    ray: np.ndarray
+    points: np.ndarray
+    normals: np.ndarray
+    dirs: np.ndarray
+    dist: np.ndarray
+    hit_map: np.ndarray
+    normal_map: np.ndarray
+
+
+def ray_grid(camera: Camera, rays_x: int, rays_y: int) -> tuple[np.ndarray, np.ndarray]:
+    """Camera-frame unit directions (r, 3) through the centres of a rays_x x rays_y grid (row-major),
+    and the pixel spacing (px) between neighbouring rays."""
+    u = (np.arange(rays_x) + 0.5) * camera.image_width_px / rays_x
+    v = (np.arange(rays_y) + 0.5) * camera.image_height_px / rays_y
+    uu, vv = np.meshgrid(u, v)
+    f = camera.focal_px
+    d = np.stack([(uu.ravel() - camera.image_width_px / 2) / f, (vv.ravel() - camera.image_height_px / 2) / f,
+                  np.ones(uu.size)], axis=1)
+    return d / np.linalg.norm(d, axis=1, keepdims=True), camera.image_width_px / rays_x
+
+
+def observe(capture_set: CaptureSet, gt: GroundTruth, rays_x: int, rays_y: int, max_range_m: float,
+            incidence_max: float) -> Observations:
+    """Cast every view's ray grid in one batched call; keep usable hits on the ship."""
+    n = len(capture_set)
+    cam_dirs, _ = ray_grid(capture_set.camera, rays_x, rays_y)
+    r = len(cam_dirs)
+    rot = camera_rotations(capture_set.yaw, capture_set.pitch)
+    dirs = np.einsum("nij,rj->nri", rot, cam_dirs)
+    origins = np.broadcast_to(np.asarray(capture_set.positions, dtype=float)[:, None, :], (n, r, 3))
+    rays = np.concatenate([origins, dirs], axis=2).astype(np.float32).reshape(-1, 6)
+    ans = gt.occluder_scene.cast_rays(o3d.core.Tensor(rays))
+    # float32 from here on (what open3d casts in): metres to ~1e-5 at ship scale, far below the noise
+    t_hit = ans["t_hit"].numpy()
+    gid = ans["geometry_ids"].numpy()
+    nrm = ans["primitive_normals"].numpy()
+    flat_dirs = rays[:, 3:]
+    flat_origins = rays[:, :3]
+    cos_inc = -np.einsum("kj,kj->k", flat_dirs, nrm)
+    # meshes with mixed triangle winding: the visible side is the one facing the camera
+    nrm = nrm * np.where(cos_inc < 0, np.float32(-1), np.float32(1))[:, None]
+    cos_inc = np.abs(cos_inc)
+    good = (gid == gt.ship_geometry_id) & (t_hit <= max_range_m) & (cos_inc >= np.cos(incidence_max))
+    idx = np.flatnonzero(good)
+    points = flat_dirs[idx] * t_hit[idx, None] + flat_origins[idx]
+    hit_map = np.full((n * r, 3), np.nan, dtype=np.float32)
+    hit_map[idx] = points
+    normal_map = np.full((n * r, 3), np.nan, dtype=np.float32)
+    normal_map[idx] = nrm[idx]
+    return Observations(idx // r, idx % r, points, nrm[idx], flat_dirs[idx], t_hit[idx],
+                        hit_map.reshape(n, r, 3), normal_map.reshape(n, r, 3))
+
+
+def candidate_pairs(obs: Observations, n_views: int, cell_m: float, max_partners: int,
+                    axes: np.ndarray | None = None,
+                    max_axis_angle: float = np.pi) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Candidate (hit, other view) pairs: among each view's ``max_partners`` best partner views (most
+    surface cells seen in common) plus the maximum spanning tree of co-visibility, those that saw the
+    hit's surface cell.
+
+    Real MVS bounds the source images per reference image the same way (view selection, e.g. Goesele et
+    al. 2007; Schoenberger et al. 2016), which keeps the cost linear in the number of views.
+    ``axes`` (n, 3): optical axes; pairs whose axes differ by more than ``max_axis_angle`` are dropped (the
+    rays to a common point differ from the axes by at most the half field of view each).
+    Returns hit index (k,) sorted ascending, partner view (k,), and the shared-cell counts (n, n).
+    """
+    cells = np.floor(obs.points / cell_m).astype(np.int64)
+    cells -= cells.min(axis=0)
+    extent = cells.max(axis=0) + 1
+    keys = (cells[:, 0] * extent[1] + cells[:, 1]) * extent[2] + cells[:, 2]
+    _, cell_id = np.unique(keys, return_inverse=True)
+    cell_id = cell_id.ravel()
+    n_cells = int(cell_id.max()) + 1
+    seen = np.zeros((n_views, n_cells), dtype=bool)  # view x cell incidence
+    seen[obs.view, cell_id] = True
+    incidence = sp.csr_matrix(seen, dtype=np.int32)
+    shared = (incidence @ incidence.T).toarray()  # co-visibility: common cells per view pair
+    np.fill_diagonal(shared, 0)
+    if axes is not None:  # views looking in too different directions cannot match: not candidates
+        shared = np.where(axes @ axes.T >= np.cos(max_axis_angle), shared, 0)
+    k = min(max_partners, n_views - 1)
+    order = np.argsort(-shared, axis=1, kind="stable")[:, :k]  # best partners first, ties by index
+    allowed = np.zeros((n_views, n_views), dtype=bool)
+    np.put_along_axis(allowed, order, True, axis=1)
+    # plus the maximum spanning tree of co-visibility: the cap never cuts a chain of views that see
+    # common surface (e.g. a ring whose best partners all lie on one side)
+    weights = np.where(shared > 0, shared.max() + 1 - shared, 0)
+    tree = minimum_spanning_tree(sp.csr_matrix(weights)).toarray() > 0
+    allowed |= tree | tree.T
+    allowed &= shared > 0
+    partner_lists = sp.csr_matrix(allowed)  # row v: the candidate partners of view v (sorted)
+    counts = np.diff(partner_lists.indptr)[obs.view]
+    hit = np.repeat(np.arange(len(cell_id)), counts)
+    offsets = np.arange(len(hit)) - np.repeat(np.cumsum(counts) - counts, counts)
+    partner = partner_lists.indices[np.repeat(partner_lists.indptr[obs.view], counts) + offsets]
+    ok = seen[partner, cell_id[hit]]
+    return hit[ok], partner[ok], shared
+
+
+class SyntheticOracle:
+    """The default oracle. ``evaluate(capture_set, ship_mesh, seed)`` -> :class:`ReconResult`."""
+
+    name = "synthetic"
+
+    def __init__(self, section: OracleSection = OracleSection()):
+        self.section = section
+        self._gt_cache = GroundTruthCache(section.gt_density_per_m2, section.gt_seed)
+
+    def ground_truth(self, ship_mesh: trimesh.Trimesh) -> GroundTruth:
+        """The prepared ground truth of ``ship_mesh`` (cached by content)."""
+        return self._gt_cache.get(ship_mesh)
+
+    def evaluate(self, capture_set: CaptureSet, ship_mesh: trimesh.Trimesh, seed: int = 0) -> ReconResult:
+        start = time.perf_counter()
+        check_inputs(capture_set, ship_mesh)
+        gt = self.ground_truth(ship_mesh)
+        surfels, registered, reason, extra = self.reconstruct(capture_set, gt, seed)
+        s = self.section
+        scores = score_reconstruction(surfels, gt, s.tau_m, s.icp_max_correspondence_m, s.icp_max_iterations,
+                                      seed)
+        return ReconResult(scores.error_m, scores.accuracy_m, scores.completeness, scores.precision,
+                           scores.fscore, s.tau_m, registered, len(capture_set), bool(reason), reason,
+                           time.perf_counter() - start, scores.scale, len(surfels), self.name, extra)
+
+    def reconstruct(self, capture_set: CaptureSet, gt: GroundTruth,
+                    seed: int = 0) -> tuple[Surfels, int, str, dict]:
+        """Surfels of the largest registered component, the registered count, failure reason ("" if none)
+        and diagnostics."""
+        p = self.section.synthetic
+        cam = capture_set.camera
+        n = len(capture_set)
+        empty = Surfels(np.zeros((0, 3)), np.zeros((0, 3)), np.zeros(0))
+        if n == 0:
+            return empty, 0, "no views captured", {}
+        f = cam.focal_px
+        max_range = cam.distance_for_gsd(p.max_gsd_m)
+        inc_max = np.radians(p.incidence_max_deg)
+        obs = observe(capture_set, gt, p.rays_x, p.rays_y, max_range, inc_max)
+        _, px_spacing = ray_grid(cam, p.rays_x, p.rays_y)
+        rays_per_view = p.rays_x * p.rays_y
+        if len(obs.points) == 0:
+            return empty, 0, "no view sees the ship", {"hits": 0}
+        # Cells must be larger than the spacing of neighbouring rays on the surface, or a view's sparse
+        # rays would miss cells it sees.
+        spacing = obs.dist * px_spacing / f
+        cell_m = max(p.cell_m, 1.5 * float(np.percentile(spacing, 95)))
+        axes = optical_axes(capture_set.yaw, capture_set.pitch)
+        hit, partner, _ = candidate_pairs(obs, n, cell_m, p.max_partners, axes,
+                                          np.radians(p.parallax_max_deg) + max(cam.half_fov_x, cam.half_fov_y))
+
+        # --- match every candidate pair (vectorised over pairs) ---
+        pos = np.asarray(capture_set.positions, dtype=np.float32)
+        rot = camera_rotations(capture_set.yaw, capture_set.pitch).astype(np.float32)
+        # cheap geometric tests first (range, incidence in j, parallax <= max), projection on the survivors
+        rel = obs.points[hit] - pos[partner]
+        dist_j = np.sqrt(np.einsum("kj,kj->k", rel, rel))
+        cos_j = np.abs(np.einsum("kj,kj->k", obs.normals[hit], rel)) / np.maximum(dist_j, 1e-9)
+        # parallax: angle at p between the two viewing rays (cos = (-d_i) . (-rel / |rel|))
+        cos_alpha = np.einsum("kj,kj->k", obs.dirs[hit], rel) / np.maximum(dist_j, 1e-9)
+        keep = np.flatnonzero((dist_j <= max_range) & (cos_j >= np.cos(inc_max))
+                              & (cos_alpha >= np.cos(np.radians(p.parallax_max_deg))))
+        hit, partner, rel, dist_j, cos_j = hit[keep], partner[keep], rel[keep], dist_j[keep], cos_j[keep]
+        alpha = np.arccos(np.clip(cos_alpha[keep], -1.0, 1.0))
+        cam_xyz = np.einsum("kij,ki->kj", rot[partner], rel)
+        z = cam_xyz[:, 2]
+        zs = np.where(z > 1e-9, z, 1e-9)
+        u = f * cam_xyz[:, 0] / zs + cam.image_width_px / 2
+        v = f * cam_xyz[:, 1] / zs + cam.image_height_px / 2
+        inside = (z > 1e-9) & (u >= 0) & (u < cam.image_width_px) & (v >= 0) & (v < cam.image_height_px)
+        iu = np.clip((u * p.rays_x / cam.image_width_px).astype(np.int64), 0, p.rays_x - 1)
+        iv = np.clip((v * p.rays_y / cam.image_height_px).astype(np.int64), 0, p.rays_y - 1)
+        grid_index = partner * rays_per_view + iv * p.rays_x + iu
+        dq = obs.points[hit] - obs.hit_map.reshape(-1, 3)[grid_index]
+        nq = obs.normal_map.reshape(-1, 3)[grid_index]
+        spacing_j = dist_j * px_spacing / f
+        # shadow-map test: j's ray at p's image cell landed on p's surface patch (near it, on its plane)
+        with np.errstate(invalid="ignore"):
+            same_plane = np.abs(np.einsum("kj,kj->k", dq, nq)) <= 0.5 * spacing_j + 1e-3
+            near = np.einsum("kj,kj->k", dq, dq) <= (2.0 * spacing_j / np.maximum(cos_j, np.cos(inc_max))) ** 2
+        matchable = inside & same_plane & near
+        triangulates = matchable & (alpha >= np.radians(p.parallax_min_deg))
+
+        # --- registration: link views sharing enough matchable surface, keep the largest component ---
+        # overlap as Hepp et al. 2018 (Plan3D): |obs(i) & obs(j)| / mean(|obs(i)|, |obs(j)|), here counted
+        # in matchable rays of each view landing on surface the other sees
+        vi = obs.view[hit[matchable]]
+        counts = np.bincount(vi * n + partner[matchable], minlength=n * n).reshape(n, n)
+        hits_per_view = np.bincount(obs.view, minlength=n)
+        common = counts + counts.T
+        with np.errstate(invalid="ignore", divide="ignore"):
+            overlap = common / (hits_per_view[:, None] + hits_per_view[None, :])
+        links = sp.csr_matrix((overlap >= p.min_overlap) & (common >= 2 * p.min_matched_rays))
+        n_comp, labels = connected_components(links, directed=False)
+        sizes = np.bincount(labels, minlength=n_comp)
+        best_comp = int(np.argmax(sizes))  # ties -> the component with the lowest view index
+        registered_mask = labels == best_comp
+        n_registered = int(registered_mask.sum())
+        reason = ""
+        if n_registered < 3:
+            reason = f"only {n_registered} view(s) registered (fewer than 3)"
+        elif 2 * n_registered < n:
+            reason = (f"only {n_registered} of {n} views registered ({n_comp} disconnected view groups, "
+                      f"largest kept)")
+
+        # --- reconstruct: best triangulating registered partner per hit ---
+        ok = triangulates & registered_mask[partner] & registered_mask[obs.view[hit]]
+        d_m = np.maximum(obs.dist[hit], dist_j)
+        with np.errstate(divide="ignore"):
+            sigma = np.where(ok, d_m * p.sigma_px / (f * np.sin(alpha)), np.inf)
+        best = np.full(len(obs.points), np.inf)
+        if len(hit):
+            starts = np.flatnonzero(np.r_[True, hit[1:] != hit[:-1]])
+            best[hit[starts]] = np.minimum.reduceat(sigma, starts)
+        recon = np.flatnonzero(np.isfinite(best))
+        sigma_r = np.maximum(best[recon], p.noise_floor_gsd * np.asarray(cam.gsd_m(obs.dist[recon])))
+        rng = np.random.default_rng(seed)
+        noisy = (obs.points[recon].astype(np.float64)
+                 + (rng.standard_normal(len(recon)) * sigma_r)[:, None] * obs.dirs[recon])
+        cos_i = np.abs(np.einsum("kj,kj->k", obs.normals[recon], obs.dirs[recon]))
+        radii = 0.71 * spacing[recon] / np.maximum(cos_i, _SURFEL_MIN_COS)
+        extra = {"hits": int(len(obs.points)), "candidate_pairs": int(len(hit)),
+                 "view_groups": int(n_comp), "cell_m": cell_m,
+                 "median_sigma_m": float(np.median(sigma_r)) if len(recon) else None}
+        return (Surfels(noisy, obs.normals[recon].astype(np.float64), radii.astype(np.float64)),
+                n_registered, reason, extra)
