@@ -4,11 +4,10 @@ and a worker's set-up error stops the campaign with its message."""
 from __future__ import annotations
 
 import pytest
+import ray  # the [cluster] extra; `make test` installs it, so its absence is a failure, not a skip
 
 from wrp_eval.campaign.store import TrialStore
 from wrp_eval.errors import InputError
-
-ray = pytest.importorskip("ray", reason="the ray backend needs the [cluster] extra")
 
 
 def test_ray_matches_local_and_shuts_down_its_instance(tmp_path, path_file, make_config, comparable, run_analytic):

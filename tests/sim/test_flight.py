@@ -138,8 +138,9 @@ def test_wind_of_the_wrong_shape_is_refused(simulator, short_path):
 
 
 def test_flights_in_the_ship_stage_scene(section):
-    trimesh = pytest.importorskip("trimesh")
-    scene_mod = pytest.importorskip("wrp_eval.ship.scene")
+    import trimesh
+
+    import wrp_eval.ship.scene as scene_mod
     from wrp_eval.sim.flight import FlightSimulator
     from wrp_eval.sim.simple_wind import ConstantWind as Wind
     root = scene_mod.build_scene(trimesh.creation.box(extents=(140.0, 20.0, 25.0)))
