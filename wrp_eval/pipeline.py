@@ -61,6 +61,7 @@ class Step:
 
 def run_pipeline(config_path: Path, *, quiet: bool = True) -> dict:
     """Run every stage of the config at ``config_path``; returns the run summary (also run_summary.json)."""
+    from wrp_eval.campaign.rerun_log import campaign_recording_id
     from wrp_eval.campaign.runner import run_campaign
     from wrp_eval.config import load_experiment
     from wrp_eval.export.formats import FORMATS, export_path
@@ -88,7 +89,6 @@ def run_pipeline(config_path: Path, *, quiet: bool = True) -> dict:
     with Step(timings, "ship", "particulars, proxy, mesh, surface complexity"):
         ship = resolve_ship_full(config.ship, config_dir, str(config_path))
         write_json_atomic(out / "ship.json", ship_report(ship))
-        save_ship_recording(ship, out / "ship.rrd")
 
     with Step(timings, "plan", f"{config.planning.method} reconstruction path (paper Sec. 3)"):
         result = plan(ship.proxy, ship.complexity.complexity, config.planning, planning_rng(config.run.seed))
@@ -96,7 +96,10 @@ def run_pipeline(config_path: Path, *, quiet: bool = True) -> dict:
                                                           "seed": config.run.seed})
         path.save(out / "plan" / "path.json")
         write_json_atomic(out / "plan" / "plan_metrics.json", result.metrics)
-        save_plan_recording(result, ship.proxy, out / "plan.rrd")
+        # one recording id for the run's parts, so that run.rrd merges them into one recording
+        recording_id = campaign_recording_id(path.to_json_dict())
+        save_ship_recording(ship, out / "ship.rrd", recording_id=recording_id)
+        save_plan_recording(result, ship.proxy, out / "plan.rrd", recording_id=recording_id)
         summary["plan"] = result.metrics
 
     campaign_dir = Path(config.campaign.outputs.dir or out / "campaign")

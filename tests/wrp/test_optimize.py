@@ -71,6 +71,22 @@ def test_accepted_moves_satisfy_the_criterion_and_bounds(kind, threshold):
     assert r.predicted_error_m == pytest.approx(surrogate.predict(r.offsets[None])[0])
 
 
+def test_moved_viewpoints_stay_above_the_minimum_altitude_and_out_of_the_no_fly_box():
+    surrogate = small_surrogate(6, seed=0, error_std=1.0, gain=20.0)
+    free = interval_optimise(surrogate, params_for(surrogate, "iswrp", 0.004), seed=2)
+    assert free.moved.any()
+    # planned viewpoints just above the minimum altitude, beside a no-fly box: many free moves break one
+    base = np.column_stack([np.linspace(-10, 10, 6), np.full(6, 6.0), np.full(6, 5.5)])
+    box = np.array([[-20.0, -20.0, 0.0], [20.0, 5.0, 30.0]])
+    p = params_for(surrogate, "iswrp", 0.004)
+    p = WrpParams(**{**p.__dict__, "base_positions": base, "min_altitude_m": 5.0, "no_fly_bounds": box})
+    assert not np.all(p.feasible(0, free.offsets[:, :3]))            # the case is not trivial
+    r = interval_optimise(surrogate, p, seed=2)
+    moved_to = base + r.offsets[:, :3]
+    assert np.all(moved_to[:, 2] >= 5.0)
+    assert not np.any(np.all((moved_to >= box[0]) & (moved_to <= box[1]), axis=1))
+
+
 def test_threshold_zero_moves_nothing_and_scores_every_iteration_once_per_block(surrogate):
     p = params_for(surrogate, "iswrp", 0.0)
     r = interval_optimise(surrogate, p, seed=0)

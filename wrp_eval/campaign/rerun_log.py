@@ -20,7 +20,7 @@ import numpy as np
 
 from wrp_eval.campaign.records import METRIC_NAMES
 
-APPLICATION_ID = "wrp-eval-campaign"
+APPLICATION_ID = "wrp-eval"  # the same application as the ship and plan recordings, so a run merges into one
 TIMELINE = "trial"
 FRUSTUM_DEPTH_M = 4.0
 
@@ -61,6 +61,13 @@ def frustum_strips(positions: np.ndarray, yaw: np.ndarray, pitch: np.ndarray, ha
     return np.concatenate(order, axis=1)
 
 
+def campaign_recording_id(path_doc: dict) -> str:
+    """The recording id of a path's campaign: other recordings of the same run (ship, plan) that use it merge
+    into the same recording (``rerun rrd merge``)."""
+    from wrp_eval.campaign.runner import path_digest
+    return f"campaign-{path_digest(path_doc)}"
+
+
 class CampaignRecorder:
     """Writes the campaign's recording. ``seconds`` accumulates the time spent logging (for the overhead)."""
 
@@ -71,7 +78,7 @@ class CampaignRecorder:
         self.tmp = Path(out_dir) / "campaign.rrd.tmp"
         self.seconds = 0.0
         start = time.perf_counter()
-        self.rec = rr.RecordingStream(APPLICATION_ID, recording_id=f"campaign-{path_doc.get('digest', '')}")
+        self.rec = rr.RecordingStream(APPLICATION_ID, recording_id=campaign_recording_id(path_doc))
         self.rec.save(str(self.tmp), default_blueprint=blueprint())
         vps = path_doc["viewpoints"]
         self.planned = np.array([[v["x_m"], v["y_m"], v["z_m"]] for v in vps], dtype=float)

@@ -17,13 +17,14 @@ _FRUSTUM_DEPTH_M = 4.0  # drawn image-plane distance
 
 
 def save_plan_recording(result: PlanResult, proxy: Proxy, file: str | FsPath,
-                        application_id: str = "wrp-eval") -> FsPath:
+                        application_id: str = "wrp-eval",
+                        recording_id: str | None = None) -> FsPath:
     """Write ``file`` atomically with entities plan/proxy, plan/no_fly, plan/samples, plan/candidates,
     plan/views/<i> (frusta), plan/tour."""
     file = FsPath(file)
     file.parent.mkdir(parents=True, exist_ok=True)
     tmp = file.with_name(f".{file.name}.{os.getpid()}.tmp")
-    rec = rr.RecordingStream(application_id)
+    rec = rr.RecordingStream(application_id, recording_id=recording_id)
     rec.save(tmp)
     rec.log("plan", rr.ViewCoordinates.RIGHT_HAND_Z_UP, static=True)
     lo, hi = proxy.bounds

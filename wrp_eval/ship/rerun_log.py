@@ -12,12 +12,13 @@ import rerun as rr
 from wrp_eval.ship.resolve import ResolvedShip
 
 
-def save_ship_recording(ship: ResolvedShip, path: str | Path, application_id: str = "wrp-eval") -> Path:
+def save_ship_recording(ship: ResolvedShip, path: str | Path, application_id: str = "wrp-eval",
+                        recording_id: str | None = None) -> Path:
     """Write ``path`` (atomically) with entities ship/mesh, ship/proxy, ship/no_fly, ship/faces, ship/info."""
     path = Path(path)
     path.parent.mkdir(parents=True, exist_ok=True)
     tmp = path.with_name(f".{path.name}.{os.getpid()}.tmp")
-    rec = rr.RecordingStream(application_id)
+    rec = rr.RecordingStream(application_id, recording_id=recording_id)
     rec.save(tmp)
     mesh, proxy, comp = ship.mesh, ship.proxy, ship.complexity
     rec.log("ship/mesh", rr.Mesh3D(vertex_positions=np.asarray(mesh.vertices, np.float32),

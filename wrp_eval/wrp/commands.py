@@ -77,6 +77,16 @@ def resolve_inputs(config, section, config_dir: Path, checkpoint: str | None = N
     return path, surrogate, camp, radius, source
 
 
+def safety_constraints(config, path, config_dir: Path) -> dict:
+    """The planner's flight-safety constraints for moved viewpoints: minimum altitude and the no-fly box."""
+    from wrp_eval.ship.proxy import build_proxy
+    from wrp_eval.ship.resolve import resolve_particulars
+    particulars, _ = resolve_particulars(config.ship, config_dir)
+    proxy = build_proxy(particulars, config.ship.no_fly_margin_m)
+    return {"base_positions": np.asarray(path.positions, dtype=float),
+            "min_altitude_m": float(config.planning.min_altitude_m), "no_fly_bounds": proxy.no_fly_bounds()}
+
+
 def step_from_surrogate(surrogate, section) -> float:
     """The position move bound: ``step_m``, else the training offsets' smallest position half-range."""
     if section.step_m is not None:
@@ -112,7 +122,8 @@ def run_optimize(config, section, config_dir: Path, out: Path, *, checkpoint=Non
                        attitude_samples=section.attitude_samples, yaw_range_rad=float(np.radians(section.yaw_range_deg)),
                        neighbourhood_samples=section.neighbourhood_samples,
                        step_m=step_from_surrogate(surrogate, section), swrp_spread=section.swrp_spread,
-                       block_iterations=section.block_iterations, stage2_batch=section.stage2_batch)
+                       block_iterations=section.block_iterations, stage2_batch=section.stage2_batch,
+                       **safety_constraints(config, path, config_dir))
     seed = section.seed if section.seed is not None else config.run.seed
     result = interval_optimise(surrogate, params, seed=seed)
     table = result.table3()

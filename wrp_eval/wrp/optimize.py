@@ -54,6 +54,23 @@ class WrpParams:
     swrp_spread: str = "variance"
     block_iterations: int = 64
     stage2_batch: int = 8
+    # flight-safety constraints of the moved viewpoints (the planner's, Sec. 3.1): planned positions (n, 3) m,
+    # the lowest allowed height above the sea (m) and the no-fly box (2, 3); None: unconstrained
+    base_positions: np.ndarray | None = None
+    min_altitude_m: float = 0.0
+    no_fly_bounds: np.ndarray | None = None
+
+    def feasible(self, view: int, offsets: np.ndarray) -> np.ndarray:
+        """(B,) bool: position offsets (B, 3) of ``view`` that keep it above the minimum altitude and out of
+        the no-fly box."""
+        if self.base_positions is None:
+            return np.ones(len(offsets), bool)
+        p = np.asarray(self.base_positions)[view] + offsets
+        ok = p[:, 2] >= self.min_altitude_m
+        if self.no_fly_bounds is not None:
+            lo, hi = np.asarray(self.no_fly_bounds)
+            ok &= ~np.all((p >= lo) & (p <= hi), axis=1)
+        return ok
 
     def __post_init__(self) -> None:
         if self.kind not in ("iswrp", "swrp"):
@@ -156,7 +173,7 @@ def optimise_view(query: ViewQuery, view: int, params: WrpParams, seed: int) -> 
         pos, yaws = d.position[:count], d.yaw[:count]
         yaw_best, e1 = best_attitude(query, view, pos, yaws)
         scored += count
-        survivors = np.flatnonzero(np.abs(e1 - e0) <= t)[::-1]           # latest iteration first
+        survivors = np.flatnonzero((np.abs(e1 - e0) <= t) & params.feasible(view, pos))[::-1]  # latest first
         for s in range(0, survivors.size, params.stage2_batch):
             chunk = survivors[s:s + params.stage2_batch]
             centres = pos[chunk][:, None, :] + d.neighbour_offset[chunk]  # (c, M, 3)
