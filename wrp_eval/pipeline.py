@@ -12,22 +12,15 @@ from __future__ import annotations
 
 import argparse
 import dataclasses
-import json
 import subprocess
 import sys
 import time
 from pathlib import Path
 
+from wrp_eval.atomic import write_json_atomic
 from wrp_eval.errors import InputError
 
 RUN_RECORDING = "run.rrd"
-
-
-def write_json_atomic(file: Path, doc: dict) -> None:
-    file.parent.mkdir(parents=True, exist_ok=True)
-    tmp = file.with_name(file.name + ".tmp")
-    tmp.write_text(json.dumps(doc, indent=1, default=float))
-    tmp.replace(file)
 
 
 def merge_recordings(parts: list[Path], target: Path) -> Path:

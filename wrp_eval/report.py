@@ -55,7 +55,9 @@ def ship_path_figure(mesh, path, file: Path) -> Path:
     centre, half = (lo + hi) / 2, (hi - lo).max() / 2
     ax.set_xlim(centre[0] - half, centre[0] + half)
     ax.set_ylim(centre[1] - half, centre[1] + half)
-    ax.set_zlim(0, 2 * half)
+    top = 1.15 * float(hi[2])
+    ax.set_zlim(0, top)
+    ax.set_box_aspect((1, 1, max(top / (2 * half), 0.15)))   # true proportions, not a cube
     ax.set_xlabel("x (m, bow +)")
     ax.set_ylabel("y (m, port +)")
     ax.set_zlabel("z (m)")

@@ -1,5 +1,4 @@
 import numpy as np
-import pytest
 
 from wrp_eval.sim.simple_wind import ConstantWind, mean_wind_vector
 

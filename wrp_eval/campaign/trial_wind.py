@@ -24,7 +24,7 @@ from wrp_eval.campaign.sampling import WindDraw
 from wrp_eval.wind.config import WindSection
 from wrp_eval.wind.dryden import DrydenTurbulence, severity_w20_mps
 from wrp_eval.wind.field import TWENTY_FT_M, WindField, build_mean_grid
-from wrp_eval.wind.grid import GriddedMeanWind, OutsideWindGridError, WindGrid, _cell
+from wrp_eval.wind.grid import GriddedMeanWind, WindGrid, interpolate
 from wrp_eval.wind.gusts import OneMinusCosineGusts
 
 
@@ -55,9 +55,8 @@ class StackedMeanWind:
     """Per-flight mean fields of one geometry: ``velocity(points (n,3), t)``, row i of ``points`` is flight i.
 
     The wind stage's :func:`wrp_eval.wind.grid.interpolate` evaluated for all flights at once, each against
-    its own node values: the same operations in the same order, so each row is bit-identical to the wind
-    stage's own interpolation of that flight's grid (tests/campaign/test_trial_wind.py checks this exactly).
-    TODO(wind stage): a per-flight ``values`` argument of ``interpolate`` would make this copy unnecessary.
+    its own node values, so each row is bit-identical to the wind stage's interpolation of that flight's grid
+    alone (tests/campaign/test_trial_wind.py checks this exactly).
     """
 
     grids: list[WindGrid]
@@ -70,50 +69,7 @@ class StackedMeanWind:
         self.values = np.stack([g.velocity_mps for g in self.grids])      # (F, nx, ny, nz, 3)
 
     def velocity(self, points: np.ndarray, t: float = 0.0) -> np.ndarray:
-        grid, clamp = self.geometry, self.clamp
-        points = np.asarray(points, dtype=float)
-        flight = np.arange(points.shape[0])[:, None]
-        g = grid.to_grid_frame(points)
-        i, fx = _cell(grid.x_m, g[:, 0], clamp, "x (grid frame)", grid.source)
-        j, fy = _cell(grid.y_m, g[:, 1], clamp, "y (grid frame)", grid.source)
-        ci = np.stack([i, i + 1, i, i + 1], axis=1)
-        cj = np.stack([j, j, j + 1, j + 1], axis=1)
-        heights = grid.heights_m[ci, cj]
-        z = g[:, 2:3]
-        bottom, top = heights[..., 0].min(axis=1), heights[..., -1].max(axis=1)
-        outside = (z[:, 0] < bottom) | (z[:, 0] > top) | ~np.isfinite(z[:, 0])
-        if np.any(outside) and not clamp:
-            row = np.nonzero(outside)[0][0]
-            raise OutsideWindGridError(
-                grid.source, f"query height z = {z[row, 0]:.3f} m is outside the wind grid's levels "
-                             f"[{bottom[row]:.3f}, {top[row]:.3f}] m here (enlarge the grid or set wind.clamp)")
-        zc = np.clip(np.nan_to_num(np.broadcast_to(z, heights.shape[:2]), nan=0.0), heights[..., 0], heights[..., -1])
-        nz = heights.shape[2]
-        k = np.clip((heights <= zc[..., None]).sum(axis=2) - 1, 0, nz - 2)
-        h_lo = np.take_along_axis(heights, k[..., None], 2)[..., 0]
-        h_hi = np.take_along_axis(heights, k[..., None] + 1, 2)[..., 0]
-        fz = (zc - h_lo) / (h_hi - h_lo)
-        v_lo = self.values[flight, ci, cj, k]                  # (n, 4, 3): each flight's own nodes
-        v_hi = self.values[flight, ci, cj, k + 1]
-        fxc = np.stack([fx, 1 - fx, fx, 1 - fx], axis=1)
-        fyc = np.stack([fy, fy, 1 - fy, 1 - fy], axis=1)
-        if self.method == "trilinear":
-            column = v_lo + fz[..., None] * (v_hi - v_lo)
-            wx = np.stack([1 - fx, fx, 1 - fx, fx], axis=1)
-            wy = np.stack([1 - fy, 1 - fy, fy, fy], axis=1)
-            return np.einsum("nc,ncd->nd", wx * wy, column)
-        # paper Sec. 4.1: inverse-distance weighting over the 8 surrounding grid points (as the wind stage)
-        d2_lo = fxc**2 + fyc**2 + fz**2
-        d2_hi = fxc**2 + fyc**2 + (1 - fz) ** 2
-        d2 = np.concatenate([d2_lo, d2_hi], axis=1)
-        values = np.concatenate([v_lo, v_hi], axis=1)
-        on_node = d2 < 1e-24
-        with np.errstate(divide="ignore"):
-            w = np.where(on_node, 0.0, d2 ** (-0.5 * self.idw_power))
-        hit = on_node.any(axis=1)
-        w[hit] = on_node[hit].astype(float)
-        w /= w.sum(axis=1, keepdims=True)
-        return np.einsum("nc,ncd->nd", w, values)
+        return interpolate(self.geometry, points, self.method, self.idw_power, self.clamp, values=self.values)
 
 
 @dataclass

@@ -5,20 +5,14 @@ from __future__ import annotations
 
 import argparse
 import dataclasses
-import json
 from pathlib import Path
 
 import numpy as np
 
+from wrp_eval.atomic import write_json_atomic
+
 # Stream id of the planning stage inside the run seed (other stages spawn their own).
 PLANNING_SEED_STREAM = 3
-
-
-def write_json_atomic(file: Path, doc: dict) -> None:
-    file.parent.mkdir(parents=True, exist_ok=True)
-    tmp = file.with_name(file.name + ".tmp")
-    tmp.write_text(json.dumps(doc, indent=1))
-    tmp.replace(file)
 
 
 def planning_rng(seed: int) -> np.random.Generator:

@@ -6,12 +6,15 @@ photogrammetric one (validation; ``pip install .[photogrammetry]``). See README.
 
 from __future__ import annotations
 
-from wrp_eval.recon.base import Oracle, ReconResult
-from wrp_eval.recon.config import OracleSection
+# base (open3d) is imported only when an oracle is made: the config and the CLI import this package, and
+# open3d costs ~1 s at every start-up and worker spawn.
 
 
-def make_oracle(section: OracleSection = OracleSection(), kind: str | None = None) -> Oracle:
-    """The oracle named by ``kind`` (default ``section.kind``), configured by ``section``."""
+def make_oracle(section=None, kind: str | None = None):
+    """The oracle (:class:`wrp_eval.recon.base.Oracle`) named by ``kind`` (default ``section.kind``),
+    configured by ``section`` (an :class:`wrp_eval.recon.config.OracleSection`; default its defaults)."""
+    from wrp_eval.recon.config import OracleSection
+    section = OracleSection() if section is None else section
     kind = kind or section.kind
     if kind == "synthetic":
         from wrp_eval.recon.synthetic import SyntheticOracle
@@ -23,4 +26,4 @@ def make_oracle(section: OracleSection = OracleSection(), kind: str | None = Non
     raise InputError("oracle", f"unknown oracle kind {kind!r}; choose synthetic or colmap")
 
 
-__all__ = ["Oracle", "OracleSection", "ReconResult", "make_oracle"]
+__all__ = ["make_oracle"]

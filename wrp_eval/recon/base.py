@@ -24,7 +24,6 @@ import trimesh
 from scipy.spatial import cKDTree
 
 from wrp_eval.errors import InputError
-from wrp_eval.recon.config import OracleSection
 from wrp_eval.sim.captures import CaptureSet
 
 SEA_HALF_EXTENT_M = 1.0e5  # the sea plane occluder spans +-100 km around the origin

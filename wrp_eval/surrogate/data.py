@@ -7,7 +7,6 @@ oracle error map (the paper's fit function f(p, a), Sec. 4.1).
 
 from __future__ import annotations
 
-import json
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -154,10 +153,3 @@ def known_function(offsets: np.ndarray, params: dict) -> np.ndarray:
             + (params["u"] * dyaw ** 2).sum(-1) + params["c"] * (dx[..., :-1] * dx[..., 1:]).sum(-1) / n)
 
 
-def write_json_atomic(target: Path, doc: dict) -> None:
-    """JSON to ``target`` through a temporary name, then rename."""
-    target = Path(target)
-    target.parent.mkdir(parents=True, exist_ok=True)
-    tmp = target.with_name(target.name + ".tmp")
-    tmp.write_text(json.dumps(doc, indent=1))
-    tmp.replace(target)

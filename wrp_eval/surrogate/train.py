@@ -20,7 +20,8 @@ from torch.nn import functional as F
 
 from wrp_eval.errors import InputError
 from wrp_eval.surrogate.config import SurrogateSection
-from wrp_eval.surrogate.data import TrialData, split_indices, write_json_atomic
+from wrp_eval.atomic import write_json_atomic
+from wrp_eval.surrogate.data import TrialData, split_indices
 from wrp_eval.surrogate.model import Surrogate, SurrogateMeta, ViewSequenceCNN
 
 CHECKPOINT_NAME = "surrogate.pt"

@@ -115,8 +115,11 @@ def _cell(axis: np.ndarray, coord: np.ndarray, clamp: bool, name: str, source: s
 
 
 def interpolate(grid: WindGrid, points: np.ndarray, method: str = "idw", idw_power: float = 2.0,
-                clamp: bool = False) -> np.ndarray:
-    """Mean wind (n, 3) m/s, ship frame, at ship-frame ``points`` (n, 3) m."""
+                clamp: bool = False, values: np.ndarray | None = None) -> np.ndarray:
+    """Mean wind (n, 3) m/s, ship frame, at ship-frame ``points`` (n, 3) m.
+
+    values: optional per-row node velocities (n, nx, ny, nz, 3) on ``grid``'s geometry (row i of ``points``
+    is interpolated in ``values[i]``: a batch of flights, each in its own mean field); default the grid's."""
     if method not in INTERPOLATION_METHODS:
         raise InputError("wind.interpolation", f"unknown method {method!r}; choose from {INTERPOLATION_METHODS}")
     points = np.asarray(points, dtype=float)
@@ -147,8 +150,13 @@ def interpolate(grid: WindGrid, points: np.ndarray, method: str = "idw", idw_pow
     h_lo = np.take_along_axis(heights, k[..., None], 2)[..., 0]
     h_hi = np.take_along_axis(heights, k[..., None] + 1, 2)[..., 0]
     fz = (zc - h_lo) / (h_hi - h_lo)                       # (n, 4)
-    v_lo = grid.velocity_mps[ci, cj, k]                    # (n, 4, 3)
-    v_hi = grid.velocity_mps[ci, cj, k + 1]
+    if values is None:
+        v_lo = grid.velocity_mps[ci, cj, k]                # (n, 4, 3)
+        v_hi = grid.velocity_mps[ci, cj, k + 1]
+    else:
+        row = np.arange(points.shape[0])[:, None]
+        v_lo = values[row, ci, cj, k]                      # (n, 4, 3): each row's own nodes
+        v_hi = values[row, ci, cj, k + 1]
 
     fxc = np.stack([fx, 1 - fx, fx, 1 - fx], axis=1)       # cell-unit distance to each column along x
     fyc = np.stack([fy, fy, 1 - fy, 1 - fy], axis=1)

@@ -101,7 +101,7 @@ def run_optimize(config, section, config_dir: Path, out: Path, *, checkpoint=Non
                  e_original=None, use_oracle=True, quiet=False) -> dict:
     """The whole ``optimize`` command as a function: returns the wrp_metrics document."""
     import torch
-    from wrp_eval.surrogate.data import write_json_atomic
+    from wrp_eval.atomic import write_json_atomic
     from wrp_eval.wrp.optimize import WrpParams, apply_offsets, interval_optimise
     torch.set_num_threads(section.threads)
     path, surrogate, camp, radius, radius_source = resolve_inputs(config, section, config_dir, checkpoint, campaign)
@@ -185,7 +185,7 @@ def run_evaluate(config, config_dir: Path, out: Path, *, n_trials: int | None = 
     from wrp_eval.campaign.evaluators import DEFAULT_EVALUATOR
     from wrp_eval.campaign.runner import run_campaign
     from wrp_eval.config import ExperimentConfig
-    from wrp_eval.surrogate.data import write_json_atomic
+    from wrp_eval.atomic import write_json_atomic
     from wrp_eval.wrp.config import WrpSection
     from wrp_eval.wrp.evaluate import box_plot, read_trials, summarise
     from wrp_eval.planning.path import Path as FlightPath
