@@ -9,8 +9,8 @@ Pipeline (the open stand-in for the paper's ContextCapture, Sec. 4.1):
    fewer than 3), as the synthetic oracle;
 4. georeference: similarity from the registered cameras' centres to the true capture positions (as
    ContextCapture does with the drone's GPS), then ICP with scale against the ground truth (:mod:`base`);
-   a model whose cameras stay more than ``max_camera_residual_m`` (RMS) from their positions after that
-   similarity has broken geometry and counts as failed;
+   optionally (``max_camera_residual_m``, off by default) a model whose cameras stay farther than that
+   (RMS) from their positions after the similarity has broken geometry and counts as failed;
 5. score the sparse points as surfels: normal from the 12 nearest neighbours (PCA, open3d), radius the
    distance to the 4th nearest neighbour (capped at 2 m), so that the sparse cloud covers the surface it
    sampled and the metrics compare with the synthetic oracle's.
@@ -186,7 +186,7 @@ class ColmapOracle:
         extra["points3D"] = int(len(pts))
         reason = ""
         residual = extra.get("camera_residual_m", 0.0)
-        if registered >= 3 and residual > c.max_camera_residual_m:
+        if registered >= 3 and c.max_camera_residual_m is not None and residual > c.max_camera_residual_m:
             # the model's cameras cannot be placed at their GPS positions by any similarity: its geometry is
             # broken (e.g. a weakly chained view graph folded by global positioning), the model is unusable
             reason = (f"COLMAP model geometry is inconsistent: registered cameras are {residual:.1f} m RMS from "

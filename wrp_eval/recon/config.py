@@ -39,8 +39,10 @@ class ColmapOracleSection(StrictModel):
     image_width_px: int = Field(800, ge=160, le=6000, description="rendered image width (height follows the camera)")
     max_num_features: int = Field(2000, ge=100, description="SIFT features per image")
     match_exhaustive: bool = Field(True, description="exhaustive matching (else sequential)")
-    max_camera_residual_m: float = Field(5.0, gt=0, description="failed when the registered cameras are farther "
-                                         "than this (RMS, m) from their capture positions after georeferencing")
+    max_camera_residual_m: float | None = Field(
+        None, gt=0, description="optional extra failure rule (not in issue 6's definition, off by default): failed "
+                                "when the registered cameras are farther than this (RMS, m) from their capture "
+                                "positions after georeferencing (a folded model); 5 m separates folded from sound")
     mapper: Literal["global", "incremental"] = Field("global", description="COLMAP mapper: global SfM (GLOMAP) "
                                                      "or incremental")
 
