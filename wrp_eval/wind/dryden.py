@@ -104,6 +104,18 @@ def _discrete_lyapunov_2x2(F: np.ndarray, Q: np.ndarray) -> np.ndarray:
     return 0.5 * (P + np.swapaxes(P, -1, -2))
 
 
+def flight_generators(rngs, n_flights: int) -> list[np.random.Generator]:
+    """One Generator per flight: ``rngs`` is a seed / SeedSequence / None (spawned), a Generator (spawned),
+    or already a sequence of ``n_flights`` Generators."""
+    if isinstance(rngs, (int, np.integer, np.random.SeedSequence)) or rngs is None:
+        rngs = np.random.default_rng(rngs).spawn(n_flights)
+    elif isinstance(rngs, np.random.Generator):
+        rngs = rngs.spawn(n_flights)
+    if len(rngs) != n_flights:
+        raise ValueError(f"got {len(rngs)} generators for {n_flights} flights")
+    return list(rngs)
+
+
 class DrydenTurbulence:
     """Dryden turbulence for a batch of ``n_flights`` flights, each with its own random stream.
 
@@ -123,15 +135,9 @@ class DrydenTurbulence:
             raise ValueError("n_flights must be >= 1")
         if not dt_s > 0:
             raise ValueError("dt_s must be > 0")
-        if isinstance(rngs, (int, np.integer, np.random.SeedSequence)) or rngs is None:
-            rngs = np.random.default_rng(rngs).spawn(n_flights)
-        elif isinstance(rngs, np.random.Generator):
-            rngs = rngs.spawn(n_flights)
-        if len(rngs) != n_flights:
-            raise ValueError(f"got {len(rngs)} generators for {n_flights} flights")
         self.n_flights = n_flights
         self.dt_s = float(dt_s)
-        self.rngs = list(rngs)
+        self.rngs = flight_generators(rngs, n_flights)
         w20 = 10.0 * sigma_w_override_mps if sigma_w_override_mps is not None else w20_mps
         self.w20_mps = np.broadcast_to(np.asarray(w20, dtype=float), (n_flights,)).copy()
         self.airspeed_floor_mps = float(airspeed_floor_mps)

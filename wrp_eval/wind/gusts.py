@@ -11,18 +11,15 @@ from __future__ import annotations
 
 import numpy as np
 
+from wrp_eval.wind.dryden import flight_generators
+
 
 class OneMinusCosineGusts:
     """Gusts for ``n_flights`` flights over ``horizon_s`` seconds; ``velocity(points, t)`` -> (n, 3) m/s."""
 
     def __init__(self, n_flights: int, rngs, horizon_s: float, rate_per_min: float, amplitude_mps: float,
                  duration_s: float, mean_azimuth_rad: float = 0.0, direction_spread_deg: float = 30.0):
-        if isinstance(rngs, (int, np.integer, np.random.SeedSequence)) or rngs is None:
-            rngs = np.random.default_rng(rngs).spawn(n_flights)
-        elif isinstance(rngs, np.random.Generator):
-            rngs = rngs.spawn(n_flights)
-        if len(rngs) != n_flights:
-            raise ValueError(f"got {len(rngs)} generators for {n_flights} flights")
+        rngs = flight_generators(rngs, n_flights)
         if duration_s <= 0 or horizon_s <= 0 or rate_per_min < 0:
             raise ValueError("gust duration and horizon must be > 0 and the rate >= 0")
         self.n_flights = n_flights
