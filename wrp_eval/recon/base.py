@@ -232,6 +232,19 @@ class GroundTruthCache:
         return gt
 
 
+class MeshOracle:
+    """What the oracles share: their config section and the ground truth prepared per ship mesh (cached by
+    content, since a campaign scores thousands of capture sets of one ship)."""
+
+    def __init__(self, section):
+        self.section = section
+        self._gt_cache = GroundTruthCache(section.gt_density_per_m2, section.gt_seed)
+
+    def ground_truth(self, ship_mesh: trimesh.Trimesh) -> GroundTruth:
+        """The prepared ground truth of ``ship_mesh``."""
+        return self._gt_cache.get(ship_mesh)
+
+
 def align_to_ground_truth(points: np.ndarray, gt: GroundTruth, max_correspondence_m: float,
                           max_iterations: int, max_source_points: int = 5000,
                           seed: int = 0, tolerance: float = 1e-6) -> np.ndarray:

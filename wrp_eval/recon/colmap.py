@@ -30,7 +30,7 @@ import trimesh
 from scipy.spatial import cKDTree
 
 from wrp_eval.errors import InputError
-from wrp_eval.recon.base import (GroundTruth, GroundTruthCache, ReconResult, Surfels, check_inputs,
+from wrp_eval.recon.base import (GroundTruth, MeshOracle, ReconResult, Surfels, check_inputs,
                                  score_reconstruction)
 from wrp_eval.recon.config import OracleSection
 from wrp_eval.recon.render import SolidTexture, render_views
@@ -59,7 +59,7 @@ def sparse_surfels(points: np.ndarray) -> Surfels:
     return Surfels(points, np.asarray(pcd.normals), radii)
 
 
-class ColmapOracle:
+class ColmapOracle(MeshOracle):
     """Render + pycolmap SfM. ``evaluate(capture_set, ship_mesh, seed)`` -> :class:`ReconResult`."""
 
     name = "colmap"
@@ -69,12 +69,8 @@ class ColmapOracle:
             import pycolmap  # noqa: F401
         except ImportError:
             raise InputError("oracle colmap", "pycolmap is not installed: pip install .[photogrammetry]") from None
-        self.section = section
+        super().__init__(section)
         self.work_dir = Path(work_dir) if work_dir is not None else None
-        self._gt_cache = GroundTruthCache(section.gt_density_per_m2, section.gt_seed)
-
-    def ground_truth(self, ship_mesh: trimesh.Trimesh) -> GroundTruth:
-        return self._gt_cache.get(ship_mesh)
 
     def evaluate(self, capture_set: CaptureSet, ship_mesh: trimesh.Trimesh, seed: int = 0) -> ReconResult:
         start = time.perf_counter()

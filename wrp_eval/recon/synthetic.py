@@ -47,7 +47,7 @@ import trimesh
 from scipy.sparse.csgraph import connected_components, minimum_spanning_tree
 
 from wrp_eval.camera import Camera, camera_rotations, optical_axes
-from wrp_eval.recon.base import (GroundTruth, GroundTruthCache, ReconResult, Surfels, check_inputs,
+from wrp_eval.recon.base import (GroundTruth, MeshOracle, ReconResult, Surfels, check_inputs,
                                  score_reconstruction)
 from wrp_eval.recon.config import OracleSection
 from wrp_eval.sim.captures import CaptureSet
@@ -164,18 +164,13 @@ def candidate_pairs(obs: Observations, n_views: int, cell_m: float, max_partners
     return hit[ok], partner[ok], shared
 
 
-class SyntheticOracle:
+class SyntheticOracle(MeshOracle):
     """The default oracle. ``evaluate(capture_set, ship_mesh, seed)`` -> :class:`ReconResult`."""
 
     name = "synthetic"
 
     def __init__(self, section: OracleSection = OracleSection()):
-        self.section = section
-        self._gt_cache = GroundTruthCache(section.gt_density_per_m2, section.gt_seed)
-
-    def ground_truth(self, ship_mesh: trimesh.Trimesh) -> GroundTruth:
-        """The prepared ground truth of ``ship_mesh`` (cached by content)."""
-        return self._gt_cache.get(ship_mesh)
+        super().__init__(section)
 
     def evaluate(self, capture_set: CaptureSet, ship_mesh: trimesh.Trimesh, seed: int = 0) -> ReconResult:
         start = time.perf_counter()
