@@ -15,6 +15,7 @@ densely the image was sampled, only on what was reconstructed and how noisily.
 from __future__ import annotations
 
 import hashlib
+import time
 from dataclasses import dataclass, field
 from typing import Protocol
 
@@ -243,6 +244,24 @@ class MeshOracle:
     def ground_truth(self, ship_mesh: trimesh.Trimesh) -> GroundTruth:
         """The prepared ground truth of ``ship_mesh``."""
         return self._gt_cache.get(ship_mesh)
+
+    def reconstruct(self, capture_set: CaptureSet, gt: GroundTruth,
+                    seed: int = 0) -> tuple["Surfels", int, str, dict]:
+        """(reconstruction, registered views, failure reason or "", extra diagnostics): the oracle's own part."""
+        raise NotImplementedError
+
+    def evaluate(self, capture_set: CaptureSet, ship_mesh: trimesh.Trimesh, seed: int = 0) -> ReconResult:
+        """Reconstruct, align to the ground truth (ICP with scale) and score: the :class:`Oracle` interface."""
+        start = time.perf_counter()
+        check_inputs(capture_set, ship_mesh)
+        gt = self.ground_truth(ship_mesh)
+        surfels, registered, reason, extra = self.reconstruct(capture_set, gt, seed)
+        s = self.section
+        scores = score_reconstruction(surfels, gt, s.tau_m, s.icp_max_correspondence_m, s.icp_max_iterations,
+                                      seed)
+        return ReconResult(scores.error_m, scores.accuracy_m, scores.completeness, scores.precision,
+                           scores.fscore, s.tau_m, registered, len(capture_set), bool(reason), reason,
+                           time.perf_counter() - start, scores.scale, len(surfels), self.name, extra)
 
 
 def align_to_ground_truth(points: np.ndarray, gt: GroundTruth, max_correspondence_m: float,

@@ -26,12 +26,10 @@ from pathlib import Path
 
 import numpy as np
 import open3d as o3d
-import trimesh
 from scipy.spatial import cKDTree
 
 from wrp_eval.errors import InputError
-from wrp_eval.recon.base import (GroundTruth, MeshOracle, ReconResult, Surfels, check_inputs,
-                                 score_reconstruction)
+from wrp_eval.recon.base import GroundTruth, MeshOracle, Surfels
 from wrp_eval.recon.config import OracleSection
 from wrp_eval.recon.render import SolidTexture, render_views
 from wrp_eval.sim.captures import CaptureSet
@@ -72,22 +70,13 @@ class ColmapOracle(MeshOracle):
         super().__init__(section)
         self.work_dir = Path(work_dir) if work_dir is not None else None
 
-    def evaluate(self, capture_set: CaptureSet, ship_mesh: trimesh.Trimesh, seed: int = 0) -> ReconResult:
-        start = time.perf_counter()
-        check_inputs(capture_set, ship_mesh)
-        gt = self.ground_truth(ship_mesh)
+    def reconstruct(self, capture_set: CaptureSet, gt: GroundTruth, seed: int = 0):
+        """Render, run SfM in ``work_dir`` (kept) or a temporary folder (removed)."""
         if self.work_dir is not None:
             self.work_dir.mkdir(parents=True, exist_ok=True)
-            surfels, registered, reason, extra = self._run(capture_set, gt, seed, self.work_dir)
-        else:
-            with tempfile.TemporaryDirectory(prefix="wrp-colmap-") as tmp:
-                surfels, registered, reason, extra = self._run(capture_set, gt, seed, Path(tmp))
-        s = self.section
-        scores = score_reconstruction(surfels, gt, s.tau_m, s.icp_max_correspondence_m, s.icp_max_iterations,
-                                      seed)
-        return ReconResult(scores.error_m, scores.accuracy_m, scores.completeness, scores.precision,
-                           scores.fscore, s.tau_m, registered, len(capture_set), bool(reason), reason,
-                           time.perf_counter() - start, scores.scale, len(surfels), self.name, extra)
+            return self._run(capture_set, gt, seed, self.work_dir)
+        with tempfile.TemporaryDirectory(prefix="wrp-colmap-") as tmp:
+            return self._run(capture_set, gt, seed, Path(tmp))
 
     def _run(self, capture_set: CaptureSet, gt: GroundTruth, seed: int,
              work: Path) -> tuple[Surfels, int, str, dict]:

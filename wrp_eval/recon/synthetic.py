@@ -37,18 +37,15 @@ Every random draw comes from ``numpy.random.default_rng(seed)``: same inputs and
 
 from __future__ import annotations
 
-import time
 from dataclasses import dataclass
 
 import numpy as np
 import open3d as o3d
 import scipy.sparse as sp
-import trimesh
 from scipy.sparse.csgraph import connected_components, minimum_spanning_tree
 
 from wrp_eval.camera import Camera, camera_rotations, optical_axes
-from wrp_eval.recon.base import (GroundTruth, MeshOracle, ReconResult, Surfels, check_inputs,
-                                 score_reconstruction)
+from wrp_eval.recon.base import GroundTruth, MeshOracle, Surfels
 from wrp_eval.recon.config import OracleSection
 from wrp_eval.sim.captures import CaptureSet
 
@@ -171,18 +168,6 @@ class SyntheticOracle(MeshOracle):
 
     def __init__(self, section: OracleSection = OracleSection()):
         super().__init__(section)
-
-    def evaluate(self, capture_set: CaptureSet, ship_mesh: trimesh.Trimesh, seed: int = 0) -> ReconResult:
-        start = time.perf_counter()
-        check_inputs(capture_set, ship_mesh)
-        gt = self.ground_truth(ship_mesh)
-        surfels, registered, reason, extra = self.reconstruct(capture_set, gt, seed)
-        s = self.section
-        scores = score_reconstruction(surfels, gt, s.tau_m, s.icp_max_correspondence_m, s.icp_max_iterations,
-                                      seed)
-        return ReconResult(scores.error_m, scores.accuracy_m, scores.completeness, scores.precision,
-                           scores.fscore, s.tau_m, registered, len(capture_set), bool(reason), reason,
-                           time.perf_counter() - start, scores.scale, len(surfels), self.name, extra)
 
     def reconstruct(self, capture_set: CaptureSet, gt: GroundTruth,
                     seed: int = 0) -> tuple[Surfels, int, str, dict]:
