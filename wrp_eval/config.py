@@ -17,6 +17,7 @@ from wrp_eval.recon.config import OracleSection
 from wrp_eval.planning.config import PlanningSection
 from wrp_eval.ship.config import ShipSection
 from wrp_eval.sim.config import SimSection
+from wrp_eval.study.config import StudySection
 from wrp_eval.surrogate.config import SurrogateSection
 from wrp_eval.validation import StrictModel, load_model
 from wrp_eval.wind.config import WindSection
@@ -44,6 +45,8 @@ class ExperimentConfig(StrictModel):
     surrogate: SurrogateSection = SurrogateSection()
     wrp: WrpSection = WrpSection()
     export: ExportSection = ExportSection()
+    study: StudySection | None = Field(None, description="variants of this config measured side by side "
+                                       "(the paper's tables, experiments/paper/); none: the single pipeline")
 
 
 def load_experiment(path: str | Path) -> ExperimentConfig:

@@ -52,8 +52,12 @@ class Step:
         return False
 
 
-def run_pipeline(config_path: Path, *, quiet: bool = True) -> dict:
-    """Run every stage of the config at ``config_path``; returns the run summary (also run_summary.json)."""
+def run_pipeline(config_path: Path, *, quiet: bool = True, smallest: bool = False) -> dict:
+    """Run every stage of the config at ``config_path``; returns the run summary (also run_summary.json).
+
+    A config with a ``study:`` section runs its variants instead (:mod:`wrp_eval.study.runner`: each variant
+    through the stages it needs) and returns the study document; ``smallest`` applies the study's
+    ``smallest`` overrides (the tests' setting)."""
     from wrp_eval.campaign.rerun_log import campaign_recording_id
     from wrp_eval.campaign.runner import run_campaign
     from wrp_eval.config import load_experiment
@@ -71,6 +75,11 @@ def run_pipeline(config_path: Path, *, quiet: bool = True) -> dict:
     from wrp_eval.wrp.commands import run_evaluate
 
     config = load_experiment(config_path)
+    if config.study is not None:
+        from wrp_eval.study.runner import run_study
+        return run_study(config, config_path, smallest=smallest, quiet=quiet)
+    if smallest:
+        raise InputError(config_path, "--smallest needs a study: section (it applies study.smallest)")
     config_dir = config_path.parent
     # the stages' own defaults put their outputs under logs/<run.name>/...; the pipeline relies on them
     out = Path("logs") / config.run.name
@@ -146,11 +155,14 @@ def _cmd_run(args: argparse.Namespace) -> int:
     config_path = Path(args.config)
     if not config_path.is_file():
         raise InputError(config_path, "no such config file")
-    summary = run_pipeline(config_path, quiet=not args.progress)
+    summary = run_pipeline(config_path, quiet=not args.progress, smallest=args.smallest)
     out = Path(summary["out"])
     print(f"\nwrp-eval run finished in {summary['timings_s']['total']:.0f} s.")
     print(f"Report:    {summary['report']}")
-    print(f"Recording: {out / RUN_RECORDING}  (open it with: rerun {out / RUN_RECORDING})")
+    if "rows" in summary:   # a study: a table, no recording
+        print(f"Table:     {out / 'study.json'}  (the rows as JSON; per-variant paths under {out / 'study'})")
+    else:
+        print(f"Recording: {out / RUN_RECORDING}  (open it with: rerun {out / RUN_RECORDING})")
     return 0
 
 
@@ -160,5 +172,7 @@ def register(sub: argparse._SubParsersAction) -> None:
                        formatter_class=argparse.RawDescriptionHelpFormatter)
     p.add_argument("config", help="experiment YAML (e.g. experiments/quickstart.yaml)")
     p.add_argument("--progress", action="store_true", help="show the stages' own progress bars and lines")
+    p.add_argument("--smallest", action="store_true", help="a study config (experiments/paper/): its smallest "
+                                                           "setting (study.smallest), as the tests run it")
     p.set_defaults(func=_cmd_run)
 

@@ -54,6 +54,8 @@ class PlanningSection(StrictModel):
     # --- transitions (paper Def. 3.4-3.5, Alg. 2)
     overlap_min: float = Field(0.4, ge=0, le=1, description="OSMC t_min")
     overlap_max: float = Field(0.8, ge=0, le=1, description="OSMC t_max")
+    transitions: bool = Field(True, description="method ours: insert the transition viewpoints (Alg. 2); false "
+                              "is the paper's Table 6 comparison (ours without the transition path)")
     # --- flight
     speed_m_s: float = Field(5.0, gt=0, description="cruise speed (paper Sec. 5.1)")
     dwell_s: float = Field(0.5, ge=0, description="hover per photo (Table 7: (159.764 s - 684.566 m / 5 m/s) "

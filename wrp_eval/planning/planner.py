@@ -206,7 +206,7 @@ def plan(proxy: Proxy, complexity: np.ndarray, section: PlanningSection, rng: np
     pos, yaw, pitch = chosen.positions, chosen.yaw, chosen.pitch
     face, kind = chosen.face.copy(), np.full(len(chosen), KIND_SURFACE)
     violations = checked = 0
-    if ours:
+    if ours and section.transitions:
         targets = samples.points[chosen.sample]
         tr = transition_views(pos, face, chosen_obs, targets, radii, proxy, samples.points, samples.normals,
                               samples.face, camera, raycaster, d_max, max_inc, section.min_altitude_m,

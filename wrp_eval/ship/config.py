@@ -9,6 +9,7 @@ ship:
   ais: ["!AIVDM,2,1,3,A,...", "!AIVDM,2,2,3,A,..."]   # or  ais_file: ship.nmea  (relative to the config)
   mesh: procedural             # or {path: hull.stl, scale: 0.001, up_axis: y, offset_m: [0, 0, -8]}
   no_fly_margin_m: 10          # overrides the per-type margin r
+  proxy_height_error: 0.1      # the proxy 10 % taller than the ship (paper Table 1); the mesh is unchanged
 ```
 """
 
@@ -78,6 +79,9 @@ class ShipSection(StrictModel):
     mesh: UserMesh | None = Field(None, description="'procedural' (None) or a user mesh file")
     no_fly_margin_m: float | None = Field(None, ge=0, le=200, description="override of the per-type margin r",
                                           **_METRES)
+    proxy_height_error: float = Field(0.0, gt=-0.9, le=2.0, description="signed error of the proxy's height as a "
+                                      "fraction of the true height above the waterline (paper Table 1: an unreliable "
+                                      "AIS draught); the mesh (the truth) keeps its height", **_METRES)
 
     @field_validator("mesh", mode="before")
     @classmethod

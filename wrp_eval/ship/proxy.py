@@ -92,11 +92,14 @@ class Proxy:
         return v, f
 
 
-def build_proxy(particulars: ShipParticulars, no_fly_margin_m: float | None = None) -> Proxy:
-    """The proxy of ``particulars``; ``no_fly_margin_m`` overrides the per-type margin."""
+def build_proxy(particulars: ShipParticulars, no_fly_margin_m: float | None = None,
+                height_error: float = 0.0) -> Proxy:
+    """The proxy of ``particulars``; ``no_fly_margin_m`` overrides the per-type margin; ``height_error`` (a signed
+    fraction) makes the proxy's height (1 + height_error) x the true height above the waterline, the paper's
+    Table 1 experiment on an inaccurate proxy (the ship itself is unchanged)."""
     length = particulars.length_bp_m
     breadth = particulars.breadth_m
-    height = particulars.height_above_water_m
+    height = particulars.height_above_water_m * (1.0 + float(height_error))
     if min(length, breadth, height) <= 0:
         raise ValueError(f"proxy dimensions must be positive, got L={length}, B={breadth}, H={height}")
     margin = NO_FLY_MARGIN_M[particulars.ship_type] if no_fly_margin_m is None else float(no_fly_margin_m)

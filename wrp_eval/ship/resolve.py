@@ -63,7 +63,7 @@ def resolve_ship_full(section: ShipSection, config_dir: str | Path = ".", source
                       cache_dir: Path | None = None) -> ResolvedShip:
     """Particulars, proxy, mesh and per-face surface complexity of the configured ship."""
     particulars, provenance = resolve_particulars(section, config_dir, source)
-    proxy = build_proxy(particulars, section.no_fly_margin_m)
+    proxy = build_proxy(particulars, section.no_fly_margin_m, section.proxy_height_error)
     if section.mesh is None:
         mesh, path = cached_procedural_mesh(particulars, cache_dir)
         mesh_source = f"procedural ({path})"

@@ -1,0 +1,191 @@
+"""Studies (`study:` configs, wrp_eval/study): validation, the variant mechanics, and every paper config
+(experiments/paper/table1..8.yaml) run end to end at its smallest setting through `wrp-eval run --smallest`."""
+
+import json
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from wrp_eval.cli import main
+from wrp_eval.config import ExperimentConfig, load_experiment
+from wrp_eval.errors import InputError
+from wrp_eval.study.runner import deep_merge, offset_path, offset_totals, random_offsets, variant_configs
+from wrp_eval.validation import parse_model
+
+PAPER = Path(__file__).resolve().parents[1] / "experiments" / "paper"
+STUDY = {"columns": ["views", "error_m"], "variants": [{"name": "a"}]}
+
+
+def _study(**changes):
+    return {"study": {**STUDY, **changes}}
+
+
+def test_deep_merge_merges_mappings_and_replaces_the_rest():
+    base = {"ship": {"type": "stylized", "particulars": {"draft_m": 6}}, "run": {"seed": 1}}
+    out = deep_merge(base, {"ship": {"particulars": {"breadth_m": 20}}, "run": {"seed": 2}, "x": [1]})
+    assert out == {"ship": {"type": "stylized", "particulars": {"draft_m": 6, "breadth_m": 20}},
+                   "run": {"seed": 2}, "x": [1]}
+    assert base["ship"]["particulars"] == {"draft_m": 6}   # the base is not modified
+
+
+@pytest.mark.parametrize("changes, message", [
+    ({"columns": ["views", "speed"]}, "unknown column"),
+    ({"variants": [{"name": "a"}, {"name": "a"}]}, "unique"),
+    ({"variants": [{"name": "a", "paper": {"length_m": 1.0}}]}, "not in study.columns"),
+    ({"variants": [{"name": "a", "repetitions": 3}]}, "random_offsets"),
+    ({"variants": [{"name": "a", "random_offsets": True, "repetitions": 3, "paper": [{}, {}]}]}, "repetitions"),
+    ({"variants": [{"name": "a", "path": "wrp"}]}, "path"),
+    ({"variants": []}, "variants"),
+    ({"variants": [{"name": "a", "overrides": {"run": {"name": "other"}}}]}, "run.name"),
+])
+def test_bad_study_sections_are_refused_with_one_line(changes, message):
+    with pytest.raises(InputError, match=message) as err:
+        parse_model(ExperimentConfig, _study(**changes), "cfg.yaml")
+    assert "\n" not in str(err.value)
+
+
+def test_a_bad_override_names_the_variant_and_exits_2(tmp_path, monkeypatch, capsys):
+    monkeypatch.chdir(tmp_path)
+    cfg = tmp_path / "bad.yaml"
+    cfg.write_text("study: {columns: [views], variants: [{name: ok}, {name: broken, overrides: "
+                   "{planning: {method: magic}}}]}\n")
+    assert main(["run", str(cfg)]) == 2
+    err = capsys.readouterr().err.strip()
+    assert "variant 'broken'" in err and "planning.method" in err and len(err.splitlines()) == 1
+    assert not (tmp_path / "logs" / "quickstart" / "study.json").exists()   # nothing ran
+
+
+def test_variants_keep_the_base_and_apply_their_overrides():
+    config = parse_model(ExperimentConfig, {
+        "run": {"name": "t", "seed": 4}, "ship": {"type": "cruise"},
+        "study": {"columns": ["views"], "variants": [{"name": "a"},
+                                                     {"name": "b", "overrides": {"planning": {"max_rounds": 0}}}],
+                  "smallest": {"planning": {"threshold": 0.5}}, "smallest_variants": 1}}, "cfg")
+    (va, a), (vb, b) = variant_configs(config, "cfg")
+    assert (a.ship.type.value, a.run.seed, a.planning.max_rounds) == ("cruise", 4, 2)
+    assert b.planning.max_rounds == 0 and b.ship.type_given      # "type given" survives the round trip
+    assert a.study is None and b.study is None
+    (only, small), = variant_configs(config, "cfg", smallest=True)
+    assert only.name == "a" and small.planning.threshold == 0.5 and small.run.name == "t-smallest"
+
+
+def test_random_offsets_are_seeded_bounded_and_summed_as_the_paper_does():
+    a = random_offsets(200, 2.0, np.radians(20.0), np.random.default_rng(1))
+    b = random_offsets(200, 2.0, np.radians(20.0), np.random.default_rng(1))
+    np.testing.assert_array_equal(a, b)
+    assert np.abs(a[:, :3]).max() <= 2.0 and np.abs(a[:, 3]).max() <= np.radians(20.0)
+    assert np.abs(a[:, :3]).max() > 1.9                               # it fills the box
+    pos, rot = offset_totals(a)
+    assert pos == pytest.approx(np.linalg.norm(a[:, :3], axis=1).sum())
+    assert rot == pytest.approx(np.degrees(np.abs(a[:, 3])).sum())
+
+
+def test_offset_path_moves_positions_and_wraps_yaw(stylized_path):
+    offsets = np.zeros((len(stylized_path), 4))
+    offsets[0] = [1.0, -2.0, 0.5, np.pi]
+    moved = offset_path(stylized_path, offsets, {"note": 1})
+    np.testing.assert_allclose(moved.positions[0] - stylized_path.positions[0], [1.0, -2.0, 0.5])
+    np.testing.assert_allclose(np.cos(moved.yaw[0]), -np.cos(stylized_path.yaw[0]), atol=1e-12)
+    assert -np.pi < moved.yaw[0] <= np.pi and moved.metadata["note"] == 1
+    np.testing.assert_array_equal(moved.positions[1:], stylized_path.positions[1:])
+
+
+@pytest.fixture(scope="module")
+def stylized_path():
+    from wrp_eval.planning.commands import planning_rng
+    from wrp_eval.planning.planner import plan
+    from wrp_eval.ship.config import ShipSection
+    from wrp_eval.ship.resolve import resolve_ship_full
+    ship = resolve_ship_full(ShipSection())
+    return plan(ship.proxy, ship.complexity.complexity, ExperimentConfig().planning, planning_rng(0)).path
+
+
+@pytest.mark.parametrize("table", range(1, 9))
+def test_every_paper_config_is_valid_and_carries_the_papers_figures(table):
+    config = load_experiment(PAPER / f"table{table}.yaml")
+    assert config.study is not None and config.study.table == table
+    assert config.run.name == f"paper-table{table}"
+    assert any(v.paper for v in config.study.variants)     # the anchors are in the config, not only in comments
+    assert len(variant_configs(config, "cfg")) == len(config.study.variants)
+
+
+def _run_smallest(table, tmp_path, monkeypatch) -> tuple[dict, str]:
+    tmp_path.mkdir(parents=True, exist_ok=True)
+    monkeypatch.chdir(tmp_path)
+    assert main(["run", str(PAPER / f"table{table}.yaml"), "--smallest"]) == 0
+    out = tmp_path / "logs" / f"paper-table{table}-smallest"
+    doc = json.loads((out / "study.json").read_text())
+    report = (out / "report.md").read_text()
+    assert doc["smallest"] and f"Table {table}" in report
+    header = next(line for line in report.splitlines() if line.startswith("| variant"))
+    assert header.count("| paper ") == len(doc["columns"])           # the paper's column beside every one of ours
+    for row in doc["rows"]:
+        assert row["variant"] in report
+        ours = row["ours"]
+        assert ours["views"] >= ours["adopted"] >= 0
+        assert ours["images_adopted"] == f"{ours['views']}/{ours['adopted']}"
+        assert ours["failed"] or (ours["error_m"] is not None and ours["error_m"] > 0)
+        assert Path(row["folder"], "plan", "path.json").is_file()
+    return doc, report
+
+
+def test_table1_smallest_plans_on_the_disturbed_proxy(tmp_path, monkeypatch):
+    doc, _ = _run_smallest(1, tmp_path, monkeypatch)
+    original, disturbed = doc["rows"]
+    assert original["ours"]["proxy_height_m"] == pytest.approx(25.0)
+    assert disturbed["ours"]["height_disturbance_m"] == pytest.approx(-0.08691 * 25.0)
+    assert disturbed["ours"]["height_disturbance_m"] == pytest.approx(disturbed["paper"]["height_disturbance_m"],
+                                                                      abs=1e-3)
+    assert original["paper"]["error_m"] == 2.94981
+
+
+def test_table2_smallest_maximisation_raises_h(tmp_path, monkeypatch):
+    doc, _ = _run_smallest(2, tmp_path, monkeypatch)
+    min_only, min_max = (r["ours"] for r in doc["rows"])
+    assert min_max["H"] > min_only["H"] and min_only["max_s"] < min_max["max_s"]
+    assert min_only["minmax_s"] == pytest.approx(min_only["min_s"] + min_only["max_s"])
+
+
+def test_table6_smallest_drops_the_transition_views(tmp_path, monkeypatch):
+    doc, report = _run_smallest(6, tmp_path, monkeypatch)
+    ours, zhou = (r["ours"] for r in doc["rows"])
+    assert ours["transition_views"] > zhou["transition_views"] and ours["views"] > zhou["views"]
+    assert "![stylized ours](study/stylized_ours/path.png)" in report
+
+
+def test_table7_and_table8_smallest(tmp_path, monkeypatch):
+    doc, _ = _run_smallest(7, tmp_path / "7", monkeypatch)
+    assert [r["ours"]["method"] for r in doc["rows"]] == ["ours", "zhou2020"]
+    assert all(r["ours"]["tsp_s"] > 0 for r in doc["rows"])
+    doc, _ = _run_smallest(8, tmp_path / "8", monkeypatch)
+    ours, op = (r["ours"] for r in doc["rows"])
+    assert (op["method"], op["pitch_deg"], op["front_overlap"], op["side_overlap"]) == ("oblique", 60, 0.7, 0.75)
+    assert ours["pitch_deg"] is None and op["views"] > ours["views"]
+
+
+@pytest.mark.slow
+def test_table3_smallest_shares_one_surrogate_across_the_six_wrps(tmp_path, monkeypatch):
+    doc, _ = _run_smallest(3, tmp_path, monkeypatch)
+    assert len(doc["shared_training"]) == 1 and len(doc["rows"]) == 7
+    wrp = [r["ours"] for r in doc["rows"][1:]]
+    e0 = wrp[0]["e_original_m"]
+    assert doc["rows"][0]["ours"]["error_m"] == pytest.approx(e0)      # the initial path's error is E_original
+    for ours, fraction in zip(wrp, [0.06279, 0.07849, 0.09419] * 2):
+        assert ours["threshold_m"] == pytest.approx(fraction * e0)
+        assert 0 <= ours["offset_rate_pct"] <= 100 and ours["wrp_time_s"] > 0
+    assert [r["path"] for r in doc["rows"]] == ["plan"] + ["iswrp"] * 3 + ["swrp"] * 3
+
+
+@pytest.mark.slow
+def test_tables_4_and_5_smallest_offset_rows(tmp_path, monkeypatch):
+    for table, n_rows in ((4, 7), (5, 6)):
+        doc, _ = _run_smallest(table, tmp_path / str(table), monkeypatch)
+        assert len(doc["rows"]) == n_rows
+        offset_rows = [r for r in doc["rows"] if r["random_offsets"]]
+        assert [r["repetition"] for r in offset_rows] == [1, 2, 3, 4, 5]
+        totals = [r["ours"]["position_offset_m"] for r in offset_rows]
+        n = offset_rows[0]["ours"]["views"]
+        assert len(set(totals)) == 5 and all(0 < t <= n * 2.0 * np.sqrt(3) for t in totals)
+        assert all(r["ours"]["wrp_time_s"] is None and r["paper"]["wrp_time_s"] is None for r in offset_rows)
+        assert all(Path(r["folder"], f"offsets-{r['repetition']}", "path.json").is_file() for r in offset_rows)

@@ -1,0 +1,233 @@
+"""Run a ``study:`` config: every variant of the base config through the stages it needs, one table.
+
+Per variant: ship -> plan -> [campaign -> surrogate -> ISWRP/SWRP] -> [random viewpoint offsets] -> oracle.
+The stages are called through their public functions (``plan``, ``run_campaign``, ``load_campaign_trials``,
+``train_surrogate``, ``write_outputs``, ``run_optimize``, ``oracle_error``), never re-implemented. Variants whose
+ship / planning / wind / sim / campaign / oracle / surrogate sections and seed are equal share one campaign and
+one surrogate (Table 3's six WRPs are optimised against the same surrogate, as in the paper).
+
+Outputs under ``logs/<run.name>/``: ``study/<variant>/`` (path.json per path, wrp metrics), ``study/shared-<key>/``
+(campaign, surrogate), ``study.json`` (every row, ours and the paper's), ``report.md``.
+"""
+
+from __future__ import annotations
+
+import copy
+import dataclasses
+import hashlib
+import json
+import re
+import time
+import zlib
+from pathlib import Path
+
+import numpy as np
+
+from wrp_eval.atomic import write_json_atomic
+from wrp_eval.planning.path import KIND_TRANSITION
+
+# the offsets stream of the study's random viewpoint offsets (SeedSequence([seed, STREAM, crc(name), rep]))
+OFFSETS_STREAM = 9_001
+TRAINING_SECTIONS = ("ship", "planning", "wind", "sim", "campaign", "oracle", "surrogate")
+
+
+def deep_merge(base: dict, update: dict) -> dict:
+    """A copy of ``base`` with ``update`` merged in: mappings merge key by key, anything else replaces."""
+    out = copy.deepcopy(base)
+    for key, value in update.items():
+        if isinstance(value, dict) and isinstance(out.get(key), dict):
+            out[key] = deep_merge(out[key], value)
+        else:
+            out[key] = copy.deepcopy(value)
+    return out
+
+
+def slug(name: str) -> str:
+    """A folder name for a variant name (letters, digits, ._- kept; the rest becomes '_')."""
+    return re.sub(r"[^A-Za-z0-9._-]+", "_", name).strip("_") or "variant"
+
+
+def base_document(config, smallest: bool) -> dict:
+    """The base config as a document (only the keys the file set, so that section defaults keep their meaning,
+    e.g. ``ship.type`` given or not), without the study, with the study's ``smallest`` overrides if asked."""
+    doc = config.model_dump(mode="json", exclude_unset=True)
+    doc.pop("study", None)
+    if smallest:
+        doc = deep_merge(doc, config.study.smallest)
+        if "name" not in config.study.smallest.get("run", {}):
+            doc.setdefault("run", {})["name"] = f"{config.run.name}-smallest"
+    return doc
+
+
+def variant_configs(config, source: str, smallest: bool = False) -> list:
+    """[(variant, ExperimentConfig)] for the variants to run; every one validated before anything runs."""
+    from wrp_eval.config import ExperimentConfig
+    from wrp_eval.validation import parse_model
+    base = base_document(config, smallest)
+    variants = list(config.study.variants)
+    if smallest and config.study.smallest_variants:
+        variants = variants[:config.study.smallest_variants]
+    return [(v, parse_model(ExperimentConfig, deep_merge(base, v.overrides), f"{source} study variant {v.name!r}"))
+            for v in variants]
+
+
+def random_offsets(n_views: int, position_half_width_m: float, yaw_half_width_rad: float,
+                   rng: np.random.Generator) -> np.ndarray:
+    """(n_views, 4) offsets (dx, dy, dz m, dyaw rad), each uniform in its +-half width."""
+    half = np.array([position_half_width_m] * 3 + [yaw_half_width_rad])
+    return rng.uniform(-1.0, 1.0, size=(n_views, 4)) * half
+
+
+def offset_path(path, offsets: np.ndarray, note: dict):
+    """``path`` with positions + offsets[:, :3] and yaw + offsets[:, 3] (wrapped to (-pi, pi])."""
+    yaw = np.angle(np.exp(1j * (np.asarray(path.yaw) + offsets[:, 3])))
+    return dataclasses.replace(path, positions=np.asarray(path.positions) + offsets[:, :3], yaw=yaw,
+                               metadata={**path.metadata, **note})
+
+
+def offset_totals(offsets: np.ndarray) -> tuple[float, float]:
+    """The paper's position / rotation offset columns: sum over viewpoints of |dp| (m) and |dyaw| (deg)."""
+    return (float(np.linalg.norm(offsets[:, :3], axis=1).sum()), float(np.degrees(np.abs(offsets[:, 3])).sum()))
+
+
+def training_key(config) -> str:
+    """Variants with the same key share one campaign and one surrogate."""
+    doc = {k: config.model_dump(mode="json")[k] for k in TRAINING_SECTIONS}
+    doc["seed"] = config.run.seed
+    return hashlib.sha256(json.dumps(doc, sort_keys=True).encode()).hexdigest()[:10]
+
+
+def _train(config, path, config_dir: Path, folder: Path, quiet: bool) -> dict:
+    """Campaign of ``path`` + surrogate; returns {campaign, checkpoint, trials, failed, surrogate test metrics}."""
+    from wrp_eval.campaign.runner import run_campaign
+    from wrp_eval.surrogate.data import load_campaign_trials
+    from wrp_eval.surrogate.train import train_surrogate, write_outputs
+    campaign_dir, surrogate_dir = folder / "campaign", folder / "surrogate"
+    start = time.perf_counter()
+    camp = run_campaign(config, out_dir=campaign_dir, config_dir=config_dir, path=path, progress=not quiet)
+    campaign_s = time.perf_counter() - start
+    seed = config.surrogate.seed if config.surrogate.seed is not None else config.run.seed
+    trained = train_surrogate(load_campaign_trials(campaign_dir), config.surrogate, seed=seed, progress=not quiet)
+    write_outputs(trained, surrogate_dir)
+    return {"campaign": str(campaign_dir), "checkpoint": str(surrogate_dir / "surrogate.pt"), "trials": camp.done,
+            "failed": camp.failed, "campaign_s": campaign_s,
+            "surrogate_s": time.perf_counter() - start - campaign_s, "surrogate_test": trained.metrics["test"]}
+
+
+def _plan_columns(ship, result, path, section) -> dict:
+    m, t = result.metrics, result.metrics.get("timings", {})
+    oblique = m.get("method") == "oblique"
+    return {"method": m.get("method"), "proxy_height_m": float(ship.proxy.height_m),
+            "height_disturbance_m": float(ship.proxy.height_m - ship.particulars.height_above_water_m),
+            "H": m.get("H"), "R": m.get("R"), "min_s": t.get("min_s"), "max_s": t.get("max_s"),
+            "minmax_s": (t["min_s"] + t["max_s"]) if "min_s" in t and "max_s" in t else None,
+            "tsp_s": t.get("tsp_s"), "plan_s": t.get("total_s"),
+            "pitch_deg": section.oblique_pitch_deg if oblique else None,
+            "front_overlap": section.front_overlap if oblique else None,
+            "side_overlap": section.side_overlap if oblique else None}
+
+
+def _path_columns(path, verdict: dict) -> dict:
+    views, adopted = len(path), int(verdict.get("registered_views", 0))
+    return {"views": views, "adopted": adopted, "images_adopted": f"{views}/{adopted}",
+            "transition_views": int(np.sum(np.asarray(path.kind) == KIND_TRANSITION)), "length_m": path.length_m,
+            "flight_time_s": path.flight_time_s, "error_m": verdict.get("error_m"),
+            "failed": bool(verdict.get("failed")), "reason": verdict.get("reason", ""),
+            "completeness": verdict.get("completeness"), "fscore": verdict.get("fscore")}
+
+
+def run_study(config, config_path: Path, *, smallest: bool = False, quiet: bool = True) -> dict:
+    """Every variant of ``config.study``; writes study.json and report.md under logs/<run.name>/ and returns
+    the study document."""
+    from wrp_eval.planning.commands import planning_rng
+    from wrp_eval.planning.path import Path as FlightPath
+    from wrp_eval.planning.planner import plan
+    from wrp_eval.report import write_study_report
+    from wrp_eval.ship.resolve import resolve_ship_full
+    from wrp_eval.wrp.commands import oracle_error, run_optimize
+    from wrp_eval.wrp.config import WrpSection
+
+    study = config.study
+    config_dir = config_path.parent
+    built = variant_configs(config, str(config_path), smallest)
+    run_name = built[0][1].run.name
+    out = Path("logs") / run_name
+    (out / "study").mkdir(parents=True, exist_ok=True)
+    job_start = time.perf_counter()
+    shared: dict[str, dict] = {}
+    optimised: dict[tuple, tuple] = {}
+    rows, figures, timings = [], [], {}
+    for number, (variant, cfg) in enumerate(built, 1):
+        start = time.perf_counter()
+        print(f"[wrp-eval run] study {number}/{len(built)}: {variant.name} ...", flush=True)
+        folder = out / "study" / slug(variant.name)
+        ship = resolve_ship_full(cfg.ship, config_dir, str(config_path))
+        result = plan(ship.proxy, ship.complexity.complexity, cfg.planning, planning_rng(cfg.run.seed))
+        path = dataclasses.replace(result.path, metadata={**result.path.metadata, "config": str(config_path),
+                                                          "variant": variant.name, "seed": cfg.run.seed})
+        path.save(folder / "plan" / "path.json")
+        write_json_atomic(folder / "plan" / "plan_metrics.json", result.metrics)
+        base_cols = _plan_columns(ship, result, path, cfg.planning)
+        wrp_cols: dict = {}
+        training = None
+        measured, verdict = path, None
+        if variant.path != "plan":
+            key = training_key(cfg)
+            if key not in shared:
+                shared[key] = _train(cfg, path, config_dir, out / "study" / f"shared-{key}", quiet)
+            training = shared[key]
+            section = WrpSection.model_validate({**cfg.wrp.model_dump(), "kind": variant.path})
+            wrp_key = (key, json.dumps(section.model_dump(mode="json"), sort_keys=True))
+            if wrp_key not in optimised:   # e.g. Table 5's SWRP row and its offset rows: one optimisation
+                wrp_dir = folder / f"wrp-{variant.path}"
+                optimised[wrp_key] = (run_optimize(cfg, section, config_dir, wrp_dir, checkpoint=training["checkpoint"],
+                                                   campaign=training["campaign"], quiet=quiet), wrp_dir)
+            doc, wrp_dir = optimised[wrp_key]
+            table = doc["table3"]
+            measured = FlightPath.load(wrp_dir / "path.json")
+            verdict = table.get("oracle")
+            wrp_cols = {"threshold_m": table["threshold_m"], "offset_rate_pct": table["offset_rate_pct"],
+                        "position_offset_m": table["position_offset_m"],
+                        "rotation_offset_deg": table["rotation_offset_deg"], "wrp_time_s": table["time_s"],
+                        "surrogate_error_m": table.get("surrogate_error_m"), "e_original_m": table.get("e_original_m")}
+        box = study.random_offsets
+        pert = cfg.campaign.perturbation
+        half_m = box.position_half_width_m if box.position_half_width_m is not None else pert.position_half_width_m
+        half_deg = box.yaw_half_width_deg if box.yaw_half_width_deg is not None else pert.yaw_half_width_deg
+        for rep in range(variant.repetitions):
+            row_path, row_verdict, cols = measured, verdict, dict(wrp_cols)
+            if variant.random_offsets:
+                rng = np.random.default_rng(np.random.SeedSequence(
+                    [cfg.run.seed, OFFSETS_STREAM, zlib.crc32(variant.name.encode()), rep]))
+                offsets = random_offsets(len(measured), half_m, np.radians(half_deg), rng)
+                row_path = offset_path(measured, offsets, {"random_offsets": {"repetition": rep + 1,
+                                                                              "position_half_width_m": half_m,
+                                                                              "yaw_half_width_deg": half_deg}})
+                row_path.save(folder / f"offsets-{rep + 1}" / "path.json")
+                cols["position_offset_m"], cols["rotation_offset_deg"] = offset_totals(offsets)
+                cols["offset_rate_pct"], cols["wrp_time_s"] = 100.0, None   # random rows: no optimisation time
+                cols["offsets_half_width"] = {"position_m": half_m, "yaw_deg": half_deg}
+                row_verdict = None
+            if row_verdict is None:
+                row_verdict = oracle_error(cfg, row_path, config_dir)
+            ours = {**base_cols, **_path_columns(row_path, row_verdict), **cols}
+            rows.append({"variant": variant.name, "repetition": rep + 1 if variant.random_offsets else None,
+                         "path": variant.path, "random_offsets": variant.random_offsets,
+                         "overrides": variant.overrides, "ours": ours, "paper": variant.paper_row(rep),
+                         "folder": str(folder)})
+        if study.figures:
+            figures.append((variant.name, measured, ship, folder))
+        timings[variant.name] = time.perf_counter() - start
+        print(f"[wrp-eval run] study {number}/{len(built)}: {variant.name}: done in {timings[variant.name]:.1f} s",
+              flush=True)
+    timings["total"] = time.perf_counter() - job_start
+    doc = {"config": str(config_path), "run": run_name, "seed": config.run.seed, "smallest": smallest,
+           "table": study.table, "title": study.title, "columns": study.columns, "rows": rows,
+           "random_offsets": {"position_half_width_m": box.position_half_width_m,
+                              "yaw_half_width_deg": box.yaw_half_width_deg},
+           "shared_training": shared, "timings_s": timings}
+    write_json_atomic(out / "study.json", doc)
+    report = write_study_report(out, doc, figures)
+    doc["timings_s"]["total"] = time.perf_counter() - job_start
+    write_json_atomic(out / "study.json", doc)
+    return {**doc, "out": str(out), "report": str(report)}
