@@ -43,8 +43,19 @@ class ColmapOracleSection(StrictModel):
         None, gt=0, description="optional extra failure rule (not in issue 6's definition, off by default): failed "
                                 "when the registered cameras are farther than this (RMS, m) from their capture "
                                 "positions after georeferencing (a folded model); 5 m separates folded from sound")
-    mapper: Literal["global", "incremental"] = Field("global", description="COLMAP mapper: global SfM (GLOMAP) "
-                                                     "or incremental")
+    mapper: Literal["global", "incremental"] = Field(
+        "incremental", description="COLMAP mapper: incremental with the capture positions as pose priors "
+                                   "(default, reproducible) or global SfM (GLOMAP, no priors, not reproducible)")
+    prior_position_sigma_m: float | None = Field(
+        1.0, gt=0, description="standard deviation (m) of the capture positions given to the incremental mapper "
+                               "as position priors (the drone's GPS; ~1 m for a consumer GNSS receiver); "
+                               "null = no priors")
+    abs_pose_min_num_inliers: int = Field(
+        15, ge=6, description="incremental mapper: fewest 2D-3D inliers to register a view (COLMAP's default 30 "
+                              "split well-connected 800-px sets into two models; see README)")
+    abs_pose_min_inlier_ratio: float = Field(0.1, gt=0, le=1, description="incremental mapper: lowest inlier "
+                                             "ratio of a view's registration (COLMAP's default 0.25)")
+    num_threads: int = Field(1, ge=-1, description="COLMAP mapping threads (1 = reproducible; -1 = all cores)")
 
 
 class OracleSection(StrictModel):

@@ -184,8 +184,9 @@ def _read_colmap_rows(file: Path) -> dict[str, dict]:
 def validate_oracle(config, mesh: trimesh.Trimesh, out: Path, seed: int = 0, config_dir: Path = Path("."),
                     reuse_colmap: Path | None = None) -> dict:
     """Run both oracles on every validation capture set (plus the planner's paths when the planning stage is
-    available); write table.csv, summary.json, scatter.png. With ``reuse_colmap`` (a previous summary.json
-    of the same config and seed), the COLMAP figures are taken from it and only the synthetic oracle runs."""
+    available); write table.csv, summary.json, scatter.png (and COLMAP's databases under OUT/colmap/). With
+    ``reuse_colmap`` (a previous summary.json of the same config and seed), the COLMAP figures are taken from
+    it and only the synthetic oracle runs."""
     from wrp_eval.recon.synthetic import SyntheticOracle
     synthetic = SyntheticOracle(config.oracle)
     previous = _read_colmap_rows(reuse_colmap) if reuse_colmap is not None else None
@@ -201,6 +202,9 @@ def validate_oracle(config, mesh: trimesh.Trimesh, out: Path, seed: int = 0, con
             row = _row(name, category, cs, syn, None)
             row.update(previous[name])
         else:
+            # features and matches are kept per capture set under OUT/colmap/NAME: a re-run into the same
+            # folder (other mapper settings) maps again without rendering and matching (see colmap.py)
+            colmap.work_dir = out / "colmap" / name
             col = colmap.evaluate(cs, mesh, seed=seed)
             row = _row(name, category, cs, syn, col)
         rows.append(row)
