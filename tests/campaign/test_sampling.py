@@ -77,3 +77,21 @@ def test_no_design_means_no_offsets_and_disturbance_is_bounded():
     assert np.all((inp.disturbance >= 0.8) & (inp.disturbance <= 1.2)) and inp.disturbance.std() > 0.05
     off = trial_inputs(section(perturbation={"flown_disturbance": 0}), 0, 1, 30)
     assert np.all(off.disturbance == 1.0)
+
+
+def test_common_design_shares_one_offset_disturbed_per_view():
+    s = section(n_trials=32, perturbation={"design": "common", "position_half_width_m": 2, "yaw_half_width_deg": 20,
+                                           "view_disturbance": 0.2, "view_jitter": 0.05})
+    offs = np.stack([commanded_offsets(s, 3, k, 40) for k in range(32)])      # (32, 40, 4)
+    half = np.array([2, 2, 2, np.radians(20)])
+    # every view within (1 + 20 %) of the common part plus 5 % jitter of the box
+    assert np.all(np.abs(offs) <= 1.2 * half + 0.05 * half + 1e-12)
+    # the views of a trial move together: the per-trial mean explains most of the spread across trials
+    within = offs.var(axis=1).mean(axis=0)
+    between = offs.mean(axis=1).var(axis=0)
+    assert np.all(between > 10 * within)
+    # the common part is a Sobol design over 4 dimensions: one trial mean in each of 32 strata of dx
+    strata = np.floor((offs[:, :, 0].mean(axis=1) / 2 + 1) / 2 * 32)
+    assert np.unique(strata).size >= 28       # disturbance and jitter blur the strata a little
+    np.testing.assert_array_equal(commanded_offsets(s, 3, 5, 40), offs[5])   # pure function of the trial
+    assert not np.array_equal(commanded_offsets(s, 4, 5, 40), offs[5])

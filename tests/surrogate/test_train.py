@@ -89,3 +89,32 @@ def test_write_outputs(trained, tmp_path):
     from wrp_eval.surrogate.model import Surrogate
     s = Surrogate.load(files["checkpoint"], n_views=trained.surrogate.n_views)
     assert s.meta.metrics["test"]["r2"] == trained.metrics["test"]["r2"]
+
+
+def test_log_target_predicts_in_metres_and_survives_the_checkpoint(known_data, tmp_path):
+    from wrp_eval.surrogate.config import SurrogateSection
+    from wrp_eval.surrogate.model import Surrogate
+    data, params = known_data
+    section = SurrogateSection(epochs=60, patience=60, batch_size=64, target="log_error")
+    result = train_surrogate(data, section, seed=0)
+    s = result.surrogate
+    assert s.meta.target == "log_error"
+    # the standardisation is of log(error): its mean is the log of the typical error (~0.5-0.7 m here)
+    assert s.meta.error_mean == pytest.approx(np.log(np.median(data.error)), abs=0.3)
+    pred = s.predict(data.offsets[:50])
+    assert np.all(pred > 0)
+    assert regression_metrics(known_function(data.offsets[:50], params), pred)["r2"] > 0.5
+    s.save(tmp_path / "s.pt")
+    again = Surrogate.load(tmp_path / "s.pt")
+    assert again.meta.target == "log_error"
+    np.testing.assert_allclose(again.predict(data.offsets[:50]), pred, rtol=1e-6)
+
+
+def test_log_target_refuses_non_positive_errors(known_data):
+    from dataclasses import replace
+
+    from wrp_eval.surrogate.config import SurrogateSection
+    data, _ = known_data
+    bad = replace(data, error=np.where(np.arange(data.n_trials) == 3, -0.1, data.error))
+    with pytest.raises(InputError, match="log_error needs errors > 0"):
+        train_surrogate(bad, SurrogateSection(epochs=2, target="log_error"), seed=0)

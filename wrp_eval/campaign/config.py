@@ -125,14 +125,25 @@ class Perturbation(StrictModel):
     design ``box``: per viewpoint (dx, dy, dz, dyaw) uniform in [-half_width, +half_width], drawn as a
     scrambled Sobol sequence (``sampler: sobol``, extendable: trial k is point k whatever the trial count) or a
     Latin hypercube over the campaign's n_trials (``sampler: lhs``; the design then depends on n_trials).
+
+    design ``common``: the paper's own data (Sec. 4.1): the offsets of a trial are the response of the UAV to ONE
+    wind situation, so they are shared by the viewpoints, each disturbed by 20 %. A common offset c (4 values)
+    is drawn in the box (Sobol / LHS over 4 dimensions, as above), and viewpoint k gets
+    c * (1 + e_k) + view_jitter * half_width * u_k with e_k ~ U(-view_disturbance, +view_disturbance) and
+    u_k ~ U(-1, 1) per component. The additive jitter lets the surrogate see single viewpoints move on their
+    own, which is what the interval optimiser asks it about.
     ``flown_disturbance``: the paper's Sec. 4.1 "additional 20 % random disturbance": the wind-induced part of
     every flown offset is scaled by (1 + e), e ~ U(-f, f), f = flown_disturbance (0 disables it).
     """
 
-    design: Literal["none", "box"] = "none"
+    design: Literal["none", "box", "common"] = "none"
     sampler: Literal["sobol", "lhs"] = "sobol"
     position_half_width_m: float = Field(2.0, ge=0)
     yaw_half_width_deg: float = Field(20.0, ge=0, le=180)
+    view_disturbance: float = Field(0.2, ge=0, le=1, description="design common: relative per-viewpoint "
+                                    "disturbance of the common offset (the paper's 20 %)")
+    view_jitter: float = Field(0.05, ge=0, le=1, description="design common: additive per-viewpoint jitter, as "
+                               "a fraction of the half widths")
     flown_disturbance: float = Field(0.2, ge=0, le=1)
 
 

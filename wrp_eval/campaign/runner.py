@@ -86,7 +86,7 @@ def fingerprint(config_doc: dict, digest: str, root_seed: int, evaluator: str, o
     """Hash of everything that decides a trial's result (an LHS design also depends on n_trials)."""
     doc = json.loads(json.dumps(config_doc))
     campaign = doc["campaign"]
-    lhs = campaign["perturbation"]["design"] == "box" and campaign["perturbation"]["sampler"] == "lhs"
+    lhs = campaign["perturbation"]["design"] != "none" and campaign["perturbation"]["sampler"] == "lhs"
     for key in _NEUTRAL_KEYS:
         if not (key == "n_trials" and lhs):
             campaign.pop(key, None)

@@ -8,7 +8,8 @@ others. Streams:
 * ``WIND_STREAM``: the scenario inputs (one child per input, so changing one input's distribution leaves the
   others' draws unchanged) and the wind realisation's seed. Nothing here depends on the path, so trials with
   the same id of different paths fly the same wind (common random numbers).
-* ``PERTURB_STREAM``: the box design (one scrambled Sobol / LHS design per campaign; trial k takes point k).
+* ``PERTURB_STREAM``: the box design (one scrambled Sobol / LHS design per campaign; trial k takes point k),
+  and, for the common design, the per-viewpoint disturbance of trial k (child (k,)).
 * ``DISTURB_STREAM``: the paper's extra random disturbance of the flown offsets.
 * ``FLIGHT_STREAM``: seeds handed to the flight and the oracle for any randomness of their own.
 """
@@ -111,8 +112,14 @@ def commanded_offsets(section: CampaignSection, root_seed: int, trial_id: int, n
     pert = section.perturbation
     if pert.design == "none":
         return np.zeros((n_views, 4))
-    u = unit_design_point(pert.sampler, root_seed, section.n_trials, trial_id, 4 * n_views).reshape(n_views, 4)
     half = np.array([pert.position_half_width_m] * 3 + [np.radians(pert.yaw_half_width_deg)])
+    if pert.design == "common":
+        common = (2.0 * unit_design_point(pert.sampler, root_seed, section.n_trials, trial_id, 4) - 1.0) * half
+        rng = trial_rng(root_seed, PERTURB_STREAM, trial_id)
+        e = rng.uniform(-pert.view_disturbance, pert.view_disturbance, size=(n_views, 4))
+        jitter = rng.uniform(-1.0, 1.0, size=(n_views, 4)) * pert.view_jitter * half
+        return common * (1.0 + e) + jitter
+    u = unit_design_point(pert.sampler, root_seed, section.n_trials, trial_id, 4 * n_views).reshape(n_views, 4)
     return (2.0 * u - 1.0) * half
 
 

@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+from typing import Literal
+
 from pydantic import Field, model_validator
 
 from wrp_eval.validation import StrictModel
@@ -21,9 +23,12 @@ class SurrogateSection(StrictModel):
                                 "(none: logs/<run.name>/surrogate)")
     val_fraction: float = Field(0.15, gt=0, lt=1)
     test_fraction: float = Field(0.15, gt=0, lt=1)
-    epochs: int = Field(400, ge=1, le=100_000)
-    patience: int = Field(40, ge=1, description="epochs without a better validation loss before stopping")
-    lr: float = Field(3e-3, gt=0, le=1)
+    epochs: int = Field(1500, ge=1, le=100_000)
+    patience: int = Field(150, ge=1, description="epochs without a better validation loss before stopping")
+    lr: float = Field(1e-3, gt=0, le=1)
+    target: Literal["error", "log_error"] = Field("error", description="what the network regresses: the "
+                                                  "error (m) or its log (the error is skewed; measured no better "
+                                                  "in metres, see README)")
     weight_decay: float = Field(0.0, ge=0)
     batch_size: int = Field(128, ge=1, le=65_536)
     channels: int = Field(16, ge=1, le=1024, description="feature channels of every conv layer (16 and kernel 3: "

@@ -73,7 +73,8 @@ class SurrogateMeta:
 
     n_views; path_digest: the campaign's hash of the path trained on (None: not tied to a stored path);
     architecture: ViewSequenceCNN keyword arguments; offset_mean/offset_std (4,), pose_mean/pose_std (7,):
-    input standardisation; error_mean/error_std: target standardisation (m); planned_pose (n_views, 7) or None;
+    input standardisation; error_mean/error_std: target standardisation (of the error in m, or of its natural
+    log when ``target`` is "log_error"); planned_pose (n_views, 7) or None;
     offset_low/offset_high (4,): range of the training offsets (the surrogate's domain); metrics: held-out
     figures; extra: free-form provenance (data source, seed, epochs run).
     """
@@ -90,6 +91,7 @@ class SurrogateMeta:
     planned_pose: list | None = None
     offset_low: list | None = None
     offset_high: list | None = None
+    target: str = "error"
     metrics: dict = field(default_factory=dict)
     extra: dict = field(default_factory=dict)
 
@@ -127,7 +129,12 @@ class Surrogate:
             raise ValueError(f"offsets must be (batch, {self.n_views}, 4), got {offsets.shape}")
         out = [self.net(self.input_tensor(offsets[i:i + batch]))[:, 0] for i in range(0, len(offsets), batch)]
         y = torch.cat(out).double().numpy() if out else np.zeros(0)
-        return y * self.meta.error_std + self.meta.error_mean
+        return self.to_error(y)
+
+    def to_error(self, standardised: np.ndarray) -> np.ndarray:
+        """The network's standardised output -> reconstruction error (m)."""
+        y = np.asarray(standardised, float) * self.meta.error_std + self.meta.error_mean
+        return np.exp(y) if self.meta.target == "log_error" else y
 
     @torch.no_grad()
     def predict_failure(self, offsets: np.ndarray) -> np.ndarray:
@@ -278,5 +285,4 @@ class ViewQuery:
             new = F.gelu(self.pre[layer][lo:hi] + dpre) * self._inside[lo:hi]
             delta_act = new - self.act[layer][lo:hi]
         pooled = (self.pooled_sum + delta_act.sum(dim=1)) / n              # (q, C)
-        y = self.s.net.head(pooled)[:, 0].double().numpy()
-        return y * self.s.meta.error_std + self.s.meta.error_mean
+        return self.s.to_error(self.s.net.head(pooled)[:, 0].double().numpy())

@@ -105,7 +105,15 @@ def train_surrogate(data: TrialData, section: SurrogateSection = SurrogateSectio
 
     offsets = np.asarray(data.offsets, float)
     off_mean, off_std = _standardise(offsets[tr].reshape(-1, 4), 0)
-    err_train = error[tr][usable[tr]]
+    if section.target == "log_error":
+        if np.any(error[usable] <= 0):
+            raise InputError(data.source or "surrogate data", "target log_error needs errors > 0; "
+                                                              "use surrogate.target: error")
+        with np.errstate(divide="ignore", invalid="ignore"):
+            target = np.log(np.where(usable, error, np.nan))
+    else:
+        target = error
+    err_train = target[tr][usable[tr]]
     if err_train.size < 2:
         raise InputError(data.source or "surrogate data", "too few training trials with a finite error")
     err_mean, err_std = float(err_train.mean()), float(max(err_train.std(), 1e-12))
@@ -124,14 +132,14 @@ def train_surrogate(data: TrialData, section: SurrogateSection = SurrogateSectio
                          offset_mean=off_mean.tolist(), offset_std=off_std.tolist(), error_mean=err_mean,
                          error_std=err_std, pose_mean=pose_mean, pose_std=pose_std, planned_pose=planned,
                          offset_low=offsets[tr].reshape(-1, 4).min(0).tolist(),
-                         offset_high=offsets[tr].reshape(-1, 4).max(0).tolist())
+                         offset_high=offsets[tr].reshape(-1, 4).max(0).tolist(), target=section.target)
     with torch.random.fork_rng(devices=[]):
         torch.manual_seed(seed)
         net = ViewSequenceCNN(**arch)
     surrogate = Surrogate(net, meta)
 
     x_all = surrogate.input_tensor(offsets)                                 # (N, Cin, n)
-    y_all = torch.as_tensor(np.nan_to_num((error - err_mean) / err_std), dtype=torch.float32)
+    y_all = torch.as_tensor(np.nan_to_num((target - err_mean) / err_std), dtype=torch.float32)
     w_all = torch.as_tensor(usable, dtype=torch.float32)                     # error-loss mask
     f_all = torch.as_tensor(np.asarray(data.failed, bool), dtype=torch.float32)
 
