@@ -1,12 +1,16 @@
 """``wrp-eval bench --only sim``: simulator throughput, open loop vs our closed-loop flights, same model.
 
-sim.raw_rollout_steps_per_s: drone-steps/s of an open-loop ``mujoco.rollout`` of the flight model (same
-scene, same drones per model, same batch, constant hover thrust), in calls of 100 steps.
-sim.closed_loop_steps_per_s: drone-steps/s of our flights (wind, drag, SE(3) control, reference, photo
+sim.raw_rollout_steps_per_s: drone-steps/s of an open-loop ``mujoco.rollout`` of the flight model (the
+scene FlightSimulator compiles: same drones per model with their in-MuJoCo attitude actuators, same
+timestep, same batch, same number of rollout threads), constant hover thrust, in calls of 100 steps.
+sim.closed_loop_steps_per_s: drone-steps/s of our flights (wind, drag, position loop, reference, photo
 triggers, failure checks, recording between chunks) hovering in gusty wind for the same simulated time.
 Both are the best of 3 interleaved runs (the machine is shared with other jobs).
-sim.ratio = closed / raw (target >= 0.7). sim.path_flight_s: wall seconds per flight of a 50-view ~700 m
-path flown by a batch of 32.
+sim.ratio = closed / raw (target >= 0.7). For transparency the same drones without the attitude
+actuators (motors only) are measured too: sim.raw_rollout_motors_only_steps_per_s and
+sim.ratio_vs_motors_only = closed / that, i.e. the cost of the whole controller (inner loop in MuJoCo +
+outer loop in numpy) against bare rigid-body physics. sim.timestep_s: the model's physics step.
+sim.path_flight_s: wall seconds per flight of a 50-view ~700 m path flown by a batch of 32.
 """
 
 from __future__ import annotations
@@ -15,6 +19,7 @@ import time
 
 import mujoco
 import numpy as np
+from mujoco import rollout as mj_rollout
 
 from wrp_eval.bench import BenchRecord
 from wrp_eval.planning.path import Path
@@ -42,30 +47,60 @@ def bench_path(n_views: int = 50, length_m: float = 700.0) -> Path:
 RAW_CALL_STEPS = 100
 
 
-def raw_rollout_rate(section: SimSection, batch: int, sim_seconds: float) -> float:
-    from wrp_eval.sim.flight import FlightSimulator
-    with FlightSimulator(section) as sim:
-        n_models, padded, qpos_flat, _, motor_flat, _ = sim._layout(batch)
-        state = np.tile(sim._initial_state, (n_models, 1))
-        q = np.zeros((padded, 7))
-        q[:, 2] = 30.0 + np.arange(padded)
-        q[:, 3] = 1.0
-        state.reshape(-1)[qpos_flat] = q
-        nstep = int(round(sim_seconds / section.timestep_s))
-        calls = -(-nstep // RAW_CALL_STEPS)
-        control = np.zeros((n_models, 1, sim.ncontrol))
-        control.reshape(-1)[motor_flat] = sim.params.weight_n / 4
-        control = np.broadcast_to(control, (n_models, RAW_CALL_STEPS, sim.ncontrol)).copy()
-        models = [sim.scene.model] * n_models
-        out = np.empty((n_models, RAW_CALL_STEPS, sim.nstate))
-        start = time.perf_counter()
+def raw_rollout_rate(section: SimSection, batch: int, sim_seconds: float,
+                     attitude_loop: bool = True) -> tuple[float, float]:
+    """Open-loop drone-steps/s of the flight model: the scene FlightSimulator builds (same drones per model,
+    same timestep, same thread count), on constant hover thrust with the attitude targets at the (level)
+    attitude, drifting horizontally at 1 m/s. ``attitude_loop=False``: the same drones without the
+    in-MuJoCo attitude actuators (what the bare rigid bodies + motors cost).
+    Returns (drone-steps per wall second, drone-steps per CPU second of all the process's threads)."""
+    import os
+
+    from wrp_eval.sim.vehicle import PHANTOM4, build_scene
+    scene = build_scene(section.drones_per_model, PHANTOM4, section.timestep_s, attitude_loop=attitude_loop)
+    model = scene.model
+    full = mujoco.mjtState.mjSTATE_FULLPHYSICS
+    spec = int(mujoco.mjtState.mjSTATE_CTRL | mujoco.mjtState.mjSTATE_MOCAP_QUAT)
+    nstate, ncontrol = mujoco.mj_stateSize(model, full), mujoco.mj_stateSize(model, spec)
+    d = section.drones_per_model
+    n_models = -(-batch // d)
+    data = mujoco.MjData(model)
+    mujoco.mj_forward(model, data)
+    state = np.zeros((n_models, nstate))
+    mujoco.mj_getState(model, data, state[0], full)
+    state[:] = state[0]
+    drone = np.arange(d)
+    q = np.zeros((d, 7))
+    q[:, 2] = 30.0 + drone
+    q[:, 3] = 1.0
+    state[:, 1 + scene.qpos_index] = q
+    # drifting at 1 m/s, not at rest: MuJoCo steps a body at exactly zero velocity ~15 % faster (velocity-
+    # dependent terms vanish; measured single-thread CPU time, 8 drones/model: 0.68 M drone-steps/s at rest
+    # vs 0.59 M drifting), and a flight never is at rest, so a resting open-loop hover would flatter "raw"
+    heading = 2.0 * np.pi * drone / d
+    state[:, 1 + model.nq + scene.qvel_index[:, 0]] = np.cos(heading)
+    state[:, 1 + model.nq + scene.qvel_index[:, 1]] = np.sin(heading)
+    control = np.zeros((n_models, RAW_CALL_STEPS, ncontrol))
+    control[:, :, scene.actuator_index.ravel()] = PHANTOM4.weight_n / 4
+    if attitude_loop:
+        mocap = model.nu + 4 * scene.mocap_index[:, None] + np.arange(4)
+        control[:, :, mocap] = q[:, 3:]
+    nthread = section.threads or (os.cpu_count() or 1)
+    datas = [mujoco.MjData(model) for _ in range(nthread)]
+    models = [model] * n_models
+    nstep = int(round(sim_seconds / section.timestep_s))
+    calls = -(-nstep // RAW_CALL_STEPS)
+    out = np.empty((n_models, RAW_CALL_STEPS, nstate))
+    with mj_rollout.Rollout(nthread=nthread) as pool:
+        start, start_cpu = time.perf_counter(), time.process_time()
         for _ in range(calls):
-            sim._pool.rollout(models, sim._datas, state, control, control_spec=sim.control_spec,
-                              skip_checks=True, nstep=RAW_CALL_STEPS, state=out)
+            pool.rollout(models, datas, state, control, control_spec=spec, skip_checks=True,
+                         nstep=RAW_CALL_STEPS, state=out)
             state = np.ascontiguousarray(out[:, -1])
-        wall = time.perf_counter() - start
-        nstep = calls * RAW_CALL_STEPS
-    return batch * nstep / wall
+        wall, cpu = time.perf_counter() - start, time.process_time() - start_cpu
+    assert np.allclose(state[:, 1 + scene.qpos_index[:, 2]], q[:, 2], atol=1e-6), "open-loop hover drifted"
+    steps = batch * calls * RAW_CALL_STEPS
+    return steps / wall, steps / cpu
 
 
 def _moderate_wind(section: SimSection, batch: int, seed: int):
@@ -75,37 +110,52 @@ def _moderate_wind(section: SimSection, batch: int, seed: int):
                             section.timestep_s * section.chunk_steps)
 
 
-def closed_loop_rate(section: SimSection, batch: int, sim_seconds: float) -> float:
+def closed_loop_rate(section: SimSection, batch: int, sim_seconds: float) -> tuple[float, float]:
+    """(drone-steps per wall second, per CPU second of all threads) of our flights hovering in turbulence."""
     from wrp_eval.sim.flight import FlightSimulator
     wind = _moderate_wind(section, batch, 0)
     with FlightSimulator(section) as sim:
-        start = time.perf_counter()
+        start, start_cpu = time.perf_counter(), time.process_time()
         result = sim.hover(wind, [0.0, 0.0, 30.0], 0.0, sim_seconds, batch=batch)
-        wall = time.perf_counter() - start
-    steps = result.flight_time_s.max() / section.timestep_s
-    return batch * steps / wall
+        wall, cpu = time.perf_counter() - start, time.process_time() - start_cpu
+    steps = batch * result.flight_time_s.max() / section.timestep_s
+    return steps / wall, steps / cpu
 
 
 def run_bench() -> list[BenchRecord]:
+    import os
     section = SimSection()
-    rec = []
-    note_common = (f"timestep {section.timestep_s} s, chunk {section.chunk_steps} steps "
-                   f"(control {1 / (section.timestep_s * section.chunk_steps):.0f} Hz), "
-                   f"{section.drones_per_model} drones/model, mujoco {mujoco.__version__}")
+    threads = section.threads or (os.cpu_count() or 1)
+    rec = [BenchRecord("sim.timestep_s", section.timestep_s, "s",
+                       note="MuJoCo physics step of the flight model (attitude loop at this rate)")]
+    note_common = (f"timestep {section.timestep_s} s (attitude loop {1 / section.timestep_s:.0f} Hz in MuJoCo), "
+                   f"chunk {section.chunk_steps} steps (position loop, wind, drag "
+                   f"{1 / (section.timestep_s * section.chunk_steps):.0f} Hz), "
+                   f"{section.drones_per_model} drones/model, {threads} rollout threads (raw and closed), "
+                   f"mujoco {mujoco.__version__}")
     for batch in (1024, 32):
         # interleaved, best of 3: this machine is shared, so the ratio is taken between neighbouring runs
-        raw = closed = 0.0
+        runs = {"raw": [], "closed": [], "bare": []}
         for _ in range(3):
-            raw = max(raw, raw_rollout_rate(section, batch, 10.0))
-            closed = max(closed, closed_loop_rate(section, batch, 10.0))
+            runs["raw"].append(raw_rollout_rate(section, batch, 10.0))
+            runs["closed"].append(closed_loop_rate(section, batch, 10.0))
+            runs["bare"].append(raw_rollout_rate(section, batch, 10.0, attitude_loop=False))
+        (raw, raw_cpu), (closed, closed_cpu), (bare, _) = (np.max(runs[k], axis=0) for k in ("raw", "closed", "bare"))
         suffix = "" if batch == 1024 else f"_batch{batch}"
         rec += [
             BenchRecord(f"sim.raw_rollout_steps_per_s{suffix}", raw, "drone-steps/s",
-                        note=f"open-loop mujoco.rollout, batch {batch}; " + note_common),
+                        note=f"open-loop mujoco.rollout of the flight model, batch {batch}; " + note_common),
             BenchRecord(f"sim.closed_loop_steps_per_s{suffix}", closed, "drone-steps/s",
                         note=f"hover in moderate Dryden turbulence, batch {batch}; " + note_common),
             BenchRecord(f"sim.ratio{suffix}", closed / raw, "ratio", anchor="issue 5 target", anchor_value=0.7,
-                        note=f"batch {batch}"),
+                        note=f"batch {batch}, {threads} threads both"),
+            BenchRecord(f"sim.ratio_cpu_time{suffix}", closed_cpu / raw_cpu, "ratio",
+                        note=f"batch {batch}: the same ratio in drone-steps per CPU second of all threads "
+                             f"(less sensitive to other jobs on a shared machine than wall time)"),
+            BenchRecord(f"sim.raw_rollout_motors_only_steps_per_s{suffix}", bare, "drone-steps/s",
+                        note=f"open loop, same drones without the attitude actuators, batch {batch}"),
+            BenchRecord(f"sim.ratio_vs_motors_only{suffix}", closed / bare, "ratio",
+                        note=f"batch {batch}: whole controller cost against bare rigid bodies + motors"),
         ]
     from wrp_eval.sim.flight import FlightSimulator
     path = bench_path()

@@ -10,20 +10,27 @@ from wrp_eval.validation import StrictModel
 
 
 class SimSection(StrictModel):
-    """Simulator settings. Defaults: 5 ms physics step, controller every 4 steps (50 Hz)."""
+    """Simulator settings. Defaults: 5 ms physics step (attitude loop 200 Hz inside MuJoCo), position loop,
+    wind and drag every 8 steps (25 Hz)."""
 
-    timestep_s: float = Field(0.005, gt=0.0, le=0.02, description="MuJoCo physics step")
-    chunk_steps: int = Field(4, ge=1, le=50,
-                             description="physics steps per mujoco.rollout call; control, wind and drag "
-                                         "are held over a chunk (control rate = 1/(chunk_steps*timestep_s))")
-    drones_per_model: int = Field(8, ge=1, le=64,
+    timestep_s: float = Field(0.005, gt=0.0, le=0.02, description="MuJoCo physics step (the attitude loop "
+                                                                  "runs inside MuJoCo at this rate)")
+    chunk_steps: int = Field(8, ge=1, le=50,
+                             description="physics steps per mujoco.rollout call; the position loop, wind and "
+                                         "drag are held over a chunk (position-loop rate = "
+                                         "1/(chunk_steps*timestep_s))")
+    drones_per_model: int = Field(4, ge=1, le=64,
                                   description="quadrotors per MuJoCo model; a batch of flights is split "
                                               "into ceil(batch/drones_per_model) rollouts")
     threads: int = Field(0, ge=0, description="mujoco.rollout threads (0: all CPUs)")
+    prefetch_wind: bool = Field(True, description="sample the next chunk's wind (at the positions predicted "
+                                                   "for the chunk's end) while the rollout runs")
     gains: Literal["default", "soft", "stiff"] = Field("default", description="controller gain preset")
     drag_coefficient: float = Field(1.0, gt=0.0, le=3.0, description="C_d of the windward area")
     air_density_kg_m3: float = Field(1.225, gt=0.0, le=2.0, description="rho (ISA sea level)")
     acceleration_m_s2: float = Field(2.5, gt=0.0, le=10.0, description="reference accel/decel along a segment")
+    jerk_m_s3: float | None = Field(4.0, gt=0.0, description="jerk limit of the reference (PX4 MPC_JERK_AUTO "
+                                                            "default 4); None: plain trapezoid")
     settle_position_m: float = Field(0.5, gt=0.0, description="settled when within this of the viewpoint "
                                                                 "(a waypoint's acceptance radius)")
     settle_speed_m_s: float = Field(0.5, gt=0.0, description="... slower than this")

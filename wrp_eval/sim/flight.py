@@ -4,9 +4,12 @@ Design (measured, see README.md and bench.py): the batch of flights is packed ``
 quadrotors to a MuJoCo model (independent free bodies, no contacts), the models run in parallel in
 ``mujoco.rollout`` threads for a chunk of ``chunk_steps`` physics steps, and between chunks numpy
 computes for the whole batch at once: the wind at every vehicle, the windward-area drag, the reference
-(trapezoidal speed profile viewpoint to viewpoint), the SE(3) controller, photo triggers and failures.
-Motor thrusts and drag forces enter the rollout through ``control_spec = CTRL | XFRC_APPLIED`` and are
-held over the chunk (zero-order hold, 20 ms by default: the controller runs at 50 Hz).
+(jerk-limited speed profile viewpoint to viewpoint), the position loop of the SE(3) controller, photo
+triggers and failures. Motor thrusts, drag forces (world-frame force actuators on the free joint) and
+the desired attitudes enter the rollout through ``control_spec = CTRL | MOCAP_QUAT`` and are held over
+the chunk (zero-order hold, 40 ms by default: the position loop runs at 25 Hz); the attitude loop runs
+inside MuJoCo at every physics step (200 Hz, vehicle.build_scene), so the numpy loop can run at the
+slower rate a position loop needs.
 
 Flight logic per viewpoint: TRANSIT along the straight segment at the cruise speed (accel-limited), then
 SETTLE until within the tolerances (or a timeout: a waypoint mission in gusts takes the photo anyway),
@@ -20,6 +23,7 @@ views are not taken.
 from __future__ import annotations
 
 import os
+from concurrent.futures import ThreadPoolExecutor
 
 import mujoco
 import numpy as np
@@ -29,8 +33,7 @@ from wrp_eval.planning.path import Path
 from wrp_eval.sim.aero import drag_force
 from wrp_eval.sim.captures import CaptureSet
 from wrp_eval.sim.config import SimSection
-from wrp_eval.sim.controller import (GAIN_PRESETS, GeometricController, quat_to_matrix, tilt_of, wrap_angle,
-                                     yaw_of)
+from wrp_eval.sim.controller import GAIN_PRESETS, PositionController, quat_to_matrix, tilt_of, wrap_angle, yaw_of
 from wrp_eval.sim.results import FlightResult, Trajectory
 from wrp_eval.sim.vehicle import PHANTOM4, QuadrotorParams, Scene, build_scene
 
@@ -39,20 +42,66 @@ YAW_RATE_REF_RAD_S = np.radians(60.0)  # reference yaw rate when a segment is mo
 
 
 def _trapezoid(length, tau, v_max, a_max):
-    """Distance, speed, accel (each (n,)) along a rest-to-rest segment at time tau, and its duration."""
+    """Rest-to-rest trapezoidal speed profile: distance s, speed v and the running integral of s, S = int s
+    dt (each (n,)) at time tau (n,) s, plus the duration (n,). Before 0: at rest at 0; after: at rest at
+    ``length``."""
+    tri = length < v_max ** 2 / a_max
+    v_peak = np.where(tri, np.sqrt(np.maximum(length, 0.0) * a_max), v_max)
+    t_acc = v_peak / a_max
+    t_cruise = np.where(tri, 0.0, length / v_max - t_acc)
+    duration = 2.0 * t_acc + t_cruise
+    s_acc = 0.5 * a_max * t_acc ** 2
+    big_s_acc = a_max * t_acc ** 3 / 6.0
+    big_s_end = big_s_acc + s_acc * t_cruise + 0.5 * v_peak * t_cruise ** 2 + (length * t_acc - big_s_acc)
+    after = np.maximum(tau - duration, 0.0)
+    tau = np.clip(tau, 0.0, duration)
+    t_c = tau - t_acc
+    t_dec = duration - tau
+    in_acc, in_dec = tau < t_acc, t_dec < t_acc
+    s = np.where(in_acc, 0.5 * a_max * tau ** 2,
+                 np.where(in_dec, length - 0.5 * a_max * t_dec ** 2, s_acc + v_peak * t_c))
+    v = np.where(in_acc, a_max * tau, np.where(in_dec, a_max * t_dec, v_peak))
+    big_s = np.where(in_acc, a_max * tau ** 3 / 6.0,
+                     np.where(in_dec, big_s_end - (length * t_dec - a_max * t_dec ** 3 / 6.0),
+                              big_s_acc + s_acc * t_c + 0.5 * v_peak * t_c ** 2))
+    return s, v, big_s + length * after, duration
+
+
+def _reference_profile(length, tau, v_max, a_max, t_jerk):
+    """Jerk-limited rest-to-rest profile: distance, speed, acceleration (each (n,)) at time tau, and the
+    duration (n,).
+
+    The trapezoidal speed profile averaged over a moving window of ``t_jerk`` s: the acceleration then
+    ramps over t_jerk instead of jumping, i.e. the jerk is limited to a_max / t_jerk, at most twice that
+    on a segment too short to reach a_max (PX4 shapes its auto-mode setpoints with a jerk limit too,
+    MPC_JERK_AUTO, default 4 m/s^3). A step in the
+    acceleration demand is what the attitude loop cannot follow without lag: with the trapezoid alone the
+    vehicle overshot each viewpoint by ~10 cm (README.md). Exact box averages from the closed forms:
+    s_j = (S(t) - S(t-T)) / T, v_j = (s(t) - s(t-T)) / T, a_j = (v(t) - v(t-T)) / T.
+    """
+    s1, v1, big1, duration = _trapezoid(length, tau, v_max, a_max)
+    if t_jerk <= 0.0:
+        return s1, v1, _trapezoid_accel(length, tau, v_max, a_max), duration
+    s0, v0, big0, _ = _trapezoid(length, tau - t_jerk, v_max, a_max)
+    return (big1 - big0) / t_jerk, (s1 - s0) / t_jerk, (v1 - v0) / t_jerk, duration + t_jerk
+
+
+def _trapezoid_accel(length, tau, v_max, a_max):
+    """Acceleration (n,) of the plain trapezoid (no jerk limit)."""
     tri = length < v_max ** 2 / a_max
     v_peak = np.where(tri, np.sqrt(np.maximum(length, 0.0) * a_max), v_max)
     t_acc = v_peak / a_max
     duration = np.where(tri, 2.0 * t_acc, length / v_max + t_acc)
-    tau = np.clip(tau, 0.0, duration)
-    t_dec = duration - tau
-    s = np.where(tau < t_acc, 0.5 * a_max * tau ** 2,
-                 np.where(t_dec < t_acc, length - 0.5 * a_max * t_dec ** 2,
-                          0.5 * a_max * t_acc ** 2 + v_peak * (tau - t_acc)))
-    v = np.where(tau < t_acc, a_max * tau, np.where(t_dec < t_acc, a_max * t_dec, v_peak))
-    a = np.where(tau < t_acc, a_max, np.where(t_dec < t_acc, -a_max, 0.0))
-    a = np.where(tau >= duration, 0.0, a)
-    return s, v, a, duration
+    return np.where((tau < 0) | (tau >= duration), 0.0,
+                    np.where(tau < t_acc, a_max, np.where(duration - tau < t_acc, -a_max, 0.0)))
+
+
+def _wind_at(wind, points, t, batch):
+    """(batch, 3) wind from ``wind.velocity(points, t)``, shape-checked."""
+    out = np.asarray(wind.velocity(points, t), dtype=float)
+    if out.shape != (batch, 3):
+        raise ValueError(f"wind model returned shape {out.shape} for {batch} flights, expected ({batch}, 3)")
+    return out
 
 
 class FlightSimulator:
@@ -66,13 +115,19 @@ class FlightSimulator:
         self.section = section
         self.params = params
         self.gains = GAIN_PRESETS[section.gains]
-        self.scene: Scene = build_scene(section.drones_per_model, params, section.timestep_s, root=scene_root)
+        g = self.gains
+        self.scene: Scene = build_scene(
+            section.drones_per_model, params, section.timestep_s, root=scene_root,
+            attitude_bandwidth_rad_s=(g.attitude_bandwidth_rad_s, g.attitude_bandwidth_rad_s,
+                                      g.yaw_bandwidth_rad_s), attitude_damping=g.attitude_damping)
         model = self.scene.model
         self.nstate = mujoco.mj_stateSize(model, mujoco.mjtState.mjSTATE_FULLPHYSICS)
-        self.control_spec = int(mujoco.mjtState.mjSTATE_CTRL | mujoco.mjtState.mjSTATE_XFRC_APPLIED)
+        self.control_spec = int(mujoco.mjtState.mjSTATE_CTRL | mujoco.mjtState.mjSTATE_MOCAP_QUAT)
         self.ncontrol = mujoco.mj_stateSize(model, self.control_spec)
         self.nthread = section.threads or (os.cpu_count() or 1)
         self._pool = mj_rollout.Rollout(nthread=self.nthread)
+        # one Python thread that calls the rollout while the main thread samples the next chunk's wind
+        self._worker = ThreadPoolExecutor(max_workers=1, thread_name_prefix="wrp-sim-rollout")
         self._datas = [mujoco.MjData(model) for _ in range(max(1, self.nthread))]
         data = mujoco.MjData(model)
         mujoco.mj_forward(model, data)
@@ -80,6 +135,7 @@ class FlightSimulator:
         mujoco.mj_getState(model, data, self._initial_state, mujoco.mjtState.mjSTATE_FULLPHYSICS)
 
     def close(self) -> None:
+        self._worker.shutdown(wait=True)
         self._pool.close()
 
     def __enter__(self):
@@ -101,8 +157,10 @@ class FlightSimulator:
         qvel_flat = model_of[:, None] * self.nstate + 1 + self.scene.model.nq + sc.qvel_index[drone_of]
         nu = self.scene.model.nu
         motor_flat = model_of[:, None] * self.ncontrol + sc.actuator_index[drone_of]
-        xfrc_flat = model_of[:, None] * self.ncontrol + nu + 6 * sc.body_id[drone_of][:, None] + np.arange(3)
-        return n_models, padded, qpos_flat, qvel_flat, motor_flat, xfrc_flat
+        drag_flat = model_of[:, None] * self.ncontrol + sc.drag_index[drone_of]
+        # control vector = [ctrl (nu), mocap_quat (nmocap x 4)]
+        mocap_flat = model_of[:, None] * self.ncontrol + nu + 4 * sc.mocap_index[drone_of][:, None] + np.arange(4)
+        return n_models, padded, qpos_flat, qvel_flat, motor_flat, drag_flat, mocap_flat
 
     # -- flights --------------------------------------------------------------------------------------
     def fly(self, path: Path, wind, batch: int, view_offsets: np.ndarray | None = None,
@@ -135,7 +193,7 @@ class FlightSimulator:
         body_tgt = cmd_pos - np.stack([cy * cam[0] - sy * cam[1], sy * cam[0] + cy * cam[1],
                                        np.full_like(cy, cam[2])], axis=-1)
 
-        n_models, padded, qpos_flat, qvel_flat, motor_flat, xfrc_flat = self._layout(batch)
+        n_models, padded, qpos_flat, qvel_flat, motor_flat, drag_flat, mocap_flat = self._layout(batch)
         state = np.tile(self._initial_state, (n_models, 1))
         flat_state = state.reshape(-1)
         # start hovering level at (each flight's) first body target
@@ -148,7 +206,7 @@ class FlightSimulator:
         flat_state[qpos_flat] = start
         park = start.copy()
 
-        controller = GeometricController(par, self.gains, padded)
+        controller = PositionController(par, self.gains, padded)
         # skip_checks rollout: no singleton expansion, so the held controls are tiled over the chunk
         control_vec = np.zeros((n_models, self.ncontrol))
         flat_ctrl = control_vec.reshape(-1)
@@ -190,28 +248,33 @@ class FlightSimulator:
         hover_thrust = par.weight_n / 4.0
         zeros_pad = np.zeros((padded - batch, 3))
         v_cruise, a_max = path.speed_m_s, sec.acceleration_m_s2
+        t_jerk = a_max / sec.jerk_m_s3 if sec.jerk_m_s3 else 0.0
         settle_yaw = np.radians(sec.settle_yaw_deg)
         lo_pitch, hi_pitch = par.gimbal_pitch_range_rad
         lo_roll, hi_roll = par.gimbal_roll_range_rad
         max_chunks = int(np.ceil(sec.max_flight_time_s / dt))
 
+        wind_next = None
         for chunk in range(max_chunks + 1):
             t = chunk * dt
             qpos = flat_state[qpos_flat]
             qvel = flat_state[qvel_flat]
             pos, quat = qpos[:, :3], qpos[:, 3:]
-            vel, omega = qvel[:, :3], qvel[:, 3:]
+            vel = qvel[:, :3]
             rot = quat_to_matrix(quat)
-            yaw = yaw_of(rot[:batch])
+            yaw_all = yaw_of(rot)
+            yaw = yaw_all[:batch]
             p_b, v_b = pos[:batch], vel[:batch]
 
             # ---- reference along the current segment
-            s, v, a, _ = _trapezoid(seg_len, phase_time, v_cruise, a_max)
+            s, v, a, _ = _reference_profile(seg_len, phase_time, v_cruise, a_max, t_jerk)
             transit = phase == TRANSIT
             ref_pos = np.where(transit[:, None], seg_start + seg_dir * s[:, None], seg_end)
             # Leash: a vehicle held back by a head wind is not "lost"; its reference waits for it (what a
             # waypoint autopilot does: it flies towards the next waypoint as fast as it can).
-            held = transit & (((p_b - ref_pos) ** 2).sum(axis=1) > sec.leash_m ** 2)
+            err = p_b - ref_pos
+            dist2 = np.einsum("ij,ij->i", err, err)
+            held = transit & (dist2 > sec.leash_m ** 2)
             moving = transit & ~held
             ref_vel = np.where(moving[:, None], seg_dir * v[:, None], 0.0)
             ref_acc = np.where(moving[:, None], seg_dir * a[:, None], 0.0)
@@ -220,8 +283,7 @@ class FlightSimulator:
 
             # ---- failures: lost position, ditched, non-finite
             active = phase < DONE
-            dist = np.sqrt(((p_b - ref_pos) ** 2).sum(axis=1))
-            lost_time = np.where(active & (dist > sec.fail_distance_m), lost_time + dt, 0.0)
+            lost_time = np.where(active & (dist2 > sec.fail_distance_m ** 2), lost_time + dt, 0.0)
             held_time = np.where(held, held_time + dt, 0.0)
             bad = ~np.isfinite(p_b.sum(axis=1) + v_b.sum(axis=1))
             stalled = held_time > sec.stall_time_s
@@ -288,29 +350,28 @@ class FlightSimulator:
                     seg_dir[nxt] = delta / np.maximum(length, 1e-12)[:, None]
                     seg_yaw0[nxt] = cmd_yaw[nxt, k1 - 1]
                     seg_dyaw[nxt] = wrap_angle(cmd_yaw[nxt, k1] - cmd_yaw[nxt, k1 - 1])
-                    _, _, _, dur = _trapezoid(length, np.zeros_like(length), v_cruise, a_max)
+                    dur = _reference_profile(length, np.zeros_like(length), v_cruise, a_max, t_jerk)[3]
                     seg_duration[nxt] = np.maximum(dur, np.abs(seg_dyaw[nxt]) / YAW_RATE_REF_RAD_S)
                     idx[nxt] = k1
                     phase[nxt] = TRANSIT
             phase = np.where(to_settle, SETTLE, phase)
             phase = np.where(to_dwell, DWELL, phase)
             phase_time = np.where(trigger | to_settle | to_dwell, 0.0, phase_time)
-            if not np.any(phase < DONE):
-                break
+            # the last chunk is still recorded (wind, drag, control included) before the loop ends, so a
+            # flight's record does not depend on whether other flights of its batch are still flying
+            finished = not np.any(phase < DONE)
 
             # ---- wind, drag, control for the whole (padded) batch
-            wind_b = np.asarray(wind.velocity(p_b, start_time_s + t), dtype=float)
-            if wind_b.shape != (batch, 3):
-                raise ValueError(f"wind model returned shape {wind_b.shape} for {batch} flights, expected "
-                                 f"({batch}, 3)")
+            wind_b = _wind_at(wind, p_b, start_time_s + t, batch) if wind_next is None else wind_next
             wind_all = np.concatenate([wind_b, zeros_pad]) if padded > batch else wind_b
-            yaw_all = yaw_of(rot)
             drag = drag_force(wind_all - vel, yaw_all, par, sec.drag_coefficient, sec.air_density_kg_m3)
             rp = np.concatenate([ref_pos, park[batch:, :3]]) if padded > batch else ref_pos
             rv = np.concatenate([ref_vel, zeros_pad]) if padded > batch else ref_vel
             ra = np.concatenate([ref_acc, zeros_pad]) if padded > batch else ref_acc
             ryaw = np.concatenate([ref_yaw, np.zeros(padded - batch)]) if padded > batch else ref_yaw
-            motors = controller(pos, vel, rot, omega, rp, rv, ra, ryaw, dt)
+            integrate = np.concatenate([phase != TRANSIT, np.ones(padded - batch, dtype=bool)])
+            thrust, quat_d = controller(pos, vel, rot[:, :, 2], rp, rv, ra, ryaw, dt, integrate)
+            motors = np.repeat(np.minimum(thrust / 4.0, par.max_thrust_per_motor_n)[:, None], 4, axis=1)
             # failed flights are parked (held still, no forces): they take no further photos
             dead = np.concatenate([phase == FAILED, np.zeros(padded - batch, dtype=bool)])
             if np.any(dead):
@@ -320,6 +381,7 @@ class FlightSimulator:
                 flat_state[qpos_flat[dead]] = qpos_dead
                 flat_state[qvel_flat[dead]] = 0.0
                 motors[dead] = hover_thrust
+                quat_d[dead] = park[dead, 3:]
                 drag[dead] = 0.0
                 controller.reset(dead)
 
@@ -332,12 +394,28 @@ class FlightSimulator:
                 rec["thrust"].append(motors[:batch].sum(axis=1))
                 rec["wind"].append(wind_b)
                 rec["drag"].append(drag[:batch].copy())
+            if finished:
+                break
 
             flat_ctrl[motor_flat] = motors
-            flat_ctrl[xfrc_flat] = drag
+            flat_ctrl[drag_flat] = drag
+            flat_ctrl[mocap_flat] = quat_d
             controls[:] = control_vec[:, None, :]
-            self._pool.rollout(models, self._datas, state, controls, control_spec=self.control_spec,
-                               skip_checks=True, nstep=sec.chunk_steps, state=out_buf, chunk_size=task_size)
+            rollout_args = (models, self._datas, state, controls)
+            rollout_kw = dict(control_spec=self.control_spec, skip_checks=True, nstep=sec.chunk_steps,
+                              state=out_buf, chunk_size=task_size)
+            if sec.prefetch_wind:
+                # the rollout releases the GIL: while it runs, the wind of the next chunk is sampled at the
+                # positions predicted for the end of this one, p + v dt (the vehicle moves < 0.5 m per
+                # chunk, the prediction is off by 0.5 a dt^2 < 1 cm, and the wind field varies over
+                # metres; README.md). The controller itself always uses the true state.
+                job = self._worker.submit(self._pool.rollout, *rollout_args, **rollout_kw)
+                try:
+                    wind_next = _wind_at(wind, p_b + v_b * dt, start_time_s + t + dt, batch)
+                finally:
+                    job.result()
+            else:
+                self._pool.rollout(*rollout_args, **rollout_kw)
             state = np.ascontiguousarray(out_buf[:, -1])
             flat_state = state.reshape(-1)
             phase_time = phase_time + np.where(held, 0.0, dt)

@@ -5,6 +5,14 @@ The airframe is a DJI Phantom 4 class quadrotor, the paper's vehicle class (DESI
 PyMJCF (dm_control) and writes the numbers of :class:`QuadrotorParams` into it, so the XML and the
 controller can never disagree. :func:`build_scene` attaches N copies to a scene root (our own sea plane,
 or a root element the caller passes in, e.g. the ship stage's scene) each under a free joint.
+
+Inner attitude loop inside MuJoCo: each drone also gets a mocap body ``target{i}`` (its orientation is the
+desired attitude R_d set by the numpy position loop) and three ``general`` actuators with a site
+transmission from the drone's ``imu`` site to the target's site (``refsite``). MuJoCo then gives the
+actuator length = the rotation vector of R_d^T R (the attitude error, in the desired frame) and velocity =
+the body rate in that frame (checked in tests/sim/test_vehicle.py), so with ``biasprm = (0, -k_R, -k_W)``
+each physics step applies the PD attitude torque tau = -k_R e_R - k_W omega of Lee et al. (2010), at the
+physics rate (200 Hz at 5 ms), while the position loop runs in numpy at a lower rate (README.md).
 """
 
 from __future__ import annotations
@@ -68,6 +76,21 @@ class QuadrotorParams:
         return self.thrust_to_weight * self.weight_n / 4.0
 
     @property
+    def max_torque_n_m(self) -> np.ndarray:
+        """(3,) roll, pitch, yaw torque (N m) the rotors can add around hover: every motor may move by the
+        smaller of its hover thrust and its headroom (T_max - T_hover), with the lever arm of the mixer."""
+        delta = min(self.weight_n / 4.0, self.max_thrust_per_motor_n - self.weight_n / 4.0)
+        xy = self.rotor_positions_m
+        return delta * np.array([np.abs(xy[:, 1]).sum(), np.abs(xy[:, 0]).sum(),
+                                 4.0 * self.yaw_torque_per_newton_m])
+
+    def attitude_gains(self, bandwidth_rad_s, damping: float) -> tuple[np.ndarray, np.ndarray]:
+        """(k_R (3,) N m/rad, k_W (3,) N m s/rad) of a critically-shaped PD: k_R = J w^2, k_W = 2 zeta J w."""
+        inertia = np.asarray(self.inertia_kg_m2, dtype=float)
+        w = np.broadcast_to(np.asarray(bandwidth_rad_s, dtype=float), (3,))
+        return inertia * w ** 2, 2.0 * damping * inertia * w
+
+    @property
     def rotor_positions_m(self) -> np.ndarray:
         """(4, 2) rotor (x, y) in the body frame, order fl, fr, rl, rr."""
         a = self.arm_length_m / np.sqrt(2.0)
@@ -123,7 +146,10 @@ class Scene:
     """A compiled scene with ``n_drones`` quadrotors.
 
     qpos_index (n_drones, 7) / qvel_index (n_drones, 6): columns of each drone's free joint in qpos/qvel;
-    body_id (n_drones,): the airframe bodies (where drag is applied); actuator_index (n_drones, 4).
+    body_id (n_drones,): the airframe bodies (where drag is applied); actuator_index (n_drones, 4): motors;
+    attitude_index (n_drones, 3): the roll/pitch/yaw attitude actuators; drag_index (n_drones, 3): the
+    world-frame x/y/z force actuators the drag goes through (N); mocap_index (n_drones,): each drone's
+    attitude target in ``mocap_quat``.
     """
 
     model: mujoco.MjModel
@@ -133,37 +159,76 @@ class Scene:
     qvel_index: np.ndarray
     body_id: np.ndarray
     actuator_index: np.ndarray
+    attitude_index: np.ndarray
+    drag_index: np.ndarray
+    mocap_index: np.ndarray
     params: QuadrotorParams = field(default=PHANTOM4)
 
 
 def build_scene(n_drones: int, params: QuadrotorParams = PHANTOM4, timestep_s: float = 0.005,
-                root: mjcf.RootElement | None = None, spacing_m: float = 2.0) -> Scene:
+                root: mjcf.RootElement | None = None, spacing_m: float = 2.0,
+                attitude_bandwidth_rad_s=(14.0, 14.0, 5.0), attitude_damping: float = 0.8,
+                attitude_loop: bool = True) -> Scene:
     """Attach ``n_drones`` quadrotors (free joints, no mutual collisions) to ``root`` and compile.
 
     ``root`` defaults to :func:`sea_scene`; pass e.g. the ship stage's scene to fly around the ship
     (its timestep is then overwritten with ``timestep_s`` and contacts are disabled: the simulator
     detects lost flights itself, drones never touch anything).
+    ``attitude_bandwidth_rad_s`` (roll, pitch, yaw) and ``attitude_damping`` set the gains of the attitude
+    actuators (module docstring); their torque is limited to what the rotors can add around hover
+    (:attr:`QuadrotorParams.max_torque_n_m`). ``attitude_loop=False`` leaves out the targets and the
+    attitude actuators (motors only: the bench's reference for what the inner loop costs).
     """
     if n_drones < 1:
         raise ValueError("n_drones must be >= 1")
     root = sea_scene(timestep_s) if root is None else root
     root.option.timestep = timestep_s
     root.option.flag.contact = "disable"
+    k_r, k_w = params.attitude_gains(attitude_bandwidth_rad_s, attitude_damping)
+    tau_max = params.max_torque_n_m
     frames = []
     for i in range(n_drones):
         quad = load_quadrotor(params, name=f"drone{i}")
         frame = root.worldbody.attach(quad)
         frame.pos = [spacing_m * i, 0.0, 10.0]
         frames.append(frame.add("freejoint", name="root"))
+        # drag: a world-frame force at the centre of mass through the free joint's translational dofs (a
+        # joint transmission: unlike xfrc_applied, which costs a Jacobian per body and step, it is a fixed
+        # unit moment; measured in README.md)
+        for axis, name in enumerate("xyz"):
+            gear = [0.0] * 6
+            gear[axis] = 1.0
+            root.actuator.add("general", name=f"drone{i}_drag_{name}", joint=frames[-1], gear=gear,
+                              gainprm=[1.0])
+        if not attitude_loop:
+            continue
+        target = root.worldbody.add("body", name=f"target{i}", mocap=True, pos=[spacing_m * i, 0.0, 10.0])
+        target_site = target.add("site", name=f"target{i}_frame", group=5)
+        for axis, name in enumerate(("roll", "pitch", "yaw")):
+            gear = [0.0] * 6
+            gear[3 + axis] = 1.0
+            # force = ctrl (feed-forward torque, 0) - k_R * length - k_W * velocity, clipped to the rotors'
+            root.actuator.add("general", name=f"drone{i}_att_{name}", site=quad.find("site", "imu"),
+                              refsite=target_site, gear=gear, gainprm=[1.0], biastype="affine",
+                              biasprm=[0.0, -k_r[axis], -k_w[axis]], forcelimited=True,
+                              forcerange=[-tau_max[axis], tau_max[axis]])
     model = mujoco.MjModel.from_xml_string(root.to_xml_string(), root.get_assets())
     qpos_index = np.zeros((n_drones, 7), dtype=int)
     qvel_index = np.zeros((n_drones, 6), dtype=int)
     body_id = np.zeros(n_drones, dtype=int)
     actuator_index = np.zeros((n_drones, 4), dtype=int)
+    attitude_index = np.zeros((n_drones, 3), dtype=int)
+    drag_index = np.zeros((n_drones, 3), dtype=int)
+    mocap_index = np.zeros(n_drones, dtype=int)
     for i in range(n_drones):
         joint = model.joint(frames[i].full_identifier)
         qpos_index[i] = joint.qposadr[0] + np.arange(7)
         qvel_index[i] = joint.dofadr[0] + np.arange(6)
         body_id[i] = model.body(f"drone{i}/airframe").id
         actuator_index[i] = [model.actuator(f"drone{i}/motor_{r}").id for r in ROTOR_NAMES]
-    return Scene(model, root, n_drones, qpos_index, qvel_index, body_id, actuator_index, params)
+        drag_index[i] = [model.actuator(f"drone{i}_drag_{a}").id for a in "xyz"]
+        if attitude_loop:
+            attitude_index[i] = [model.actuator(f"drone{i}_att_{a}").id for a in ("roll", "pitch", "yaw")]
+            mocap_index[i] = model.body_mocapid[model.body(f"target{i}").id]
+    return Scene(model, root, n_drones, qpos_index, qvel_index, body_id, actuator_index, attitude_index,
+                 drag_index, mocap_index, params)
