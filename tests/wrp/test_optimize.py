@@ -154,3 +154,41 @@ def test_apply_offsets_moves_positions_and_wraps_yaw():
     np.testing.assert_allclose(wrp.positions, off[:, :3])
     np.testing.assert_allclose(wrp.yaw, [3.3 - 2 * np.pi, 0.0, -3.3 + 2 * np.pi])
     assert wrp.metadata["wrp"]["kind"] == "iswrp" and np.all(wrp.pitch == path.pitch)
+
+
+@pytest.mark.parametrize("kind, threshold, margin", [("iswrp", 0.5, 0.1), ("swrp", 0.05, 0.0)])
+def test_improve_acceptance_moves_only_to_a_better_neighbourhood(kind, threshold, margin):
+    from wrp_eval.wrp.optimize import ViewQuery, iteration_draws, neighbourhood_score, best_attitude
+    surrogate = small_surrogate(6, seed=0, error_std=1.0, gain=20.0)
+    p = params_for(surrogate, kind, threshold, acceptance="improve", min_improvement_fraction=margin)
+    r = interval_optimise(surrogate, p, seed=2)
+    paper = interval_optimise(surrogate, params_for(surrogate, kind, threshold), seed=2)
+    assert r.moved.sum() <= paper.moved.sum() and r.moved.any()
+    n_blocks = -(-p.iterations // p.block_iterations)
+    for i in range(surrogate.n_views):
+        context = r.offsets.copy()
+        context[i:] = 0.0                      # the base this viewpoint was optimised against
+        query = ViewQuery(surrogate, context)
+        home = iteration_draws(2, i, n_blocks, p)
+        _, e_home = best_attitude(query, i, home.neighbour_offset[:1], home.neighbour_yaw[:1])
+        home_score = neighbourhood_score(e_home, p)[0]
+        if r.moved[i]:
+            assert r.neighbourhood_stat[i] <= p.threshold_m
+            # its score beats the unmoved viewpoint's by the margin: recompute it from the kept draw
+            j = r.accepted_iteration[i]
+            d = iteration_draws(2, i, j // p.block_iterations, p)
+            k = j % p.block_iterations
+            centres = r.offsets[i, :3][None, None, :] + d.neighbour_offset[k:k + 1]
+            _, ek = best_attitude(query, i, centres, d.neighbour_yaw[k:k + 1])
+            assert neighbourhood_score(ek, p)[0] < home_score - margin * p.threshold_m
+        else:
+            assert np.all(r.offsets[i] == 0)
+
+
+def test_improve_acceptance_keeps_a_flat_surrogate_path_unmoved():
+    # gain 0: the offsets do not reach the output, every candidate scores like the planned viewpoint
+    surrogate = small_surrogate(6, seed=0, error_std=1.0, gain=0.0)
+    r = interval_optimise(surrogate, params_for(surrogate, "iswrp", 0.5, acceptance="improve"), seed=1)
+    assert not r.moved.any()
+    paper = interval_optimise(surrogate, params_for(surrogate, "iswrp", 0.5), seed=1)
+    assert paper.moved.all()                  # Alg. 3 as written moves every viewpoint of a flat surrogate

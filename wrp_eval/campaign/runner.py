@@ -143,7 +143,8 @@ def run_campaign(config: ExperimentConfig, *, out_dir: str | Path | None = None,
         previous = store.read_meta()
         if previous is not None and previous.get("fingerprint") != print_:
             raise InputError(out, "holds a campaign with a different config, path or seed "
-                                  f"(fingerprint {previous.get('fingerprint')} vs {print_}); use another --out")
+                                  f"(fingerprint {previous.get('fingerprint')} vs {print_}); use another --out "
+                                  "(or campaign.outputs.dir), or remove the folder")
         store.write_meta({"fingerprint": print_, "config": config_doc, "root_seed": root_seed,
                           "path_digest": digest, "n_views": len(flight_path), "n_trials": section.n_trials,
                           "evaluator": evaluator, "evaluator_options": evaluator_options,

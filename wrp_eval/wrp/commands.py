@@ -123,6 +123,7 @@ def run_optimize(config, section, config_dir: Path, out: Path, *, checkpoint=Non
                        neighbourhood_samples=section.neighbourhood_samples,
                        step_m=step_from_surrogate(surrogate, section), swrp_spread=section.swrp_spread,
                        block_iterations=section.block_iterations, stage2_batch=section.stage2_batch,
+                       acceptance=section.acceptance, min_improvement_fraction=section.min_improvement_fraction,
                        **safety_constraints(config, path, config_dir))
     seed = section.seed if section.seed is not None else config.run.seed
     result = interval_optimise(surrogate, params, seed=seed)
@@ -141,7 +142,8 @@ def run_optimize(config, section, config_dir: Path, out: Path, *, checkpoint=Non
            "sample_radius_m": radius.tolist(), "step_m": params.step_m, "seed": seed,
            "yaw_range_deg": section.yaw_range_deg, "iterations": params.iterations,
            "attitude_samples": params.attitude_samples, "neighbourhood_samples": params.neighbourhood_samples,
-           "swrp_spread": params.swrp_spread,
+           "swrp_spread": params.swrp_spread, "acceptance": params.acceptance,
+           "min_improvement_fraction": params.min_improvement_fraction,
            "surrogate": {"path_digest": surrogate.meta.path_digest, "metrics": surrogate.meta.metrics.get("test")},
            "viewpoints": [{"index": i, "moved": bool(result.moved[i]), "dx_m": float(o[0]), "dy_m": float(o[1]),
                            "dz_m": float(o[2]), "dyaw_deg": float(np.degrees(o[3])),

@@ -60,6 +60,12 @@ class WrpSection(StrictModel):
     block_iterations: int = Field(64, ge=1, le=100_000, description="iterations drawn and scored per batch")
     stage2_batch: int = Field(8, ge=1, le=100_000, description="stage-1 survivors whose neighbourhoods are "
                               "scored per batch")
+    acceptance: Literal["paper", "improve"] = Field("paper", description="paper: Alg. 3 as written (the "
+                                                    "last accepted candidate is kept); improve: move a viewpoint "
+                                                    "only to the best accepted candidate, and only when it beats "
+                                                    "the unmoved viewpoint (see README)")
+    min_improvement_fraction: float = Field(0.1, ge=0, le=10, description="acceptance improve: the least gain "
+                                            "of the neighbourhood score, as a fraction of t")
     seed: int | None = Field(None, ge=0, description="none: run.seed")
     oracle_error: bool = Field(True, description="score the WRP with the oracle (Table 3's error column)")
     out_dir: str | None = Field(None, description="none: logs/<run.name>/wrp-<kind>")

@@ -54,6 +54,12 @@ class WrpParams:
     swrp_spread: str = "variance"
     block_iterations: int = 64
     stage2_batch: int = 8
+    # "paper": Alg. 3 as written (the last accepted candidate is kept); "improve": a viewpoint moves only to the
+    # accepted candidate with the best neighbourhood score, and only when that beats the unmoved viewpoint's own
+    # neighbourhood by min_improvement_fraction * t (see README: with a surrogate that is flat for one-viewpoint
+    # moves, Alg. 3 moves every viewpoint at random)
+    acceptance: str = "paper"
+    min_improvement_fraction: float = 0.1
     # flight-safety constraints of the moved viewpoints (the planner's, Sec. 3.1): planned positions (n, 3) m,
     # the lowest allowed height above the sea (m) and the no-fly box (2, 3); None: unconstrained
     base_positions: np.ndarray | None = None
@@ -77,6 +83,8 @@ class WrpParams:
             raise ValueError(f"kind must be iswrp or swrp, got {self.kind!r}")
         if self.swrp_spread not in ("variance", "std"):
             raise ValueError(f"swrp_spread must be variance or std, got {self.swrp_spread!r}")
+        if self.acceptance not in ("paper", "improve"):
+            raise ValueError(f"acceptance must be paper or improve, got {self.acceptance!r}")
 
 
 @dataclass(frozen=True)
@@ -159,9 +167,55 @@ class WrpResult:
                 "iterations_scored": self.iterations_scored}
 
 
+def neighbourhood_score(errors: np.ndarray, params: WrpParams) -> np.ndarray:
+    """(..., M) sample errors -> (...) what ``acceptance: improve`` minimises: the mean error of the
+    neighbourhood (ISWRP: the error expected under the wind) or its spread (SWRP, as the statistic)."""
+    return errors.mean(axis=-1) if params.kind == "iswrp" else neighbourhood_statistic(errors, params)
+
+
+def optimise_view_improve(query: ViewQuery, view: int, params: WrpParams,
+                          seed: int) -> tuple[int, np.ndarray, float, float, int]:
+    """``acceptance: improve``: every iteration is scored; among the candidates that pass both tests of Alg. 3
+    the one with the best :func:`neighbourhood_score` is kept when it beats the unmoved viewpoint's score (the
+    same neighbourhood draw around offset 0) by ``min_improvement_fraction * t``. Same return as
+    :func:`optimise_view`."""
+    b = params.block_iterations
+    n_blocks = -(-params.iterations // b)
+    t, e0 = params.threshold_m, params.e_original_m
+    # the unmoved viewpoint's own neighbourhood: a draw of its own stream (block index n_blocks)
+    home = iteration_draws(seed, view, n_blocks, params)
+    _, e_home = best_attitude(query, view, home.neighbour_offset[:1], home.neighbour_yaw[:1])
+    home_score = float(neighbourhood_score(e_home, params)[0])
+    best = (np.inf, -1, np.zeros(4), float("nan"), float("nan"))
+    scored = 0
+    for block in range(n_blocks):
+        lo = block * b
+        count = min(b, params.iterations - lo)
+        d = iteration_draws(seed, view, block, params)
+        pos, yaws = d.position[:count], d.yaw[:count]
+        yaw_best, e1 = best_attitude(query, view, pos, yaws)
+        scored += count
+        survivors = np.flatnonzero((np.abs(e1 - e0) <= t) & params.feasible(view, pos))
+        if survivors.size == 0:
+            continue
+        centres = pos[survivors][:, None, :] + d.neighbour_offset[survivors]
+        _, ek = best_attitude(query, view, centres, d.neighbour_yaw[survivors])
+        stat = neighbourhood_statistic(ek, params)
+        score = np.where(stat <= t, neighbourhood_score(ek, params), np.inf)
+        k = int(np.argmin(score))
+        if score[k] < best[0]:
+            j = int(survivors[k])
+            best = (float(score[k]), lo + j, np.array([*pos[j], yaw_best[j]]), float(e1[j]), float(stat[k]))
+    if best[1] >= 0 and best[0] < home_score - params.min_improvement_fraction * t:
+        return best[1], best[2], best[3], best[4], scored
+    return -1, np.zeros(4), float("nan"), float("nan"), scored
+
+
 def optimise_view(query: ViewQuery, view: int, params: WrpParams, seed: int) -> tuple[int, np.ndarray, float, float, int]:
     """Alg. 3 for one viewpoint against ``query``'s base. Returns (accepted iteration or -1, offset (4,),
     stage-1 error, stage-2 statistic, iterations scored)."""
+    if params.acceptance == "improve":
+        return optimise_view_improve(query, view, params, seed)
     b = params.block_iterations
     n_blocks = -(-params.iterations // b)
     t, e0 = params.threshold_m, params.e_original_m
