@@ -18,7 +18,7 @@ campaign:
   wind: {speed_10m_m_s: {dist: uniform, low: 2.0, high: 6.0}, turbulence: {severity: light}}
   perturbation: {design: box, position_half_width_m: 1.0, yaw_half_width_deg: 10.0}
   backend: {kind: local, workers: 1}
-surrogate: {epochs: 20}
+surrogate: {epochs: 20, use_failed_trials: true}   # the fishing path registers 8-10 of 17 views: most trials fail
 wrp: {iterations: 50, evaluate: {n_trials: 4}}
 """
 

@@ -165,16 +165,16 @@ def test_table7_and_table8_smallest(tmp_path, monkeypatch):
 
 
 @pytest.mark.slow
-def test_table3_smallest_shares_one_surrogate_across_the_six_wrps(tmp_path, monkeypatch):
+def test_table3_smallest_shares_one_surrogate_across_the_eight_wrps(tmp_path, monkeypatch):
     doc, _ = _run_smallest(3, tmp_path, monkeypatch)
-    assert len(doc["shared_training"]) == 1 and len(doc["rows"]) == 7
+    assert len(doc["shared_training"]) == 1 and len(doc["rows"]) == 9
     wrp = [r["ours"] for r in doc["rows"][1:]]
     e0 = wrp[0]["e_original_m"]
     assert doc["rows"][0]["ours"]["error_m"] == pytest.approx(e0)      # the initial path's error is E_original
-    for ours, fraction in zip(wrp, [0.06279, 0.07849, 0.09419] * 2):
+    for ours, fraction in zip(wrp, [0.06279, 0.07849, 0.09419] * 2 + [0.09419] * 2):
         assert ours["threshold_m"] == pytest.approx(fraction * e0)
         assert 0 <= ours["offset_rate_pct"] <= 100 and ours["wrp_time_s"] > 0
-    assert [r["path"] for r in doc["rows"]] == ["plan"] + ["iswrp"] * 3 + ["swrp"] * 3
+    assert [r["path"] for r in doc["rows"]] == ["plan"] + ["iswrp"] * 3 + ["swrp"] * 3 + ["iswrp", "swrp"]
 
 
 @pytest.mark.slow

@@ -77,15 +77,18 @@ def test_face_seen_by_one_view_only_is_missing(box_on_water, fast_section):
     assert result.completeness < 0.95
 
 
-def test_disconnected_view_groups_fail(fast_section):
+@pytest.mark.parametrize("registration, detail", [("components", "3 disconnected view groups"),
+                                                   ("incremental", "incremental registration stopped")])
+def test_disconnected_view_groups_fail(registration, detail):
     long_box = make_box((90.0, 6.0, 6.0), (0.0, 0.0, 1.0))
     # three groups of three views 15 m off the port side, each group photographing its own 10 m patch
     positions = [[x + dx, 15.0, h] for x in (-40.0, 0.0, 40.0) for dx, h in ((-4, 3.0), (0, 6.0), (4, 3.0))]
     targets = [[p[0] - dx, 3.0, 1.5] for p, dx in zip(positions, [-4, 0, 4] * 3)]
-    result = SyntheticOracle(fast_section).evaluate(_views_at(positions, targets), long_box, seed=0)
+    section = OracleSection(synthetic=SyntheticOracleSection(rays_x=40, rays_y=27, registration=registration))
+    result = SyntheticOracle(section).evaluate(_views_at(positions, targets), long_box, seed=0)
     assert result.failed
     assert result.registered_views == 3 and result.total_views == 9
-    assert "3 of 9 views registered" in result.reason and "3 disconnected view groups" in result.reason
+    assert "3 of 9 views registered" in result.reason and detail in result.reason
 
 
 def test_fewer_than_three_views_fail(box_on_water, fast_section):

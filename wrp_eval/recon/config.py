@@ -29,6 +29,16 @@ class SyntheticOracleSection(StrictModel):
     min_overlap: float = Field(0.1, gt=0, le=1, description="two views are linked (registered together) when "
                                "their overlap (Hepp et al. 2018: shared / mean observed) reaches this")
     min_matched_rays: int = Field(8, ge=1, description="... and they share at least this many matchable rays")
+    registration: Literal["components", "incremental"] = Field(
+        "incremental", description="components: the largest connected component of the linked views; "
+                                  "incremental: an incremental SfM mapper (seed pair, then a view at a time on "
+                                  "2D-3D matches to points already triangulated; see README)")
+    min_registration_rays: int = Field(
+        12, ge=1, description="incremental registration: fewest rays of a view matching triangulated points "
+                              "(2D-3D correspondences) to register it (and of triangulating rays of the seed "
+                              "pair). 12 = COLMAP's abs_pose_min_num_inliers (15, oracle.colmap) x 0.80, the "
+                              "median ratio of this oracle's matchable rays (64 x 43 grid) to COLMAP's verified "
+                              "inliers per view pair in the validation sets; scale it with rays_x * rays_y")
     cell_m: float = Field(2.0, gt=0, description="surface-cell size (m) for the co-visibility hashing")
     max_partners: int = Field(12, ge=1, description="candidate partner views per view (most shared cells first)")
 

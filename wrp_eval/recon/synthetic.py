@@ -20,9 +20,13 @@ For one capture set on the true ship mesh:
    ``parallax_min_deg`` (5 deg: where Smith et al. 2018's w1, k1 = 32, alpha1 = pi/16, is ~0, i.e. the
    smallest angle that contributes any reconstructability). Between 45 and 60 deg (past Smith's w3
    midpoint pi/4) points still reconstruct, with the noise of step 5.
-4. **Register.** Views i, j are linked when their overlap (Hepp et al. 2018: shared observations over the
-   mean of both views' observations, counted in matchable rays) reaches ``min_overlap`` and they share at
-   least ``min_matched_rays`` matchable rays on average; the reconstruction is the largest connected component
+4. **Register.** ``registration: incremental`` (default) models an incremental SfM mapper (Schoenberger &
+   Frahm 2016; COLMAP, which validates this oracle): a seed pair (most triangulating rays), then one view at
+   a time with the most rays matching points already triangulated by two registered views (2D-3D
+   correspondences), while that count reaches ``min_registration_rays``; see :func:`register_incremental`.
+   ``registration: components`` links views i, j when their overlap (Hepp et al. 2018: shared observations
+   over the mean of both views' observations, counted in matchable rays) reaches ``min_overlap`` and they
+   share at least ``min_matched_rays`` matchable rays on average, and keeps the largest connected component
    (``scipy.sparse.csgraph.connected_components``). Fewer than 3 views, or fewer than half the views,
    registered = failed (ContextCapture / COLMAP leave unregistered images out; the paper's "Failed").
 5. **Reconstruct.** A hit of a registered view is reconstructed when a registered partner triangulates it;
@@ -161,6 +165,126 @@ def candidate_pairs(obs: Observations, n_views: int, cell_m: float, max_partners
     return hit[ok], partner[ok], shared
 
 
+def register_components(n_views: int, pair_view: np.ndarray, partner: np.ndarray, matchable: np.ndarray,
+                        hits_per_view: np.ndarray, min_overlap: float,
+                        min_matched_rays: int) -> tuple[np.ndarray, int]:
+    """Registration as the largest connected component of the view-link graph.
+
+    Views i, j are linked when their overlap (Hepp et al. 2018, Plan3D: |obs(i) & obs(j)| / mean(|obs(i)|,
+    |obs(j)|), here counted in matchable rays of each view landing on surface the other sees) reaches
+    ``min_overlap`` and they share >= ``min_matched_rays`` matchable rays on average.
+    pair_view, partner, matchable (k,): view of the hit, other view, and matchability of each candidate
+    pair; hits_per_view (n,). Returns the registered mask (n,) and the number of view groups.
+    """
+    n = n_views
+    counts = np.bincount(pair_view[matchable] * n + partner[matchable], minlength=n * n).reshape(n, n)
+    common = counts + counts.T
+    with np.errstate(invalid="ignore", divide="ignore"):
+        overlap = common / (hits_per_view[:, None] + hits_per_view[None, :])
+    links = sp.csr_matrix((overlap >= min_overlap) & (common >= 2 * min_matched_rays))
+    n_comp, labels = connected_components(links, directed=False)
+    sizes = np.bincount(labels, minlength=n_comp)
+    best_comp = int(np.argmax(sizes))  # ties -> the component with the lowest view index
+    return labels == best_comp, int(n_comp)
+
+
+def _ranges(ptr: np.ndarray, rows: np.ndarray) -> np.ndarray:
+    """Concatenated index ranges ptr[r]:ptr[r+1] for every r in ``rows`` (CSR gather, no Python loop)."""
+    lo, hi = ptr[rows], ptr[rows + 1]
+    counts = hi - lo
+    total = int(counts.sum())
+    if total == 0:
+        return np.zeros(0, dtype=np.int64)
+    starts = np.repeat(lo - np.cumsum(counts) + counts, counts)
+    return starts + np.arange(total)
+
+
+def register_incremental(n_views: int, n_hits: int, hit_view: np.ndarray, hit: np.ndarray, partner: np.ndarray,
+                         matchable: np.ndarray, triangulates: np.ndarray, grid_index: np.ndarray,
+                         rays_per_view: int, min_rays: int) -> tuple[np.ndarray, list[int]]:
+    """Registration as an incremental SfM mapper does it (Schoenberger & Frahm 2016, "Structure-from-Motion
+    Revisited", Sec. 4.2-4.3; COLMAP's IncrementalMapper).
+
+    * **Seed:** the view pair with the most triangulating matchable rays (both directions counted), if that
+      count reaches ``min_rays``.
+    * **Points:** a hit (a ray sample = a feature of its view) is *triangulated* once its own view and a
+      partner that triangulates it (parallax >= parallax_min) are both registered.
+    * **Next view:** a view's 2D-3D correspondences are its rays (distinct image cells) that match a
+      triangulated hit of another view (the pair is matchable and the shadow-map test put the hit on that
+      ray). The unregistered view with the most of them is registered (absolute pose) when it has
+      >= ``min_rays``; its pairs then triangulate new points. Stop when no view qualifies.
+
+    Bookkeeping is incremental: per-hit "triangulated" and per-ray "has a 2D-3D correspondence" flags are
+    updated only from the pairs of the newly registered view, so the whole run touches each pair O(1)
+    times (a loop over registration steps, vectorised within a step). Ties go to the lowest view index,
+    so the result is deterministic.
+
+    hit_view (h,) view of every hit; hit, partner, matchable, triangulates, grid_index (k,): candidate pairs
+    sorted by hit, with the partner's flat ray index (partner * rays_per_view + ray) at the hit's image cell.
+    Returns the registered mask (n,) and the registration order.
+    """
+    n = n_views
+    registered = np.zeros(n, dtype=bool)
+    order: list[int] = []
+    mi = np.flatnonzero(matchable)
+    h_m, p_m, g_m, t_m = hit[mi], partner[mi], grid_index[mi], triangulates[mi]
+    v_m = hit_view[h_m]
+    if len(mi) == 0:
+        return registered, order
+    # seed: most triangulating rays over both directions of a pair; ties -> lowest (i, j)
+    tri = np.bincount(v_m[t_m] * n + p_m[t_m], minlength=n * n).reshape(n, n)
+    tri = np.triu(tri + tri.T, k=1)
+    seed = int(np.argmax(tri))
+    if tri.flat[seed] < min_rays:
+        return registered, order
+    # CSR views of the matchable pairs: by hit (sorted already), by the hit's view (sorted with the hits),
+    # by partner (one stable sort)
+    hit_ptr = np.searchsorted(h_m, np.arange(n_hits + 1))
+    view_ptr = np.searchsorted(v_m, np.arange(n + 1))
+    # stable sort on 16-bit keys is a radix sort in numpy (linear)
+    by_partner = np.argsort(p_m.astype(np.int16) if n < 2**15 else p_m, kind="stable")
+    partner_ptr = np.searchsorted(p_m[by_partner], np.arange(n + 1))
+    tri_hit = np.zeros(n_hits, dtype=bool)          # hit triangulated by two registered views
+    corr_ray = np.zeros(n * rays_per_view, dtype=bool)  # ray of a view matches a triangulated hit
+    corr_count = np.zeros(n, dtype=np.int64)
+    stamp_hit = np.zeros(n_hits, dtype=np.int64)           # scratch for duplicate removal without sorting
+    stamp_ray = np.zeros(n * rays_per_view, dtype=np.int64)
+
+    def distinct(idx: np.ndarray, stamp: np.ndarray) -> np.ndarray:
+        """idx without repeats (the last occurrence of each kept), O(len(idx))."""
+        pos = np.arange(len(idx))
+        stamp[idx] = pos
+        return idx[stamp[idx] == pos]
+
+    def register(v: int) -> None:
+        registered[v] = True
+        order.append(v)
+        own = np.arange(view_ptr[v], view_ptr[v + 1])          # v's hits x their partners
+        own = own[t_m[own] & registered[p_m[own]]]
+        seen = by_partner[partner_ptr[v]:partner_ptr[v + 1]]  # others' hits x partner v
+        seen = seen[t_m[seen] & registered[v_m[seen]]]
+        new = np.concatenate([h_m[own], h_m[seen]])
+        new = distinct(new[~tri_hit[new]], stamp_hit)
+        if len(new) == 0:
+            return
+        tri_hit[new] = True
+        g = g_m[_ranges(hit_ptr, new)]  # every view's ray that matches a newly triangulated hit
+        g = distinct(g[~corr_ray[g]], stamp_ray)
+        corr_ray[g] = True
+        corr_count[:] += np.bincount(g // rays_per_view, minlength=n)
+
+    i, j = divmod(seed, n)
+    register(i)
+    register(j)
+    while True:
+        cand = np.where(registered, -1, corr_count)
+        v = int(np.argmax(cand))  # ties -> lowest index
+        if cand[v] < min_rays:
+            break
+        register(v)
+    return registered, order
+
+
 class SyntheticOracle(MeshOracle):
     """The default oracle. ``evaluate(capture_set, ship_mesh, seed)`` -> :class:`ReconResult`."""
 
@@ -227,27 +351,26 @@ class SyntheticOracle(MeshOracle):
         matchable = inside & same_plane & near
         triangulates = matchable & (alpha >= np.radians(p.parallax_min_deg))
 
-        # --- registration: link views sharing enough matchable surface, keep the largest component ---
-        # overlap as Hepp et al. 2018 (Plan3D): |obs(i) & obs(j)| / mean(|obs(i)|, |obs(j)|), here counted
-        # in matchable rays of each view landing on surface the other sees
-        vi = obs.view[hit[matchable]]
-        counts = np.bincount(vi * n + partner[matchable], minlength=n * n).reshape(n, n)
-        hits_per_view = np.bincount(obs.view, minlength=n)
-        common = counts + counts.T
-        with np.errstate(invalid="ignore", divide="ignore"):
-            overlap = common / (hits_per_view[:, None] + hits_per_view[None, :])
-        links = sp.csr_matrix((overlap >= p.min_overlap) & (common >= 2 * p.min_matched_rays))
-        n_comp, labels = connected_components(links, directed=False)
-        sizes = np.bincount(labels, minlength=n_comp)
-        best_comp = int(np.argmax(sizes))  # ties -> the component with the lowest view index
-        registered_mask = labels == best_comp
+        # --- registration (step 4): which views join the reconstruction ---
+        if p.registration == "components":
+            registered_mask, n_comp = register_components(n, obs.view[hit], partner, matchable,
+                                                          np.bincount(obs.view, minlength=n),
+                                                          p.min_overlap, p.min_matched_rays)
+            detail = f"{n_comp} disconnected view groups, largest kept"
+            reg_extra = {"view_groups": int(n_comp)}
+        else:
+            registered_mask, order = register_incremental(n, len(obs.points), obs.view, hit, partner, matchable,
+                                                          triangulates, grid_index, rays_per_view,
+                                                          p.min_registration_rays)
+            detail = (f"incremental registration stopped: no other view sees >= {p.min_registration_rays} "
+                      f"triangulated points")
+            reg_extra = {"registration_order": [int(v) for v in order]}
         n_registered = int(registered_mask.sum())
         reason = ""
         if n_registered < 3:
             reason = f"only {n_registered} view(s) registered (fewer than 3)"
         elif 2 * n_registered < n:
-            reason = (f"only {n_registered} of {n} views registered ({n_comp} disconnected view groups, "
-                      f"largest kept)")
+            reason = f"only {n_registered} of {n} views registered ({detail})"
 
         # --- reconstruct: best triangulating registered partner per hit ---
         ok = triangulates & registered_mask[partner] & registered_mask[obs.view[hit]]
@@ -265,8 +388,7 @@ class SyntheticOracle(MeshOracle):
                  + (rng.standard_normal(len(recon)) * sigma_r)[:, None] * obs.dirs[recon])
         cos_i = np.abs(np.einsum("kj,kj->k", obs.normals[recon], obs.dirs[recon]))
         radii = 0.71 * spacing[recon] / np.maximum(cos_i, _SURFEL_MIN_COS)
-        extra = {"hits": int(len(obs.points)), "candidate_pairs": int(len(hit)),
-                 "view_groups": int(n_comp), "cell_m": cell_m,
+        extra = {"hits": int(len(obs.points)), "candidate_pairs": int(len(hit)), **reg_extra, "cell_m": cell_m,
                  "median_sigma_m": float(np.median(sigma_r)) if len(recon) else None}
         return (Surfels(noisy, obs.normals[recon].astype(np.float64), radii.astype(np.float64)),
                 n_registered, reason, extra)

@@ -167,6 +167,19 @@ class WrpResult:
                 "iterations_scored": self.iterations_scored}
 
 
+def stage_one(query: ViewQuery, view: int, params: WrpParams, seed: int, block: int):
+    """Iterations of ``block`` of viewpoint ``view``: their draws and Alg. 4's best yaw, then stage 1 (Alg. 3
+    line 9) and feasibility. Returns (first iteration index, draws, positions (c, 3), best yaw (c,), E (c,),
+    indices of the survivors in ascending order)."""
+    lo = block * params.block_iterations
+    count = min(params.block_iterations, params.iterations - lo)
+    d = iteration_draws(seed, view, block, params)
+    pos, yaws = d.position[:count], d.yaw[:count]
+    yaw_best, e1 = best_attitude(query, view, pos, yaws)
+    ok = (np.abs(e1 - params.e_original_m) <= params.threshold_m) & params.feasible(view, pos)
+    return lo, d, pos, yaw_best, e1, np.flatnonzero(ok)
+
+
 def neighbourhood_score(errors: np.ndarray, params: WrpParams) -> np.ndarray:
     """(..., M) sample errors -> (...) what ``acceptance: improve`` minimises: the mean error of the
     neighbourhood (ISWRP: the error expected under the wind) or its spread (SWRP, as the statistic)."""
@@ -181,7 +194,7 @@ def optimise_view_improve(query: ViewQuery, view: int, params: WrpParams,
     :func:`optimise_view`."""
     b = params.block_iterations
     n_blocks = -(-params.iterations // b)
-    t, e0 = params.threshold_m, params.e_original_m
+    t = params.threshold_m
     # the unmoved viewpoint's own neighbourhood: a draw of its own stream (block index n_blocks)
     home = iteration_draws(seed, view, n_blocks, params)
     _, e_home = best_attitude(query, view, home.neighbour_offset[:1], home.neighbour_yaw[:1])
@@ -189,13 +202,8 @@ def optimise_view_improve(query: ViewQuery, view: int, params: WrpParams,
     best = (np.inf, -1, np.zeros(4), float("nan"), float("nan"))
     scored = 0
     for block in range(n_blocks):
-        lo = block * b
-        count = min(b, params.iterations - lo)
-        d = iteration_draws(seed, view, block, params)
-        pos, yaws = d.position[:count], d.yaw[:count]
-        yaw_best, e1 = best_attitude(query, view, pos, yaws)
-        scored += count
-        survivors = np.flatnonzero((np.abs(e1 - e0) <= t) & params.feasible(view, pos))
+        lo, d, pos, yaw_best, e1, survivors = stage_one(query, view, params, seed, block)
+        scored += len(pos)
         if survivors.size == 0:
             continue
         centres = pos[survivors][:, None, :] + d.neighbour_offset[survivors]
@@ -218,16 +226,12 @@ def optimise_view(query: ViewQuery, view: int, params: WrpParams, seed: int) -> 
         return optimise_view_improve(query, view, params, seed)
     b = params.block_iterations
     n_blocks = -(-params.iterations // b)
-    t, e0 = params.threshold_m, params.e_original_m
+    t = params.threshold_m
     scored = 0
     for block in range(n_blocks - 1, -1, -1):
-        lo = block * b
-        count = min(b, params.iterations - lo)
-        d = iteration_draws(seed, view, block, params)
-        pos, yaws = d.position[:count], d.yaw[:count]
-        yaw_best, e1 = best_attitude(query, view, pos, yaws)
-        scored += count
-        survivors = np.flatnonzero((np.abs(e1 - e0) <= t) & params.feasible(view, pos))[::-1]  # latest first
+        lo, d, pos, yaw_best, e1, survivors = stage_one(query, view, params, seed, block)
+        scored += len(pos)
+        survivors = survivors[::-1]  # latest first
         for s in range(0, survivors.size, params.stage2_batch):
             chunk = survivors[s:s + params.stage2_batch]
             centres = pos[chunk][:, None, :] + d.neighbour_offset[chunk]  # (c, M, 3)
