@@ -124,6 +124,7 @@ def run_optimize(config, section, config_dir: Path, out: Path, *, checkpoint=Non
                        step_m=step_from_surrogate(surrogate, section), swrp_spread=section.swrp_spread,
                        block_iterations=section.block_iterations, stage2_batch=section.stage2_batch,
                        acceptance=section.acceptance, min_improvement_fraction=section.min_improvement_fraction,
+                       improve_candidates=section.improve_candidates,
                        **safety_constraints(config, path, config_dir))
     seed = section.seed if section.seed is not None else config.run.seed
     result = interval_optimise(surrogate, params, seed=seed)

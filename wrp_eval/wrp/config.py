@@ -66,6 +66,8 @@ class WrpSection(StrictModel):
                                                     "the unmoved viewpoint (see README)")
     min_improvement_fraction: float = Field(0.1, ge=0, le=10, description="acceptance improve: the least gain "
                                             "of the neighbourhood score, as a fraction of t")
+    improve_candidates: int = Field(16, ge=1, le=100_000, description="acceptance improve: stage-1 survivors "
+                                    "(lowest predicted error first) whose neighbourhoods are scored")
     seed: int | None = Field(None, ge=0, description="none: run.seed")
     oracle_error: bool = Field(True, description="score the WRP with the oracle (Table 3's error column)")
     out_dir: str | None = Field(None, description="none: logs/<run.name>/wrp-<kind>")

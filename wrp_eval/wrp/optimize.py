@@ -60,6 +60,7 @@ class WrpParams:
     # moves, Alg. 3 moves every viewpoint at random)
     acceptance: str = "paper"
     min_improvement_fraction: float = 0.1
+    improve_candidates: int = 16
     # flight-safety constraints of the moved viewpoints (the planner's, Sec. 3.1): planned positions (n, 3) m,
     # the lowest allowed height above the sea (m) and the no-fly box (2, 3); None: unconstrained
     base_positions: np.ndarray | None = None
@@ -188,34 +189,37 @@ def neighbourhood_score(errors: np.ndarray, params: WrpParams) -> np.ndarray:
 
 def optimise_view_improve(query: ViewQuery, view: int, params: WrpParams,
                           seed: int) -> tuple[int, np.ndarray, float, float, int]:
-    """``acceptance: improve``: every iteration is scored; among the candidates that pass both tests of Alg. 3
-    the one with the best :func:`neighbourhood_score` is kept when it beats the unmoved viewpoint's score (the
-    same neighbourhood draw around offset 0) by ``min_improvement_fraction * t``. Same return as
-    :func:`optimise_view`."""
+    """``acceptance: improve``: every iteration passes stage 1; of the survivors, the ``improve_candidates``
+    with the lowest stage-1 error (ties: earlier iteration) get the stage-2 neighbourhood, and the one with
+    the best :func:`neighbourhood_score` among those passing stage 2 is kept when it beats the unmoved
+    viewpoint's score (a neighbourhood draw around offset 0) by ``min_improvement_fraction * t``. Same return
+    as :func:`optimise_view`."""
     b = params.block_iterations
     n_blocks = -(-params.iterations // b)
     t = params.threshold_m
-    # the unmoved viewpoint's own neighbourhood: a draw of its own stream (block index n_blocks)
-    home = iteration_draws(seed, view, n_blocks, params)
-    _, e_home = best_attitude(query, view, home.neighbour_offset[:1], home.neighbour_yaw[:1])
-    home_score = float(neighbourhood_score(e_home, params)[0])
-    best = (np.inf, -1, np.zeros(4), float("nan"), float("nan"))
+    parts = []                                   # per block: survivors' iteration, position, yaw, E, draws
     scored = 0
     for block in range(n_blocks):
         lo, d, pos, yaw_best, e1, survivors = stage_one(query, view, params, seed, block)
         scored += len(pos)
-        if survivors.size == 0:
-            continue
-        centres = pos[survivors][:, None, :] + d.neighbour_offset[survivors]
-        _, ek = best_attitude(query, view, centres, d.neighbour_yaw[survivors])
-        stat = neighbourhood_statistic(ek, params)
-        score = np.where(stat <= t, neighbourhood_score(ek, params), np.inf)
-        k = int(np.argmin(score))
-        if score[k] < best[0]:
-            j = int(survivors[k])
-            best = (float(score[k]), lo + j, np.array([*pos[j], yaw_best[j]]), float(e1[j]), float(stat[k]))
-    if best[1] >= 0 and best[0] < home_score - params.min_improvement_fraction * t:
-        return best[1], best[2], best[3], best[4], scored
+        parts.append((lo + survivors, pos[survivors], yaw_best[survivors], e1[survivors],
+                      d.neighbour_offset[survivors], d.neighbour_yaw[survivors]))
+    it, pos, yaw, e1, n_off, n_yaw = (np.concatenate(column) for column in zip(*parts))
+    if it.size == 0:
+        return -1, np.zeros(4), float("nan"), float("nan"), scored
+    pick = np.lexsort((it, e1))[:params.improve_candidates]        # lowest E first, ties: earlier iteration
+    # the unmoved viewpoint's neighbourhood (its own stream: block index n_blocks) scored with the candidates
+    home = iteration_draws(seed, view, n_blocks, params)
+    centres = np.concatenate([home.neighbour_offset[:1], pos[pick][:, None, :] + n_off[pick]])   # (1 + k, M, 3)
+    yaws = np.concatenate([home.neighbour_yaw[:1], n_yaw[pick]])
+    _, ek = best_attitude(query, view, centres, yaws)
+    stat = neighbourhood_statistic(ek, params)
+    score = neighbourhood_score(ek, params)
+    home_score, stat, score = score[0], stat[1:], np.where(stat[1:] <= t, score[1:], np.inf)
+    k = int(np.argmin(score))
+    if np.isfinite(score[k]) and score[k] < home_score - params.min_improvement_fraction * t:
+        j = pick[k]
+        return int(it[j]), np.array([*pos[j], yaw[j]]), float(e1[j]), float(stat[k]), scored
     return -1, np.zeros(4), float("nan"), float("nan"), scored
 
 
