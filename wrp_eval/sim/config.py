@@ -11,11 +11,11 @@ from wrp_eval.validation import StrictModel
 
 class SimSection(StrictModel):
     """Simulator settings. Defaults: 5 ms physics step (attitude loop 200 Hz inside MuJoCo), position loop,
-    wind and drag every 8 steps (25 Hz)."""
+    wind and drag every 10 steps (20 Hz)."""
 
     timestep_s: float = Field(0.005, gt=0.0, le=0.02, description="MuJoCo physics step (the attitude loop "
                                                                   "runs inside MuJoCo at this rate)")
-    chunk_steps: int = Field(8, ge=1, le=50,
+    chunk_steps: int = Field(10, ge=1, le=50,
                              description="physics steps per mujoco.rollout call; the position loop, wind and "
                                          "drag are held over a chunk (position-loop rate = "
                                          "1/(chunk_steps*timestep_s))")

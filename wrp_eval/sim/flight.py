@@ -7,7 +7,7 @@ computes for the whole batch at once: the wind at every vehicle, the windward-ar
 (jerk-limited speed profile viewpoint to viewpoint), the position loop of the SE(3) controller, photo
 triggers and failures. Motor thrusts, drag forces (world-frame force actuators on the free joint) and
 the desired attitudes enter the rollout through ``control_spec = CTRL | MOCAP_QUAT`` and are held over
-the chunk (zero-order hold, 40 ms by default: the position loop runs at 25 Hz); the attitude loop runs
+the chunk (zero-order hold, 50 ms by default: the position loop runs at 20 Hz); the attitude loop runs
 inside MuJoCo at every physics step (200 Hz, vehicle.build_scene), so the numpy loop can run at the
 slower rate a position loop needs.
 
