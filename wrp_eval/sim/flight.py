@@ -42,9 +42,9 @@ YAW_RATE_REF_RAD_S = np.radians(60.0)  # reference yaw rate when a segment is mo
 
 
 def _trapezoid(length, tau, v_max, a_max):
-    """Rest-to-rest trapezoidal speed profile: distance s, speed v and the running integral of s, S = int s
-    dt (each (n,)) at time tau (n,) s, plus the duration (n,). Before 0: at rest at 0; after: at rest at
-    ``length``."""
+    """Rest-to-rest trapezoidal speed profile: distance s, speed v, acceleration a and the running integral
+    of s, S = int s dt (each (n,)) at time tau (n,) s, plus the duration (n,). Before 0: at rest at 0;
+    after: at rest at ``length``."""
     tri = length < v_max ** 2 / a_max
     v_peak = np.where(tri, np.sqrt(np.maximum(length, 0.0) * a_max), v_max)
     t_acc = v_peak / a_max
@@ -54,6 +54,7 @@ def _trapezoid(length, tau, v_max, a_max):
     big_s_acc = a_max * t_acc ** 3 / 6.0
     big_s_end = big_s_acc + s_acc * t_cruise + 0.5 * v_peak * t_cruise ** 2 + (length * t_acc - big_s_acc)
     after = np.maximum(tau - duration, 0.0)
+    moving = (tau >= 0.0) & (tau < duration)
     tau = np.clip(tau, 0.0, duration)
     t_c = tau - t_acc
     t_dec = duration - tau
@@ -61,10 +62,11 @@ def _trapezoid(length, tau, v_max, a_max):
     s = np.where(in_acc, 0.5 * a_max * tau ** 2,
                  np.where(in_dec, length - 0.5 * a_max * t_dec ** 2, s_acc + v_peak * t_c))
     v = np.where(in_acc, a_max * tau, np.where(in_dec, a_max * t_dec, v_peak))
+    a = np.where(moving, np.where(in_acc, a_max, np.where(in_dec, -a_max, 0.0)), 0.0)
     big_s = np.where(in_acc, a_max * tau ** 3 / 6.0,
                      np.where(in_dec, big_s_end - (length * t_dec - a_max * t_dec ** 3 / 6.0),
                               big_s_acc + s_acc * t_c + 0.5 * v_peak * t_c ** 2))
-    return s, v, big_s + length * after, duration
+    return s, v, a, big_s + length * after, duration
 
 
 def _reference_profile(length, tau, v_max, a_max, t_jerk):
@@ -79,21 +81,11 @@ def _reference_profile(length, tau, v_max, a_max, t_jerk):
     vehicle overshot each viewpoint by ~10 cm (README.md). Exact box averages from the closed forms:
     s_j = (S(t) - S(t-T)) / T, v_j = (s(t) - s(t-T)) / T, a_j = (v(t) - v(t-T)) / T.
     """
-    s1, v1, big1, duration = _trapezoid(length, tau, v_max, a_max)
+    s1, v1, a1, big1, duration = _trapezoid(length, tau, v_max, a_max)
     if t_jerk <= 0.0:
-        return s1, v1, _trapezoid_accel(length, tau, v_max, a_max), duration
-    s0, v0, big0, _ = _trapezoid(length, tau - t_jerk, v_max, a_max)
+        return s1, v1, a1, duration
+    s0, v0, _, big0, _ = _trapezoid(length, tau - t_jerk, v_max, a_max)
     return (big1 - big0) / t_jerk, (s1 - s0) / t_jerk, (v1 - v0) / t_jerk, duration + t_jerk
-
-
-def _trapezoid_accel(length, tau, v_max, a_max):
-    """Acceleration (n,) of the plain trapezoid (no jerk limit)."""
-    tri = length < v_max ** 2 / a_max
-    v_peak = np.where(tri, np.sqrt(np.maximum(length, 0.0) * a_max), v_max)
-    t_acc = v_peak / a_max
-    duration = np.where(tri, 2.0 * t_acc, length / v_max + t_acc)
-    return np.where((tau < 0) | (tau >= duration), 0.0,
-                    np.where(tau < t_acc, a_max, np.where(duration - tau < t_acc, -a_max, 0.0)))
 
 
 def _wind_at(wind, points, t, batch):
