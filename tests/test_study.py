@@ -10,7 +10,8 @@ import pytest
 from wrp_eval.cli import main
 from wrp_eval.config import ExperimentConfig, load_experiment
 from wrp_eval.errors import InputError
-from wrp_eval.study.runner import deep_merge, offset_path, offset_totals, random_offsets, variant_configs
+from wrp_eval.study.runner import deep_merge, random_offsets, variant_configs
+from wrp_eval.wrp.optimize import apply_offsets, offset_totals
 from wrp_eval.validation import parse_model
 
 PAPER = Path(__file__).resolve().parents[1] / "experiments" / "paper"
@@ -81,10 +82,10 @@ def test_random_offsets_are_seeded_bounded_and_summed_as_the_paper_does():
     assert rot == pytest.approx(np.degrees(np.abs(a[:, 3])).sum())
 
 
-def test_offset_path_moves_positions_and_wraps_yaw(stylized_path):
+def test_offset_rows_move_positions_and_wrap_yaw(stylized_path):
     offsets = np.zeros((len(stylized_path), 4))
     offsets[0] = [1.0, -2.0, 0.5, np.pi]
-    moved = offset_path(stylized_path, offsets, {"note": 1})
+    moved = apply_offsets(stylized_path, offsets, {"note": 1})
     np.testing.assert_allclose(moved.positions[0] - stylized_path.positions[0], [1.0, -2.0, 0.5])
     np.testing.assert_allclose(np.cos(moved.yaw[0]), -np.cos(stylized_path.yaw[0]), atol=1e-12)
     assert -np.pi < moved.yaw[0] <= np.pi and moved.metadata["note"] == 1

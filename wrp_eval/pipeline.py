@@ -114,7 +114,7 @@ def run_pipeline(config_path: Path, *, quiet: bool = True, smallest: bool = Fals
     surrogate_dir = Path(config.surrogate.out_dir or out / "surrogate")
     with Step(timings, "surrogate", "train the CNN surrogate on the campaign"):
         data = load_campaign_trials(campaign_dir)
-        seed = config.surrogate.seed if config.surrogate.seed is not None else config.run.seed
+        seed = config.surrogate.seed_or(config.run.seed)
         trained = train_surrogate(data, config.surrogate, seed=seed, progress=not quiet)
         write_outputs(trained, surrogate_dir)
         summary["surrogate"] = trained.metrics["test"]

@@ -25,6 +25,7 @@ import numpy as np
 
 from wrp_eval.atomic import write_json_atomic
 from wrp_eval.planning.path import KIND_TRANSITION
+from wrp_eval.wrp.optimize import apply_offsets, offset_totals
 
 # the offsets stream of the study's random viewpoint offsets (SeedSequence([seed, STREAM, crc(name), rep]))
 OFFSETS_STREAM = 9_001
@@ -78,18 +79,6 @@ def random_offsets(n_views: int, position_half_width_m: float, yaw_half_width_ra
     return rng.uniform(-1.0, 1.0, size=(n_views, 4)) * half
 
 
-def offset_path(path, offsets: np.ndarray, note: dict):
-    """``path`` with positions + offsets[:, :3] and yaw + offsets[:, 3] (wrapped to (-pi, pi])."""
-    yaw = np.angle(np.exp(1j * (np.asarray(path.yaw) + offsets[:, 3])))
-    return dataclasses.replace(path, positions=np.asarray(path.positions) + offsets[:, :3], yaw=yaw,
-                               metadata={**path.metadata, **note})
-
-
-def offset_totals(offsets: np.ndarray) -> tuple[float, float]:
-    """The paper's position / rotation offset columns: sum over viewpoints of |dp| (m) and |dyaw| (deg)."""
-    return (float(np.linalg.norm(offsets[:, :3], axis=1).sum()), float(np.degrees(np.abs(offsets[:, 3])).sum()))
-
-
 def training_key(config) -> str:
     """Variants with the same key share one campaign and one surrogate."""
     doc = {k: config.model_dump(mode="json")[k] for k in TRAINING_SECTIONS}
@@ -106,7 +95,7 @@ def _train(config, path, config_dir: Path, folder: Path, quiet: bool) -> dict:
     start = time.perf_counter()
     camp = run_campaign(config, out_dir=campaign_dir, config_dir=config_dir, path=path, progress=not quiet)
     campaign_s = time.perf_counter() - start
-    seed = config.surrogate.seed if config.surrogate.seed is not None else config.run.seed
+    seed = config.surrogate.seed_or(config.run.seed)
     trained = train_surrogate(load_campaign_trials(campaign_dir), config.surrogate, seed=seed, progress=not quiet)
     write_outputs(trained, surrogate_dir)
     return {"campaign": str(campaign_dir), "checkpoint": str(surrogate_dir / "surrogate.pt"), "trials": camp.done,
@@ -200,7 +189,7 @@ def run_study(config, config_path: Path, *, smallest: bool = False, quiet: bool 
                 rng = np.random.default_rng(np.random.SeedSequence(
                     [cfg.run.seed, OFFSETS_STREAM, zlib.crc32(variant.name.encode()), rep]))
                 offsets = random_offsets(len(measured), half_m, np.radians(half_deg), rng)
-                row_path = offset_path(measured, offsets, {"random_offsets": {"repetition": rep + 1,
+                row_path = apply_offsets(measured, offsets, {"random_offsets": {"repetition": rep + 1,
                                                                               "position_half_width_m": half_m,
                                                                               "yaw_half_width_deg": half_deg}})
                 row_path.save(folder / f"offsets-{rep + 1}" / "path.json")

@@ -33,7 +33,7 @@ def _train(args: argparse.Namespace) -> int:
     campaign = Path(args.campaign) if args.campaign else default_campaign_dir(config)
     out = Path(args.out) if args.out else default_out_dir(config)
     data = load_campaign_trials(campaign)
-    seed = section.seed if section.seed is not None else config.run.seed
+    seed = section.seed_or(config.run.seed)
     result = train_surrogate(data, section, seed=seed, progress=not args.quiet)
     files = write_outputs(result, out)
     m = result.metrics["test"]

@@ -47,6 +47,10 @@ class SurrogateSection(StrictModel):
     threads: int = Field(1, ge=1, le=2, description="torch CPU threads (1: on this shared 2-core machine two "
                          "threads measured 10-20x SLOWER than one, OpenMP threads spin-waiting for a busy core)")
 
+    def seed_or(self, run_seed: int) -> int:
+        """The training seed: ``seed``, else the run's seed."""
+        return self.seed if self.seed is not None else run_seed
+
     @model_validator(mode="after")
     def _checks(self) -> "SurrogateSection":
         if self.kernel % 2 == 0:
