@@ -118,3 +118,35 @@ def test_log_target_refuses_non_positive_errors(known_data):
     bad = replace(data, error=np.where(np.arange(data.n_trials) == 3, -0.1, data.error))
     with pytest.raises(InputError, match="log_error needs errors > 0"):
         train_surrogate(bad, SurrogateSection(epochs=2, target="log_error"), seed=0)
+
+
+def test_cross_validation_tests_every_usable_trial_exactly_once(known_data):
+    from wrp_eval.surrogate.config import SurrogateSection
+    from wrp_eval.surrogate.train import cross_validate
+    data, _ = known_data
+    failed = np.zeros(data.n_trials, bool)
+    failed[::10] = True                       # failed trials are not fitted, so never tested either
+    import dataclasses
+    data = dataclasses.replace(data, failed=failed)
+    section = SurrogateSection(epochs=60, patience=20, batch_size=32, lr=3e-3, channels=16)
+    cv = cross_validate(data, section, seed=1, folds=3)
+    tested = np.concatenate([f["test_trials"] for f in cv["per_fold"]])
+    assert sorted(tested.tolist()) == np.flatnonzero(~failed).tolist()
+    assert cv["pooled"]["n"] == (~failed).sum() == sum(f["n"] for f in cv["per_fold"])
+    r2 = [f["r2"] for f in cv["per_fold"]]
+    assert cv["r2_min"] == min(r2) <= cv["r2_mean"] <= cv["r2_max"] == max(r2)
+    assert cv["r2_min"] > 0.5, cv["per_fold"]     # the known function is learnable in every fold
+    again = cross_validate(data, section, seed=1, folds=3)
+    assert again["r2_mean"] == cv["r2_mean"]
+    with pytest.raises(InputError, match="folds"):
+        cross_validate(data, section, folds=1)
+
+
+def test_learning_rate_is_reduced_on_a_plateau_only_when_enabled(known_data):
+    from wrp_eval.surrogate.config import SurrogateSection
+    data, _ = known_data
+    base = dict(epochs=40, patience=40, batch_size=64, lr=3e-2, channels=8)
+    decayed = train_surrogate(data, SurrogateSection(**base, lr_decay_patience=1), seed=0)
+    constant = train_surrogate(data, SurrogateSection(**base, lr_decay_patience=0), seed=0)
+    assert constant.metrics["final_lr"] == pytest.approx(3e-2)
+    assert decayed.metrics["final_lr"] < 3e-2 / 2 - 1e-12

@@ -34,6 +34,15 @@ def test_train_writes_checkpoint_metrics_and_plot(trained_campaign):
     assert (root / "sur" / "parity.png").stat().st_size > 0 and (root / "sur" / "surrogate.pt").is_file()
 
 
+def test_train_cv_writes_fold_figures(trained_campaign, tmp_path, capsys):
+    _, cfg, campaign = trained_campaign
+    assert main(["train", str(cfg), "--campaign", str(campaign), "--out", str(tmp_path), "--cv", "3",
+                 "--quiet"]) == 0
+    doc = json.loads((tmp_path / "cv.json").read_text())
+    assert doc["folds"] == 3 and len(doc["per_fold"]) == 3 and doc["pooled"]["n"] == 60
+    assert "cross-validation" in capsys.readouterr().out and (tmp_path / "surrogate.pt").is_file()
+
+
 @pytest.mark.parametrize("kind", ["iswrp", "swrp"])
 def test_optimize_writes_wrp_path_and_table3(trained_campaign, kind):
     root, cfg, campaign = trained_campaign

@@ -1,0 +1,55 @@
+"""The R^2 ceiling: the oracle re-scored at jittered flown poses of a real (tiny) MuJoCo campaign."""
+
+import numpy as np
+import pytest
+
+from wrp_eval.errors import InputError
+from wrp_eval.surrogate.ceiling import oracle_roughness
+
+CONFIG = """
+run: {name: ceiling-test, seed: 2}
+ship: {type: stylized}
+wind: {speed_10m_mps: 5.0, turbulence: {severity: light}}
+campaign:
+  n_trials: 4
+  batch_size: 4
+  wind: {speed_10m_m_s: {dist: uniform, low: 3.0, high: 6.0}, turbulence: {severity: light}}
+  perturbation: {design: common, position_half_width_m: 1.0, yaw_half_width_deg: 5.0}
+  backend: {kind: local, workers: 0}
+  outputs: {rerun: false}
+"""
+
+
+@pytest.fixture(scope="module")
+def campaign_dir(tmp_path_factory):
+    from wrp_eval.campaign.runner import run_campaign
+    from wrp_eval.config import load_experiment
+    folder = tmp_path_factory.mktemp("ceiling")
+    cfg = folder / "c.yaml"
+    cfg.write_text(CONFIG)
+    summary = run_campaign(load_experiment(cfg), out_dir=folder / "campaign", progress=False)
+    assert summary.done == 4 and summary.failed < 4
+    return folder / "campaign"
+
+
+@pytest.mark.slow
+def test_ceiling_is_one_without_jitter_and_below_one_with_it(campaign_dir):
+    # the oracle is deterministic for given poses and seed: no jitter, no within-trial variance
+    exact = oracle_roughness(campaign_dir, n_trials=2, repeats=2, position_jitter_m=0.0, yaw_jitter_rad=0.0)
+    assert exact["noise_var_m2"] == 0.0 and exact["r2_ceiling"] == 1.0 and exact["n_trials"] == 2
+    rough = oracle_roughness(campaign_dir, n_trials=2, repeats=3, position_jitter_m=0.05, yaw_jitter_rad=0.005)
+    assert rough["noise_var_m2"] > 0.0 and rough["total_var_m2"] > 0.0
+    assert rough["r2_ceiling"] == pytest.approx(1 - rough["noise_var_m2"] / rough["total_var_m2"])
+    assert np.sqrt(rough["noise_var_m2"]) < 0.01    # mm-scale roughness, not a different reconstruction
+    again = oracle_roughness(campaign_dir, n_trials=2, repeats=3, position_jitter_m=0.05, yaw_jitter_rad=0.005)
+    assert again == rough
+
+
+def test_ceiling_refuses_a_folder_that_is_not_a_campaign(tmp_path):
+    with pytest.raises(InputError, match="not a campaign folder"):
+        oracle_roughness(tmp_path)
+
+
+def test_ceiling_needs_two_repeats(campaign_dir):
+    with pytest.raises(InputError, match="repeats"):
+        oracle_roughness(campaign_dir, repeats=1)
