@@ -9,7 +9,9 @@ surrogate.r2_test / rmse_test: held-out test trials (15 %), default ``surrogate:
 surrogate.r2_cv: mean test R^2 of 5-fold cross-validation (every trial tested once; the note gives the range
 and the pooled R^2): one test split of a few hundred heavy-tailed errors scatters by several hundredths.
 surrogate.r2_ceiling (campaign data only): 1 - the oracle's variance under 2 cm / 0.11 deg pose jitter over the
-campaign's error variance (:mod:`wrp_eval.surrogate.ceiling`): the R^2 no surrogate of the offsets can exceed.
+campaign's error variance (:mod:`wrp_eval.surrogate.diagnostics`): the R^2 no surrogate of the offsets can
+exceed. surrogate.single_view_spearman (campaign data only): rank agreement of surrogate and oracle on 120
+one-viewpoint moves from the planned path -- the optimiser's queries, which the trials' R^2 does not cover.
 surrogate.train_s: wall time of that training (early stopping included).
 surrogate.queries_per_s: candidates per second scored by the optimiser's exact incremental evaluator
 (:class:`ViewQuery`, batches of 3,200 = 64 iterations x 50 attitudes); surrogate.full_queries_per_s: plain
@@ -89,7 +91,7 @@ def run_bench() -> list[BenchRecord]:
     ]
     folder = os.environ.get(BENCH_ENV)
     if folder:
-        from wrp_eval.surrogate.ceiling import oracle_roughness
+        from wrp_eval.surrogate.diagnostics import oracle_roughness, single_view_agreement
         start = time.perf_counter()
         ceiling = oracle_roughness(folder)
         records.append(BenchRecord(
@@ -97,4 +99,11 @@ def run_bench() -> list[BenchRecord]:
             f"oracle std {ceiling['noise_std_m'] * 1000:.2f} mm under {ceiling['position_jitter_m']} m / "
             f"{ceiling['yaw_jitter_rad']} rad jitter ({ceiling['n_trials']} trials x {ceiling['repeats']}) vs error "
             f"std {np.sqrt(ceiling['total_var_m2']) * 1000:.2f} mm; {time.perf_counter() - start:.0f} s"))
+        agree = single_view_agreement(s, folder, n_moves=120)
+        big = ", ".join(f"view {v}: {o * 1000:.1f} vs {p * 1000:.2f}" for v, o, p in agree["largest"][:3])
+        records.append(BenchRecord(
+            "surrogate.single_view_spearman", agree["spearman"], "", None, None,
+            f"{agree['n_moves']} moves; change std oracle {agree['oracle_change_std_m'] * 1000:.2f} mm, "
+            f"surrogate {agree['surrogate_change_std_m'] * 1000:.2f} mm; largest oracle changes (mm, oracle vs "
+            f"surrogate) {big}"))
     return records

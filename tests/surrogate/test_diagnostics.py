@@ -4,7 +4,7 @@ import numpy as np
 import pytest
 
 from wrp_eval.errors import InputError
-from wrp_eval.surrogate.ceiling import oracle_roughness
+from wrp_eval.surrogate.diagnostics import oracle_roughness
 
 CONFIG = """
 run: {name: ceiling-test, seed: 2}
@@ -53,3 +53,30 @@ def test_ceiling_refuses_a_folder_that_is_not_a_campaign(tmp_path):
 def test_ceiling_needs_two_repeats(campaign_dir):
     with pytest.raises(InputError, match="repeats"):
         oracle_roughness(campaign_dir, repeats=1)
+
+
+@pytest.mark.slow
+def test_single_view_agreement_scores_one_viewpoint_moves_with_both(campaign_dir):
+    from wrp_eval.surrogate.diagnostics import campaign_oracle, single_view_agreement
+    from .conftest import random_surrogate
+    scorer, _ = campaign_oracle(campaign_dir)
+    n = len(scorer.planned)
+    surrogate = random_surrogate(n, seed=4)
+    doc = single_view_agreement(surrogate, campaign_dir, n_moves=6, seed=2)
+    assert doc["n_moves"] == 6 and -1.0 <= doc["spearman"] <= 1.0
+    assert doc["surrogate_change_std_m"] > 0.0 and doc["oracle_change_std_m"] >= 0.0
+    # the oracle's changes recomputed independently: the same moves from the same seed
+    rng = np.random.default_rng(2)
+    views = rng.integers(0, n, 6)
+    moves = rng.uniform(surrogate.meta.offset_low, surrogate.meta.offset_high, (6, 4))
+    base = scorer.error(np.zeros((n, 4)), 0)
+    changes = []
+    for view, move in zip(views, moves):
+        offsets = np.zeros((n, 4))
+        offsets[view] = move
+        changes.append(scorer.error(offsets, 0) - base)
+    k = int(np.argmax(np.abs(changes)))
+    assert doc["largest"][0][:2] == [int(views[k]), pytest.approx(changes[k], abs=1e-12)]
+    assert doc["oracle_change_std_m"] == pytest.approx(np.std(changes), abs=1e-12)
+    with pytest.raises(InputError, match="viewpoints"):
+        single_view_agreement(random_surrogate(n + 1), campaign_dir, n_moves=2)

@@ -1,0 +1,147 @@
+"""What a campaign's oracle lets a surrogate learn, and what the optimiser can trust it for.
+
+**R^2 ceiling** (:func:`oracle_roughness`). The synthetic oracle is deterministic for given poses and seed,
+but not smooth: a pose change of a few centimetres flips discrete decisions (which ray matches in which
+partner view, which views are partners, the order of registration), and the error moves by a fraction of a
+millimetre even where its trend is flat (measured on the quickstart ship: 1 mm per-view jitter -> 0.2 mm std,
+5 cm -> 0.7 mm, on a 23 mm error). No regression on the offsets can resolve that: two flights the UAV cannot
+tell apart (its calm-air tracking is ~2-3 cm and ~0.1 deg, see wrp_eval/sim) get errors that differ by it.
+The stored trials are re-scored with their flown poses jittered at that scale (independent Gaussian per
+viewpoint), the mean within-trial variance is the part no surrogate can learn, and ``r2_ceiling`` = 1 - that /
+the variance of the campaign's errors (trials that did not fail): the held-out R^2 a perfect surrogate of the
+smooth trend would reach on this data.
+
+**Single-viewpoint agreement** (:func:`single_view_agreement`). The optimiser (Alg. 3/4) moves ONE viewpoint
+at a time and asks the surrogate how the path's error changes. A high R^2 on the campaign's trials does not
+imply the surrogate knows that (trials move every viewpoint at once). This draws single-viewpoint moves in the
+training box around the planned path, scores each with the oracle and the surrogate, and compares the changes
+against the unmoved path: Spearman rank correlation and both spreads.
+
+Both re-score with the PLANNED gimbal pitch (the store keeps no achieved pitch; it differs only where the
+gimbal saturated) and are estimates from a finite sample, returned with their settings.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from pathlib import Path
+
+import numpy as np
+
+from wrp_eval.errors import InputError
+
+
+@dataclass(frozen=True)
+class CampaignOracle:
+    """A campaign's path, ship and oracle, ready to score offsets from the planned viewpoints."""
+
+    path: object
+    mesh: object
+    oracle: object
+    planned: np.ndarray      # (n, 4) x, y, z m, yaw rad
+
+    def error(self, offsets: np.ndarray, seed: int) -> float:
+        """Oracle error_m (m) of the path flown at planned + ``offsets`` (n, 4), every view taken."""
+        from wrp_eval.sim.captures import CaptureSet
+        pose = self.planned + offsets
+        n = len(pose)
+        captures = CaptureSet(pose[:, :3], pose[:, 3], np.asarray(self.path.pitch, float), np.arange(n),
+                              self.path.camera)
+        return float(self.oracle.evaluate(captures, self.mesh, seed=int(seed % (2**31 - 1))).error_m)
+
+
+def campaign_oracle(campaign_dir: str | Path, config_dir: str | Path = ".") -> tuple[CampaignOracle, object]:
+    """(:class:`CampaignOracle`, the campaign's TrialStore) from a campaign folder's campaign.json and path.json."""
+    from wrp_eval.campaign.store import TrialStore
+    from wrp_eval.config import ExperimentConfig
+    from wrp_eval.planning.path import Path as FlightPath
+    from wrp_eval.recon import make_oracle
+    from wrp_eval.ship.resolve import resolve_ship_full
+    folder = Path(campaign_dir)
+    store = TrialStore(folder)
+    meta = store.read_meta()
+    if meta is None or "config" not in meta:
+        raise InputError(folder, "not a campaign folder (no campaign.json with its config)")
+    config = ExperimentConfig.model_validate(meta["config"])
+    path = FlightPath.load(folder / "path.json")
+    ship = resolve_ship_full(config.ship, config_dir)
+    oracle = make_oracle(config.oracle, config.campaign.oracle)
+    planned = np.concatenate([np.asarray(path.positions, float), np.asarray(path.yaw, float)[:, None]], axis=1)
+    return CampaignOracle(path, ship.mesh, oracle, planned), store
+
+
+def oracle_roughness(campaign_dir: str | Path, *, n_trials: int = 60, repeats: int = 5,
+                     position_jitter_m: float = 0.02, yaw_jitter_rad: float = 0.002, seed: int = 0,
+                     config_dir: str | Path = ".") -> dict:
+    """Roughness of the oracle on a campaign's own trials and the R^2 ceiling it implies.
+
+    Draws ``n_trials`` trials that did not fail (seeded), re-scores each ``repeats`` times with its flown poses
+    jittered (``position_jitter_m`` per axis, ``yaw_jitter_rad``), with the trial's own oracle seed. Returns
+    noise_var_m2 (mean within-trial variance), noise_std_m, total_var_m2 (variance of error_m over every trial
+    that did not fail), r2_ceiling, and the settings.
+    """
+    from wrp_eval.campaign.records import column_array
+    if repeats < 2:
+        raise InputError("oracle_roughness", f"repeats must be >= 2 to measure a variance, got {repeats}")
+    scorer, store = campaign_oracle(campaign_dir, config_dir)
+    table = store.read_table(["n_views", "flown_offsets", "error_m", "failed", "oracle_seed"])
+    flown = column_array(table, "flown_offsets")
+    error = table.column("error_m").to_numpy(zero_copy_only=False).astype(float)
+    failed = table.column("failed").to_numpy(zero_copy_only=False).astype(bool)
+    oracle_seed = table.column("oracle_seed").to_numpy().astype(np.int64)
+    usable = np.flatnonzero(~failed & np.isfinite(error) & np.all(np.isfinite(flown), axis=(1, 2)))
+    if usable.size < 3:
+        raise InputError(campaign_dir, f"only {usable.size} trials without failure; need at least 3")
+    rng = np.random.default_rng(seed)
+    chosen = rng.choice(usable, size=min(n_trials, usable.size), replace=False)
+    n = len(scorer.planned)
+    scores = np.empty((chosen.size, repeats))
+    for row, trial in enumerate(chosen):   # one oracle call per capture set: the oracle is not batched
+        for rep in range(repeats):
+            jitter = np.concatenate([rng.normal(0.0, position_jitter_m, (n, 3)),
+                                     rng.normal(0.0, yaw_jitter_rad, (n, 1))], axis=1)
+            scores[row, rep] = scorer.error(flown[trial] + jitter, oracle_seed[trial])
+    finite = np.all(np.isfinite(scores), axis=1)
+    if not finite.any():
+        raise InputError(campaign_dir, "the oracle returned no finite error on the re-scored trials")
+    noise_var = float(np.var(scores[finite], axis=1, ddof=1).mean())
+    total_var = float(np.var(error[usable]))
+    return {"noise_var_m2": noise_var, "noise_std_m": float(np.sqrt(noise_var)), "total_var_m2": total_var,
+            "r2_ceiling": 1.0 - noise_var / total_var if total_var > 0 else float("nan"),
+            "n_trials": int(finite.sum()), "repeats": int(repeats), "position_jitter_m": position_jitter_m,
+            "yaw_jitter_rad": yaw_jitter_rad, "seed": seed}
+
+
+def single_view_agreement(surrogate, campaign_dir: str | Path, *, n_moves: int = 120, seed: int = 0,
+                          config_dir: str | Path = ".") -> dict:
+    """Surrogate vs oracle on single-viewpoint moves from the planned path (the optimiser's queries).
+
+    Each move: a viewpoint (uniform) and its offset (dx, dy, dz, dyaw) uniform in the surrogate's training
+    range (``offset_low``..``offset_high`` of its metadata); the other viewpoints at zero offset. Changes are
+    against the unmoved path, oracle seed 0 throughout. Returns spearman (rank correlation of the changes),
+    oracle_change_std_m, surrogate_change_std_m, mean_abs_diff_m, the largest oracle changes with the
+    surrogate's answer (view, oracle, surrogate; m), n_moves, seed.
+    """
+    from scipy.stats import spearmanr
+    scorer, _ = campaign_oracle(campaign_dir, config_dir)
+    n = len(scorer.planned)
+    if surrogate.n_views != n:
+        raise InputError(campaign_dir, f"the surrogate has {surrogate.n_views} viewpoints, the campaign's path {n}")
+    low = np.asarray(surrogate.meta.offset_low if surrogate.meta.offset_low is not None else [-2, -2, -2, -0.35])
+    high = np.asarray(surrogate.meta.offset_high if surrogate.meta.offset_high is not None else [2, 2, 2, 0.35])
+    rng = np.random.default_rng(seed)
+    views = rng.integers(0, n, n_moves)
+    moves = rng.uniform(low, high, (n_moves, 4))
+    offsets = np.zeros((n_moves, n, 4))
+    offsets[np.arange(n_moves), views] = moves
+    base_oracle = scorer.error(np.zeros((n, 4)), 0)
+    oracle_change = np.array([scorer.error(o, 0) for o in offsets]) - base_oracle
+    surrogate_change = surrogate.predict(offsets) - surrogate.predict(np.zeros((1, n, 4)))[0]
+    ok = np.isfinite(oracle_change)
+    rho = float(spearmanr(oracle_change[ok], surrogate_change[ok]).statistic) if ok.sum() > 2 else float("nan")
+    top = np.argsort(-np.abs(np.where(ok, oracle_change, 0.0)))[:5]
+    return {"spearman": rho, "oracle_change_std_m": float(np.std(oracle_change[ok])),
+            "surrogate_change_std_m": float(np.std(surrogate_change[ok])),
+            "mean_abs_diff_m": float(np.mean(np.abs(oracle_change[ok] - surrogate_change[ok]))),
+            "largest": [[int(views[k]), float(oracle_change[k]), float(surrogate_change[k])] for k in top],
+            "n_moves": int(ok.sum()), "seed": seed}
