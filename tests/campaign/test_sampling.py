@@ -95,3 +95,21 @@ def test_common_design_shares_one_offset_disturbed_per_view():
     assert np.unique(strata).size >= 28       # disturbance and jitter blur the strata a little
     np.testing.assert_array_equal(commanded_offsets(s, 3, 5, 40), offs[5])   # pure function of the trial
     assert not np.array_equal(commanded_offsets(s, 4, 5, 40), offs[5])
+
+
+def test_solo_views_move_on_their_own_and_leave_the_rest_of_the_trial_unchanged():
+    base = {"design": "common", "position_half_width_m": 2, "yaw_half_width_deg": 20}
+    plain = section(n_trials=16, perturbation=base)
+    solo = section(n_trials=16, perturbation={**base, "solo_views": 2})
+    half = np.array([2, 2, 2, np.radians(20)])
+    for k in range(16):
+        a, b = commanded_offsets(plain, 3, k, 30), commanded_offsets(solo, 3, k, 30)
+        changed = np.flatnonzero(np.any(a != b, axis=1))
+        assert changed.size == 2                       # exactly two views take their own offset ...
+        assert np.all(np.abs(b[changed]) <= half)      # ... inside the box
+        np.testing.assert_array_equal(np.delete(a, changed, 0), np.delete(b, changed, 0))
+        np.testing.assert_array_equal(commanded_offsets(solo, 3, k, 30), b)
+    # across trials the solo views are spread over the path and their offsets over the box
+    chosen = [np.flatnonzero(np.any(commanded_offsets(plain, 3, k, 30) != commanded_offsets(solo, 3, k, 30), 1))
+              for k in range(16)]
+    assert np.unique(np.concatenate(chosen)).size >= 15

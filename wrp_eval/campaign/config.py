@@ -131,7 +131,9 @@ class Perturbation(StrictModel):
     is drawn in the box (Sobol / LHS over 4 dimensions, as above), and viewpoint k gets
     c * (1 + e_k) + view_jitter * half_width * u_k with e_k ~ U(-view_disturbance, +view_disturbance) and
     u_k ~ U(-1, 1) per component. The additive jitter lets the surrogate see single viewpoints move on their
-    own, which is what the interval optimiser asks it about.
+    own, which is what the interval optimiser asks it about. ``solo_views`` k > 0: k viewpoints of each trial
+    (uniform, without replacement) take instead an offset of their own, uniform in the box: the optimiser's
+    query (one viewpoint moved against the others) appears in the data.
     ``flown_disturbance``: the paper's Sec. 4.1 "additional 20 % random disturbance": the wind-induced part of
     every flown offset is scaled by (1 + e), e ~ U(-f, f), f = flown_disturbance (0 disables it).
     """
@@ -144,6 +146,8 @@ class Perturbation(StrictModel):
                                     "disturbance of the common offset (the paper's 20 %)")
     view_jitter: float = Field(0.05, ge=0, le=1, description="design common: additive per-viewpoint jitter, as "
                                "a fraction of the half widths")
+    solo_views: int = Field(0, ge=0, description="design common: viewpoints per trial with an independent "
+                            "offset uniform in the box instead of the common one")
     flown_disturbance: float = Field(0.2, ge=0, le=1)
 
 

@@ -118,7 +118,11 @@ def commanded_offsets(section: CampaignSection, root_seed: int, trial_id: int, n
         rng = trial_rng(root_seed, PERTURB_STREAM, trial_id)
         e = rng.uniform(-pert.view_disturbance, pert.view_disturbance, size=(n_views, 4))
         jitter = rng.uniform(-1.0, 1.0, size=(n_views, 4)) * pert.view_jitter * half
-        return common * (1.0 + e) + jitter
+        offsets = common * (1.0 + e) + jitter
+        if pert.solo_views:  # drawn after the others: solo_views 0 keeps earlier campaigns' numbers
+            solo = rng.choice(n_views, size=min(pert.solo_views, n_views), replace=False)
+            offsets[solo] = rng.uniform(-1.0, 1.0, size=(len(solo), 4)) * half
+        return offsets
     u = unit_design_point(pert.sampler, root_seed, section.n_trials, trial_id, 4 * n_views).reshape(n_views, 4)
     return (2.0 * u - 1.0) * half
 
