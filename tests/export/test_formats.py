@@ -186,3 +186,32 @@ def test_readers_refuse_garbage(tmp_path):
     for fmt, spec in FORMATS.items():
         with pytest.raises(InputError):
             spec.read(junk)
+
+
+def test_leg_through_the_ship_refused_though_both_waypoints_are_clear(ship, path, section, tmp_path):
+    particulars, proxy = ship
+    x, y, z = path.positions[5]
+    across = _with_position(path, 5, (x, -y, z))      # the mirror point on the other side of the hull
+    assert not proxy.in_no_fly_zone(across.positions).any()
+    with pytest.raises(InputError, match="leg") as info:
+        export_path(across, particulars, proxy, "qgc-plan", tmp_path / "m.plan", section, source="p.json")
+    assert "#4 -> #5" in str(info.value) and "\n" not in str(info.value)
+    assert not (tmp_path / "m.plan").exists()
+
+
+def test_segments_cross_no_fly_zone_slab_test(ship):
+    _, proxy = ship
+    lo, hi = proxy.no_fly_bounds()
+    mid = (lo + hi) / 2
+    out = hi + 5.0
+    starts = np.array([[mid[0], lo[1] - 5, mid[2]],      # straight through the hull
+                       [mid[0], lo[1] - 5, hi[2] + 1],   # over the top
+                       [lo[0] - 5, lo[1] - 5, mid[2]],   # along the side, outside
+                       [mid[0], lo[1] - 5, mid[2]],      # ends inside
+                       mid,                              # zero length, inside
+                       out,                              # zero length, outside
+                       [lo[0] - 5, mid[1], mid[2]]])     # stops short of the bow
+    ends = np.array([[mid[0], hi[1] + 5, mid[2]], [mid[0], hi[1] + 5, hi[2] + 1], [hi[0] + 5, lo[1] - 5, mid[2]],
+                     mid, mid, out, [lo[0] - 1, mid[1], mid[2]]])
+    np.testing.assert_array_equal(proxy.segments_cross_no_fly_zone(starts, ends),
+                                  [True, False, False, True, True, False, False])

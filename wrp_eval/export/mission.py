@@ -75,8 +75,9 @@ def home_point(particulars: ShipParticulars, section: ExportSection) -> np.ndarr
 
 
 def check_exportable(path: Path, proxy: Proxy, section: ExportSection, source: str) -> None:
-    """Refuse (InputError) a path with a waypoint below the minimum altitude, inside the no-fly zone or
-    beyond the gimbal's pitch range."""
+    """Refuse (InputError) a path with a waypoint below the minimum altitude, inside the no-fly zone, a
+    straight leg between two waypoints of a sortie through the no-fly zone, or a pitch beyond the gimbal's
+    range."""
     z = path.positions[:, 2]
     low = np.flatnonzero(z < section.min_altitude_m)
     if low.size:
@@ -90,6 +91,14 @@ def check_exportable(path: Path, proxy: Proxy, section: ExportSection, source: s
         raise InputError(source, f"{inside.size} viewpoint(s) inside the ship's no-fly zone "
                                  f"(margin {proxy.no_fly_margin_m:g} m), first #{i} at "
                                  f"({x:.2f}, {y:.2f}, {zz:.2f}) m in the ship frame")
+    # the aircraft flies straight between the photos of a sortie: no leg may cut through the no-fly box
+    same_sortie = np.asarray(path.sortie)[1:] == np.asarray(path.sortie)[:-1]
+    crossing = np.flatnonzero(same_sortie & proxy.segments_cross_no_fly_zone(path.positions[:-1],
+                                                                             path.positions[1:]))
+    if crossing.size:
+        i = int(crossing[0])
+        raise InputError(source, f"{crossing.size} straight leg(s) between viewpoints cross the ship's no-fly zone "
+                                 f"(margin {proxy.no_fly_margin_m:g} m), first #{i} -> #{i + 1}")
     pitch = np.degrees(path.pitch)
     lo, hi = section.gimbal_pitch_range_deg
     bad = np.flatnonzero((pitch < lo - 1e-9) | (pitch > hi + 1e-9))
