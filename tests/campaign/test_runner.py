@@ -68,6 +68,29 @@ def test_a_folder_of_another_campaign_is_refused(tmp_path, path_file, make_confi
         run_analytic(make_config(path_file, n_trials=3, seed=8), tmp_path / "c")
 
 
+def test_settings_outside_the_flight_do_not_orphan_stored_trials(tmp_path, path_file, make_config, run_analytic):
+    """Retuning the surrogate or the optimiser keeps the campaign; so does a folder written before a setting
+    with an old-behaviour default was added (its stored config is validated again by today's model)."""
+    import json
+    from wrp_eval.config import ExperimentConfig
+    out = tmp_path / "c"
+    first = run_analytic(make_config(path_file, n_trials=3), out)
+    doc = make_config(path_file, n_trials=5).model_dump(mode="json")
+    doc["surrogate"]["epochs"], doc["wrp"]["iterations"] = 7, 9
+    second = run_analytic(ExperimentConfig.model_validate(doc), out)
+    assert first.ran == 3 and second.ran == 2 and second.done == 5
+    # an older campaign.json: no `solo_views` in its config, and a fingerprint computed another way
+    meta_file = out / "campaign.json"
+    meta = json.loads(meta_file.read_text())
+    del meta["config"]["campaign"]["perturbation"]["solo_views"]
+    meta["fingerprint"] = "0123456789abcdef"
+    meta_file.write_text(json.dumps(meta))
+    assert run_analytic(make_config(path_file, n_trials=6), out).ran == 1
+    # a setting a flight does read still refuses the folder
+    with pytest.raises(InputError, match="different config"):
+        run_analytic(make_config(path_file, n_trials=6, perturbation={"design": "box"}), out)
+
+
 def test_status_counts(tmp_path, path_file, make_config, comparable, run_analytic, tiny_path):
     run_analytic(make_config(path_file, n_trials=5), tmp_path / "c", fail_trial_ids=[1])
     status = campaign_status(tmp_path / "c")

@@ -26,6 +26,8 @@ from wrp_eval.planning.path import Path as FlightPath
 
 # settings that do not change any trial's result: excluded from the fingerprint
 _NEUTRAL_KEYS = ("n_trials", "batch_size", "backend", "outputs")
+# the config sections a trial (flight + oracle) reads; the path enters through its digest
+_TRIAL_SECTIONS = ("ship", "wind", "sim", "oracle", "campaign")
 
 
 @dataclass(frozen=True)
@@ -83,16 +85,31 @@ def resolve_config(config: ExperimentConfig, *, n_trials: int | None = None, bac
 
 
 def fingerprint(config_doc: dict, digest: str, root_seed: int, evaluator: str, options: dict) -> str:
-    """Hash of everything that decides a trial's result (an LHS design also depends on n_trials)."""
-    doc = json.loads(json.dumps(config_doc))
+    """Hash of everything that decides a trial's result: the config sections a flight and its scoring read
+    (:data:`_TRIAL_SECTIONS`), the path digest, the root seed, the evaluator (an LHS design also depends on
+    n_trials). The surrogate, wrp, export, planning (the path has its own digest) and study sections are left
+    out: retuning the surrogate must not make thousands of stored flights unusable."""
+    doc = {name: json.loads(json.dumps(config_doc.get(name))) for name in _TRIAL_SECTIONS}
     campaign = doc["campaign"]
     lhs = campaign["perturbation"]["design"] != "none" and campaign["perturbation"]["sampler"] == "lhs"
     for key in _NEUTRAL_KEYS:
         if not (key == "n_trials" and lhs):
             campaign.pop(key, None)
-    doc.get("run", {}).pop("name", None)
     key = {"config": doc, "path": digest, "seed": root_seed, "evaluator": evaluator, "options": options}
     return hashlib.sha256(json.dumps(key, sort_keys=True, default=str).encode()).hexdigest()[:16]
+
+
+def stored_fingerprint(meta: dict) -> str | None:
+    """The fingerprint of a stored campaign (campaign.json) recomputed by today's code: its stored config is
+    validated again, so that a setting added since (whose default keeps the old behaviour, the rule for every
+    new setting) and a change in which sections count do not orphan the stored trials. None when the stored
+    inputs no longer validate."""
+    try:
+        doc = ExperimentConfig.model_validate(meta["config"]).model_dump(mode="json")
+        return fingerprint(doc, meta["path_digest"], meta["root_seed"], meta.get("evaluator", DEFAULT_EVALUATOR),
+                           meta.get("evaluator_options") or {})
+    except (KeyError, TypeError, ValueError):   # pydantic's ValidationError is a ValueError
+        return None
 
 
 def default_out_dir(config: ExperimentConfig) -> Path:
@@ -141,7 +158,8 @@ def run_campaign(config: ExperimentConfig, *, out_dir: str | Path | None = None,
     store = TrialStore(out)
     with store:
         previous = store.read_meta()
-        if previous is not None and previous.get("fingerprint") != print_:
+        if (previous is not None and previous.get("fingerprint") != print_
+                and stored_fingerprint(previous) != print_):
             raise InputError(out, "holds a campaign with a different config, path or seed "
                                   f"(fingerprint {previous.get('fingerprint')} vs {print_}); use another --out "
                                   "(or campaign.outputs.dir), or remove the folder")
