@@ -136,10 +136,16 @@ def test_cross_validation_tests_every_usable_trial_exactly_once(known_data):
     r2 = [f["r2"] for f in cv["per_fold"]]
     assert cv["r2_min"] == min(r2) <= cv["r2_mean"] <= cv["r2_max"] == max(r2)
     assert cv["r2_min"] > 0.5, cv["per_fold"]     # the known function is learnable in every fold
-    again = cross_validate(data, section, seed=1, folds=3)
-    assert again["r2_mean"] == cv["r2_mean"]
+    # folds trained in two spawned processes: the same folds, the same seeded trainings, the same figures
+    parallel = cross_validate(data, section, seed=1, folds=3, workers=2)
+    assert parallel["workers"] == 2 and cv["workers"] == 1
+    assert [f["test_trials"] for f in parallel["per_fold"]] == [f["test_trials"] for f in cv["per_fold"]]
+    assert [f["r2"] for f in parallel["per_fold"]] == r2
+    assert parallel["pooled"] == cv["pooled"]
     with pytest.raises(InputError, match="folds"):
         cross_validate(data, section, folds=1)
+    with pytest.raises(InputError, match="workers"):
+        cross_validate(data, section, folds=3, workers=0)
 
 
 def test_learning_rate_is_reduced_on_a_plateau_only_when_enabled(known_data):

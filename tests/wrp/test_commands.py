@@ -37,10 +37,13 @@ def test_train_writes_checkpoint_metrics_and_plot(trained_campaign):
 def test_train_cv_writes_fold_figures(trained_campaign, tmp_path, capsys):
     _, cfg, campaign = trained_campaign
     assert main(["train", str(cfg), "--campaign", str(campaign), "--out", str(tmp_path), "--cv", "3",
-                 "--quiet"]) == 0
+                 "--workers", "1", "--quiet"]) == 0
     doc = json.loads((tmp_path / "cv.json").read_text())
-    assert doc["folds"] == 3 and len(doc["per_fold"]) == 3 and doc["pooled"]["n"] == 60
+    assert doc["folds"] == 3 and len(doc["per_fold"]) == 3 and doc["pooled"]["n"] == 60 and doc["workers"] == 1
     assert "cross-validation" in capsys.readouterr().out and (tmp_path / "surrogate.pt").is_file()
+    assert main(["train", str(cfg), "--campaign", str(campaign), "--out", str(tmp_path / "bad"), "--cv", "3",
+                 "--workers", "0", "--quiet"]) == 2
+    assert "--workers" in capsys.readouterr().err and not (tmp_path / "bad").exists()   # refused before training
 
 
 @pytest.mark.parametrize("kind", ["iswrp", "swrp"])

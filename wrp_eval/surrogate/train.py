@@ -232,36 +232,57 @@ def train_surrogate(data: TrialData, section: SurrogateSection = SurrogateSectio
                        preds["test"][0], preds["test"][1], seconds)
 
 
+def _fold_splits(rows: np.ndarray, section: SurrogateSection, seed: int, folds: int) -> list[tuple]:
+    """(train, val, test) trial indices of each fold: test = the k-th of ``folds`` seeded parts of ``rows``."""
+    rng = np.random.default_rng(np.random.SeedSequence(seed, spawn_key=(1,)))
+    parts = np.array_split(rng.permutation(rows), folds)
+    n_val = max(1, int(round(section.val_fraction * rows.size)))
+    splits = []
+    for k in range(folds):
+        rest = rng.permutation(np.concatenate([parts[j] for j in range(folds) if j != k]))
+        splits.append((np.sort(rest[n_val:]), np.sort(rest[:n_val]), np.sort(parts[k])))
+    return splits
+
+
+def _train_fold(data: TrialData, section: SurrogateSection, seed: int, split: tuple) -> tuple[dict, np.ndarray,
+                                                                                            np.ndarray]:
+    """(test metrics with test_trials, test_true, test_pred) of one fold (module level: pool processes call it)."""
+    result = train_surrogate(data, section, seed=seed, split=split)
+    return {**result.metrics["test"], "test_trials": split[2].tolist()}, result.test_true, result.test_pred
+
+
 def cross_validate(data: TrialData, section: SurrogateSection = SurrogateSection(), seed: int = 0,
-                   folds: int = 5) -> dict:
+                   folds: int = 5, workers: int = 1) -> dict:
     """K-fold estimate of the held-out figures: every usable trial is a test trial exactly once.
 
     One R^2 from one random test split of a few hundred trials scatters widely when the error is heavy-tailed
     (measured on 1,500 flights of the surrogate bench: 0.85, 0.92 and 0.95 for split seeds 2, 1, 0), so the
     mean and range over folds are the figure to quote. Fold k tests on the k-th of ``folds`` seeded parts of
-    the usable trials; of the rest, ``val_fraction`` validates (early stopping) and the others train. Returns
-    per-fold R^2 / RMSE / MAE / n / test_trials, their mean, min and max, the pooled figures of all out-of-fold
-    predictions, seconds.
+    the usable trials; of the rest, ``val_fraction`` validates (early stopping) and the others train.
+    workers > 1 trains that many folds at once in spawned processes (each with ``section.threads`` torch
+    threads); every fold's training is seeded the same way either way. Returns per-fold R^2 / RMSE / MAE / n /
+    test_trials, their mean, min and max, the pooled figures of all out-of-fold predictions, seconds.
     """
     if folds < 2:
         raise InputError("surrogate cross-validation", f"folds must be >= 2, got {folds}")
+    if workers < 1:
+        raise InputError("surrogate cross-validation", f"workers must be >= 1, got {workers}")
     start = time.perf_counter()
-    usable, rows = usable_rows(data, section)
-    rng = np.random.default_rng(np.random.SeedSequence(seed, spawn_key=(1,)))
-    parts = np.array_split(rng.permutation(rows), folds)
-    per_fold, true_all, pred_all = [], [], []
-    for k in range(folds):
-        test = np.sort(parts[k])
-        rest = rng.permutation(np.concatenate([parts[j] for j in range(folds) if j != k]))
-        n_val = max(1, int(round(section.val_fraction * rows.size)))
-        split = (np.sort(rest[n_val:]), np.sort(rest[:n_val]), test)
-        result = train_surrogate(data, section, seed=seed, split=split)
-        per_fold.append({**result.metrics["test"], "test_trials": test.tolist()})
-        true_all.append(result.test_true)
-        pred_all.append(result.test_pred)
-    pooled = regression_metrics(np.concatenate(true_all), np.concatenate(pred_all))
+    _, rows = usable_rows(data, section)
+    splits = _fold_splits(rows, section, seed, folds)
+    if workers == 1:
+        results = [_train_fold(data, section, seed, split) for split in splits]
+    else:
+        import multiprocessing
+        from concurrent.futures import ProcessPoolExecutor
+        # spawn, not fork: no forked copy of torch's thread pool; the data travel to each process once per fold
+        with ProcessPoolExecutor(max_workers=min(workers, folds),
+                                 mp_context=multiprocessing.get_context("spawn")) as pool:
+            results = list(pool.map(_train_fold, [data] * folds, [section] * folds, [seed] * folds, splits))
+    per_fold = [r[0] for r in results]
+    pooled = regression_metrics(np.concatenate([r[1] for r in results]), np.concatenate([r[2] for r in results]))
     summary = {"folds": folds, "seed": seed, "per_fold": per_fold, "pooled": pooled,
-               "seconds": time.perf_counter() - start}
+               "seconds": time.perf_counter() - start, "workers": int(min(workers, folds))}
     for key in ("r2", "rmse", "mae"):
         values = np.array([m[key] for m in per_fold], float)
         summary[f"{key}_mean"], summary[f"{key}_min"], summary[f"{key}_max"] = (
