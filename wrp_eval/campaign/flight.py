@@ -60,24 +60,21 @@ class FlightEvaluator:
 
     def __init__(self, context: CampaignContext):
         from wrp_eval.config import ExperimentConfig
-        from wrp_eval.recon import make_oracle
-        from wrp_eval.ship.resolve import resolve_ship_full
+        from wrp_eval.recon.scene import scored_ship
         from wrp_eval.sim.flight import FlightSimulator
         self.config = ExperimentConfig.model_validate(context.config)
         self.config_dir = context.config_dir or "."
         self.path = load_path_doc(context.path)
-        ship = resolve_ship_full(self.config.ship, self.config_dir)
-        self.particulars, self.mesh = ship.particulars, ship.mesh
+        self.ship = scored_ship(self.config, self.config_dir)
         sim_section = self.config.sim.model_copy(update={"threads": max(1, int(context.threads))})
         self.sim = FlightSimulator(sim_section)
         self.dt_s = sim_section.timestep_s * sim_section.chunk_steps
-        self.oracle = make_oracle(self.config.oracle, self.config.campaign.oracle)
         self.trajectory_points = self.config.campaign.outputs.trajectory_points
 
     def evaluate(self, batch: list[TrialInputs]) -> list[TrialOutcome]:
         from wrp_eval.campaign.trial_wind import build_trial_wind
         start = time.perf_counter()
-        wind = build_trial_wind(self.config.wind, [t.wind for t in batch], self.particulars, self.dt_s,
+        wind = build_trial_wind(self.config.wind, [t.wind for t in batch], self.ship.particulars, self.dt_s,
                                 self.config_dir)
         commanded = np.stack([t.commanded_offsets for t in batch])           # (b, n, 4)
         result = self.sim.fly(self.path, wind, len(batch), view_offsets=commanded)
@@ -96,7 +93,7 @@ class FlightEvaluator:
             pose = planned[taken] + flown[i, taken]
             captures = CaptureSet(pose[:, :3], pose[:, 3], result.camera_pitch[i, taken], np.flatnonzero(taken),
                                   self.path.camera)
-            recon = self.oracle.evaluate(captures, self.mesh, seed=int(inputs.oracle_seed % (2**31 - 1)))
+            recon = self.ship.score(captures, inputs.oracle_seed)
             reasons = []
             if result.failed[i]:
                 reasons.append(f"flight: {result.failure_reason[i]}")

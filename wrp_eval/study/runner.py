@@ -133,6 +133,7 @@ def run_study(config, config_path: Path, *, smallest: bool = False, quiet: bool 
     from wrp_eval.planning.planner import plan
     from wrp_eval.report import write_study_report
     from wrp_eval.ship.resolve import resolve_ship_full
+    from wrp_eval.recon.scene import scored_ship
     from wrp_eval.wrp.commands import oracle_error, run_optimize
     from wrp_eval.wrp.config import WrpSection
 
@@ -183,6 +184,7 @@ def run_study(config, config_path: Path, *, smallest: bool = False, quiet: bool 
         pert = cfg.campaign.perturbation
         half_m = box.position_half_width_m if box.position_half_width_m is not None else pert.position_half_width_m
         half_deg = box.yaw_half_width_deg if box.yaw_half_width_deg is not None else pert.yaw_half_width_deg
+        scorer = None    # the variant's ship + oracle, built at the first row that needs a verdict
         for rep in range(variant.repetitions):
             row_path, row_verdict, cols = measured, verdict, dict(wrp_cols)
             if variant.random_offsets:
@@ -198,7 +200,8 @@ def run_study(config, config_path: Path, *, smallest: bool = False, quiet: bool 
                 cols["offsets_half_width"] = {"position_m": half_m, "yaw_deg": half_deg}
                 row_verdict = None
             if row_verdict is None:
-                row_verdict = oracle_error(cfg, row_path, config_dir)
+                scorer = scorer if scorer is not None else scored_ship(cfg, config_dir)
+                row_verdict = oracle_error(cfg, row_path, config_dir, scorer)
             ours = {**base_cols, **_path_columns(row_path, row_verdict), **cols}
             rows.append({"variant": variant.name, "repetition": rep + 1 if variant.random_offsets else None,
                          "path": variant.path, "random_offsets": variant.random_offsets,

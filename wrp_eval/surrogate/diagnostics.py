@@ -33,21 +33,16 @@ from wrp_eval.errors import InputError
 
 @dataclass(frozen=True)
 class CampaignOracle:
-    """A campaign's path, ship and oracle, ready to score offsets from the planned viewpoints."""
+    """A campaign's path and its scored ship (:class:`wrp_eval.recon.scene.ScoredShip`): offsets in, error out."""
 
     path: object
-    mesh: object
-    oracle: object
+    ship: object
     planned: np.ndarray      # (n, 4) x, y, z m, yaw rad
 
     def error(self, offsets: np.ndarray, seed: int) -> float:
         """Oracle error_m (m) of the path flown at planned + ``offsets`` (n, 4), every view taken."""
-        from wrp_eval.sim.captures import CaptureSet
-        pose = self.planned + offsets
-        n = len(pose)
-        captures = CaptureSet(pose[:, :3], pose[:, 3], np.asarray(self.path.pitch, float), np.arange(n),
-                              self.path.camera)
-        return float(self.oracle.evaluate(captures, self.mesh, seed=int(seed % (2**31 - 1))).error_m)
+        from wrp_eval.recon.capture_io import captures_from_path
+        return float(self.ship.score(captures_from_path(self.path, offsets), seed).error_m)
 
 
 def campaign_oracle(campaign_dir: str | Path, config_dir: str | Path = ".") -> tuple[CampaignOracle, object]:
@@ -55,8 +50,7 @@ def campaign_oracle(campaign_dir: str | Path, config_dir: str | Path = ".") -> t
     from wrp_eval.campaign.store import TrialStore
     from wrp_eval.config import ExperimentConfig
     from wrp_eval.planning.path import Path as FlightPath
-    from wrp_eval.recon import make_oracle
-    from wrp_eval.ship.resolve import resolve_ship_full
+    from wrp_eval.recon.scene import scored_ship
     folder = Path(campaign_dir)
     store = TrialStore(folder)
     meta = store.read_meta()
@@ -64,10 +58,8 @@ def campaign_oracle(campaign_dir: str | Path, config_dir: str | Path = ".") -> t
         raise InputError(folder, "not a campaign folder (no campaign.json with its config)")
     config = ExperimentConfig.model_validate(meta["config"])
     path = FlightPath.load(folder / "path.json")
-    ship = resolve_ship_full(config.ship, config_dir)
-    oracle = make_oracle(config.oracle, config.campaign.oracle)
     planned = np.concatenate([np.asarray(path.positions, float), np.asarray(path.yaw, float)[:, None]], axis=1)
-    return CampaignOracle(path, ship.mesh, oracle, planned), store
+    return CampaignOracle(path, scored_ship(config, config_dir), planned), store
 
 
 def oracle_roughness(campaign_dir: str | Path, *, n_trials: int = 60, repeats: int = 5,

@@ -29,16 +29,14 @@ and <out>/boxplot.png. Re-running resumes the campaigns.
 """
 
 
-def oracle_error(config, path, config_dir: Path) -> dict:
-    """The oracle's verdict on the path flown exactly as planned (no wind): capture poses = viewpoints."""
-    from wrp_eval.recon import make_oracle
-    from wrp_eval.ship.resolve import resolve_ship_full
-    from wrp_eval.sim.captures import CaptureSet
-    ship = resolve_ship_full(config.ship, config_dir)
-    oracle = make_oracle(config.oracle, config.campaign.oracle)
-    captures = CaptureSet(np.asarray(path.positions), np.asarray(path.yaw), np.asarray(path.pitch),
-                          np.arange(len(path)), path.camera)
-    return oracle.evaluate(captures, ship.mesh, seed=0).to_json_dict()
+def oracle_error(config, path, config_dir: Path, ship=None) -> dict:
+    """The oracle's verdict (JSON dict) on the path flown exactly as planned (no wind): capture poses =
+    viewpoints, oracle seed 0. ship: a :class:`wrp_eval.recon.scene.ScoredShip` already built from ``config``
+    (saves resolving the ship again); none: built here."""
+    from wrp_eval.recon.capture_io import captures_from_path
+    from wrp_eval.recon.scene import scored_ship
+    ship = ship if ship is not None else scored_ship(config, config_dir)
+    return ship.score(captures_from_path(path), seed=0).to_json_dict()
 
 
 def resolve_inputs(config, section, config_dir: Path, checkpoint: str | None = None, campaign: str | None = None):
@@ -110,8 +108,12 @@ def run_optimize(config, section, config_dir: Path, out: Path, *, checkpoint=Non
     if e0 is None and section.e_original_source == "surrogate":
         e0 = float(surrogate.predict(np.zeros((1, len(path), 4)))[0])
         e0_source = "surrogate at zero offsets"
+    ship = None
+    if e0 is None or (use_oracle and section.oracle_error):
+        from wrp_eval.recon.scene import scored_ship
+        ship = scored_ship(config, config_dir)     # once for both verdicts: the wind-free and the WRP path
     if e0 is None:
-        verdict = oracle_error(config, path, config_dir)
+        verdict = oracle_error(config, path, config_dir, ship)
         if verdict["error_m"] is None:
             raise InputError("wrp", f"the oracle could not score the wind-free path ({verdict['reason']}); "
                                     "give wrp.e_original_m")
@@ -132,7 +134,7 @@ def run_optimize(config, section, config_dir: Path, out: Path, *, checkpoint=Non
     wrp_path = apply_offsets(path, result.offsets, {"wrp": {"kind": section.kind, "threshold_m": threshold,
                                                             "seed": seed}})
     if use_oracle and section.oracle_error:
-        verdict = oracle_error(config, wrp_path, config_dir)
+        verdict = oracle_error(config, wrp_path, config_dir, ship)
         table["oracle_error_m"] = verdict["error_m"]
         table["oracle"] = verdict
     else:
