@@ -70,8 +70,7 @@ def run_pipeline(config_path: Path, *, quiet: bool = True, smallest: bool = Fals
     from wrp_eval.ship.commands import ship_report
     from wrp_eval.ship.resolve import resolve_ship_full
     from wrp_eval.ship.rerun_log import save_ship_recording
-    from wrp_eval.surrogate.data import load_campaign_trials
-    from wrp_eval.surrogate.train import train_surrogate, write_outputs
+    from wrp_eval.surrogate.train import train_from_campaign
     from wrp_eval.wrp.commands import run_evaluate
 
     config = load_experiment(config_path)
@@ -113,10 +112,7 @@ def run_pipeline(config_path: Path, *, quiet: bool = True, smallest: bool = Fals
 
     surrogate_dir = Path(config.surrogate.out_dir or out / "surrogate")
     with Step(timings, "surrogate", "train the CNN surrogate on the campaign"):
-        data = load_campaign_trials(campaign_dir)
-        seed = config.surrogate.seed_or(config.run.seed)
-        trained = train_surrogate(data, config.surrogate, seed=seed, progress=not quiet)
-        write_outputs(trained, surrogate_dir)
+        trained, _ = train_from_campaign(config, campaign_dir, surrogate_dir, progress=not quiet)
         summary["surrogate"] = trained.metrics["test"]
 
     evaluate_dir = Path(config.wrp.evaluate.out_dir or out / "evaluate")

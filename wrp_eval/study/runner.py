@@ -1,8 +1,8 @@
 """Run a ``study:`` config: every variant of the base config through the stages it needs, one table.
 
 Per variant: ship -> plan -> [campaign -> surrogate -> ISWRP/SWRP] -> [random viewpoint offsets] -> oracle.
-The stages are called through their public functions (``plan``, ``run_campaign``, ``load_campaign_trials``,
-``train_surrogate``, ``write_outputs``, ``run_optimize``, ``oracle_error``), never re-implemented. Variants whose
+The stages are called through their public functions (``plan``, ``run_campaign``,
+``train_from_campaign``, ``run_optimize``, ``oracle_error``), never re-implemented. Variants whose
 ship / planning / wind / sim / campaign / oracle / surrogate sections and seed are equal share one campaign and
 one surrogate (Table 3's six WRPs are optimised against the same surrogate, as in the paper).
 
@@ -89,15 +89,12 @@ def training_key(config) -> str:
 def _train(config, path, config_dir: Path, folder: Path, quiet: bool) -> dict:
     """Campaign of ``path`` + surrogate; returns {campaign, checkpoint, trials, failed, surrogate test metrics}."""
     from wrp_eval.campaign.runner import run_campaign
-    from wrp_eval.surrogate.data import load_campaign_trials
-    from wrp_eval.surrogate.train import train_surrogate, write_outputs
+    from wrp_eval.surrogate.train import train_from_campaign
     campaign_dir, surrogate_dir = folder / "campaign", folder / "surrogate"
     start = time.perf_counter()
     camp = run_campaign(config, out_dir=campaign_dir, config_dir=config_dir, path=path, progress=not quiet)
     campaign_s = time.perf_counter() - start
-    seed = config.surrogate.seed_or(config.run.seed)
-    trained = train_surrogate(load_campaign_trials(campaign_dir), config.surrogate, seed=seed, progress=not quiet)
-    write_outputs(trained, surrogate_dir)
+    trained, _ = train_from_campaign(config, campaign_dir, surrogate_dir, progress=not quiet)
     return {"campaign": str(campaign_dir), "checkpoint": str(surrogate_dir / "surrogate.pt"), "trials": camp.done,
             "failed": camp.failed, "campaign_s": campaign_s,
             "surrogate_s": time.perf_counter() - start - campaign_s, "surrogate_test": trained.metrics["test"]}

@@ -29,9 +29,8 @@ def default_out_dir(config) -> Path:
 
 def _train(args: argparse.Namespace) -> int:
     from wrp_eval.config import load_experiment
-    from wrp_eval.surrogate.data import load_campaign_trials
     from wrp_eval.atomic import write_json_atomic
-    from wrp_eval.surrogate.train import cross_validate, train_surrogate, write_outputs
+    from wrp_eval.surrogate.train import CHECKPOINT_NAME, cross_validate, train_from_campaign
     from wrp_eval.campaign.backends import default_workers
     workers = args.workers if args.workers is not None else default_workers()
     from wrp_eval.errors import InputError
@@ -43,12 +42,10 @@ def _train(args: argparse.Namespace) -> int:
     section = config.surrogate
     campaign = Path(args.campaign) if args.campaign else default_campaign_dir(config)
     out = Path(args.out) if args.out else default_out_dir(config)
-    data = load_campaign_trials(campaign)
+    result, data = train_from_campaign(config, campaign, out, progress=not args.quiet)
     seed = section.seed_or(config.run.seed)
-    result = train_surrogate(data, section, seed=seed, progress=not args.quiet)
-    files = write_outputs(result, out)
     m = result.metrics["test"]
-    print(f"surrogate {files['checkpoint']}: test R^2 {m['r2']:.4f}, RMSE {m['rmse']:.4g} m, MAE {m['mae']:.4g} m "
+    print(f"surrogate {out / CHECKPOINT_NAME}: test R^2 {m['r2']:.4f}, RMSE {m['rmse']:.4g} m, MAE {m['mae']:.4g} m "
           f"on {m['n']} held-out trials ({result.metrics['n_used']} used of {data.n_trials}; "
           f"{result.metrics['epochs_run']} epochs, {result.seconds:.1f} s)")
     if args.cv:

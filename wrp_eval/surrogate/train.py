@@ -290,6 +290,19 @@ def cross_validate(data: TrialData, section: SurrogateSection = SurrogateSection
     return summary
 
 
+def train_from_campaign(config, campaign_dir: str | Path, out_dir: str | Path, progress: bool = False
+                        ) -> tuple[TrainResult, "TrialData"]:
+    """The training job of an ExperimentConfig: its ``surrogate:`` section fitted on a campaign folder's trials
+    (seed: ``surrogate.seed``, else ``run.seed``), outputs written to ``out_dir`` (:func:`write_outputs`).
+    Returns (result, the trials) -- what ``wrp-eval train``, ``wrp-eval run`` and the studies all do."""
+    from wrp_eval.surrogate.data import load_campaign_trials
+    data = load_campaign_trials(campaign_dir)
+    result = train_surrogate(data, config.surrogate, seed=config.surrogate.seed_or(config.run.seed),
+                             progress=progress)
+    write_outputs(result, out_dir)
+    return result, data
+
+
 def parity_plot(result: TrainResult, file: str | Path, title: str = "surrogate: held-out test trials") -> None:
     """Predicted vs oracle error of the test split, with the y = x line (PNG, written atomically)."""
     import matplotlib
