@@ -119,6 +119,14 @@ def _run_smallest(table, tmp_path, monkeypatch) -> tuple[dict, str]:
     doc = json.loads((out / "study.json").read_text())
     report = (out / "report.md").read_text()
     assert doc["smallest"] and f"Table {table}" in report
+    # run.rrd: one recording per variant, named <run>/<variant>, each with the ship and the planned views
+    from rerun.chunk import RrdReader
+    reader = RrdReader(str(out / "run.rrd"))
+    stores = {store.recording_id: store for store in reader.recordings()}
+    assert set(stores) == {f"paper-table{table}-smallest/{name}" for name in {r["variant"] for r in doc["rows"]}}
+    for store in stores.values():
+        entities = {chunk.entity_path for chunk in reader.stream(store=store)}
+        assert {"/ship/mesh", "/plan/tour", "/plan/views/0000"} <= entities
     header = next(line for line in report.splitlines() if line.startswith("| variant"))
     assert header.count("| paper ") == len(doc["columns"])           # the paper's column beside every one of ours
     for row in doc["rows"]:
@@ -190,3 +198,10 @@ def test_tables_4_and_5_smallest_offset_rows(tmp_path, monkeypatch):
         assert len(set(totals)) == 5 and all(0 < t <= n * 2.0 * np.sqrt(3) for t in totals)
         assert all(r["ours"]["wrp_time_s"] is None and r["paper"]["wrp_time_s"] is None for r in offset_rows)
         assert all(Path(r["folder"], f"offsets-{r['repetition']}", "path.json").is_file() for r in offset_rows)
+        # the offset paths are drawn beside their variant's plan in its recording
+        from rerun.chunk import RrdReader
+        reader = RrdReader(str(tmp_path / str(table) / "logs" / f"paper-table{table}-smallest" / "run.rrd"))
+        store = next(s for s in reader.recordings() if s.recording_id.endswith("/" + offset_rows[0]["variant"]))
+        entities = {chunk.entity_path for chunk in reader.stream(store=store)}
+        assert {f"/paths/offsets-{k}/tour" for k in range(1, 6)} <= entities
+        assert f"/paths/{offset_rows[0]['path']}/tour" in entities or offset_rows[0]["path"] == "plan"

@@ -155,10 +155,9 @@ def _cmd_run(args: argparse.Namespace) -> int:
     out = Path(summary["out"])
     print(f"\nwrp-eval run finished in {summary['timings_s']['total']:.0f} s.")
     print(f"Report:    {summary['report']}")
-    if "rows" in summary:   # a study: a table, no recording
+    if "rows" in summary:   # a study: a table, and one recording per variant
         print(f"Table:     {out / 'study.json'}  (the rows as JSON; per-variant paths under {out / 'study'})")
-    else:
-        print(f"Recording: {out / RUN_RECORDING}  (open it with: rerun {out / RUN_RECORDING})")
+    print(f"Recording: {out / RUN_RECORDING}  (open it with: rerun {out / RUN_RECORDING})")
     return 0
 
 

@@ -1,3 +1,4 @@
+import dataclasses
 import json
 
 import numpy as np
@@ -73,6 +74,14 @@ def test_cli_bad_config_exits_2(tmp_path, capsys):
 
 def test_rerun_recording_is_written(plans, proxies, tmp_path):
     from wrp_eval.planning.rerun_log import save_plan_recording
-    out = save_plan_recording(plans[("stylized", "ours")], proxies["stylized"], tmp_path / "plan.rrd")
+    from rerun.chunk import RrdReader
+    result = plans[("stylized", "ours")]
+    moved = dataclasses.replace(result.path, positions=result.path.positions + [0.0, 0.0, 1.0])
+    out = save_plan_recording(result, proxies["stylized"], tmp_path / "plan.rrd", other_paths={"wrp": moved})
     assert out.exists() and out.stat().st_size > 10_000
     assert not list(tmp_path.glob("*.tmp"))
+    entities = {chunk.entity_path for chunk in RrdReader(str(out)).stream()}
+    n = len(result.path)
+    for prefix in ("/plan", "/paths/wrp"):    # both paths: one frustum entity per view and a tour
+        assert {f"{prefix}/views/{i:04d}" for i in range(n)} <= entities and f"{prefix}/tour" in entities
+    assert f"/plan/views/{n:04d}" not in entities and "/plan/proxy" in entities

@@ -9,18 +9,35 @@ from pathlib import Path as FsPath
 import rerun as rr
 
 from wrp_eval.camera import camera_rotations
-from wrp_eval.planning.path import KIND_TRANSITION
+from wrp_eval.planning.path import KIND_TRANSITION, Path
 from wrp_eval.planning.planner import PlanResult
 from wrp_eval.ship.proxy import Proxy
 
 _FRUSTUM_DEPTH_M = 4.0  # drawn image-plane distance
 
 
+def _log_views(rec: rr.RecordingStream, prefix: str, path: Path, colours: list[list[int]],
+               tour_colour: list[int]) -> None:
+    """One frustum entity per view of ``path`` under ``prefix``/views/<i> and its tour as ``prefix``/tour."""
+    cam = path.camera
+    rot = camera_rotations(path.yaw, path.pitch)
+    for i in range(len(path)):  # one entity per view: rerun draws a frustum per Pinhole entity
+        rec.log(f"{prefix}/views/{i:04d}", rr.Transform3D(translation=path.positions[i], mat3x3=rot[i]),
+                static=True)
+        rec.log(f"{prefix}/views/{i:04d}", rr.Pinhole(focal_length=cam.focal_px,
+                                                      width=cam.image_width_px, height=cam.image_height_px,
+                                                      camera_xyz=rr.ViewCoordinates.RDF,
+                                                      image_plane_distance=_FRUSTUM_DEPTH_M, color=colours[i]),
+                static=True)
+    rec.log(f"{prefix}/tour", rr.LineStrips3D([path.positions], colors=[tour_colour]), static=True)
+
+
 def save_plan_recording(result: PlanResult, proxy: Proxy, file: str | FsPath,
                         application_id: str = "wrp-eval",
-                        recording_id: str | None = None) -> FsPath:
+                        recording_id: str | None = None, other_paths: dict[str, Path] | None = None) -> FsPath:
     """Write ``file`` atomically with entities plan/proxy, plan/no_fly, plan/samples, plan/candidates,
-    plan/views/<i> (frusta), plan/tour."""
+    plan/views/<i> (frusta), plan/tour; and each of ``other_paths`` (e.g. the WRP moved from this plan) as
+    paths/<name>/views/<i> and paths/<name>/tour."""
     file = FsPath(file)
     file.parent.mkdir(parents=True, exist_ok=True)
     tmp = file.with_name(f".{file.name}.{os.getpid()}.tmp")
@@ -38,17 +55,11 @@ def save_plan_recording(result: PlanResult, proxy: Proxy, file: str | FsPath,
         rec.log("plan/candidates", rr.Points3D(result.candidates.positions, radii=0.2,
                                                colors=[[150, 150, 150]]), static=True)
     path = result.path
-    cam = path.camera
-    rot = camera_rotations(path.yaw, path.pitch)
-    for i in range(len(path)):  # one entity per chosen view: rerun draws a frustum per Pinhole entity
-        colour = [255, 160, 0] if path.kind[i] == KIND_TRANSITION else [30, 120, 255]
-        rec.log(f"plan/views/{i:04d}", rr.Transform3D(translation=path.positions[i], mat3x3=rot[i]), static=True)
-        rec.log(f"plan/views/{i:04d}", rr.Pinhole(focal_length=cam.focal_px,
-                                                  width=cam.image_width_px, height=cam.image_height_px,
-                                                  camera_xyz=rr.ViewCoordinates.RDF,
-                                                  image_plane_distance=_FRUSTUM_DEPTH_M, color=colour),
-                static=True)
-    rec.log("plan/tour", rr.LineStrips3D([path.positions], colors=[[255, 255, 255]]), static=True)
+    _log_views(rec, "plan", path, [[255, 160, 0] if k == KIND_TRANSITION else [30, 120, 255] for k in path.kind],
+               [255, 255, 255])
+    for name, other in (other_paths or {}).items():
+        rec.log(f"paths/{name}", rr.ViewCoordinates.RIGHT_HAND_Z_UP, static=True)
+        _log_views(rec, f"paths/{name}", other, [[230, 40, 200]] * len(other), [230, 40, 200])
     rec.flush()
     rec.disconnect()
     tmp.replace(file)

@@ -6,8 +6,10 @@ The stages are called through their public functions (``plan``, ``run_campaign``
 ship / planning / wind / sim / campaign / oracle / surrogate sections and seed are equal share one campaign and
 one surrogate (Table 3's six WRPs are optimised against the same surrogate, as in the paper).
 
-Outputs under ``logs/<run.name>/``: ``study/<variant>/`` (path.json per path, wrp metrics), ``study/shared-<key>/``
-(campaign, surrogate), ``study.json`` (every row, ours and the paper's), ``report.md``.
+Outputs under ``logs/<run.name>/``: ``study/<variant>/`` (path.json per path, wrp metrics, ship.rrd + plan.rrd),
+``study/shared-<key>/`` (campaign, surrogate), ``study.json`` (every row, ours and the paper's), ``report.md`` and
+``run.rrd`` (one rerun recording per variant, id ``<run>/<variant>``: ship, plan, and the WRP or offset paths under
+``paths/<name>``).
 """
 
 from __future__ import annotations
@@ -130,7 +132,10 @@ def run_study(config, config_path: Path, *, smallest: bool = False, quiet: bool 
     from wrp_eval.planning.planner import plan
     from wrp_eval.report import write_study_report
     from wrp_eval.ship.resolve import resolve_ship_full
+    from wrp_eval.pipeline import RUN_RECORDING, merge_recordings
+    from wrp_eval.planning.rerun_log import save_plan_recording
     from wrp_eval.recon.scene import scored_ship
+    from wrp_eval.ship.rerun_log import save_ship_recording
     from wrp_eval.wrp.commands import oracle_error, run_optimize
     from wrp_eval.wrp.config import WrpSection
 
@@ -143,7 +148,7 @@ def run_study(config, config_path: Path, *, smallest: bool = False, quiet: bool 
     job_start = time.perf_counter()
     shared: dict[str, dict] = {}
     optimised: dict[tuple, tuple] = {}
-    rows, figures, timings = [], [], {}
+    rows, figures, timings, recordings = [], [], {}, []
     for number, (variant, cfg) in enumerate(built, 1):
         start = time.perf_counter()
         print(f"[wrp-eval run] study {number}/{len(built)}: {variant.name} ...", flush=True)
@@ -182,6 +187,7 @@ def run_study(config, config_path: Path, *, smallest: bool = False, quiet: bool 
         half_m = box.position_half_width_m if box.position_half_width_m is not None else pert.position_half_width_m
         half_deg = box.yaw_half_width_deg if box.yaw_half_width_deg is not None else pert.yaw_half_width_deg
         scorer = None    # the variant's ship + oracle, built at the first row that needs a verdict
+        shown = {variant.path: measured} if variant.path != "plan" else {}   # paths drawn beside the plan
         for rep in range(variant.repetitions):
             row_path, row_verdict, cols = measured, verdict, dict(wrp_cols)
             if variant.random_offsets:
@@ -192,6 +198,7 @@ def run_study(config, config_path: Path, *, smallest: bool = False, quiet: bool 
                                                                               "position_half_width_m": half_m,
                                                                               "yaw_half_width_deg": half_deg}})
                 row_path.save(folder / f"offsets-{rep + 1}" / "path.json")
+                shown[f"offsets-{rep + 1}"] = row_path
                 cols["position_offset_m"], cols["rotation_offset_deg"] = offset_totals(offsets)
                 cols["offset_rate_pct"], cols["wrp_time_s"] = 100.0, None   # random rows: no optimisation time
                 cols["offsets_half_width"] = {"position_m": half_m, "yaw_deg": half_deg}
@@ -206,6 +213,11 @@ def run_study(config, config_path: Path, *, smallest: bool = False, quiet: bool 
                          "folder": str(folder)})
         if study.figures:
             figures.append((variant.name, measured, ship, folder))
+        # one rerun recording per variant (its own recording id): ship, plan, and the WRP / offset paths
+        recording_id = f"{run_name}/{variant.name}"
+        save_ship_recording(ship, folder / "ship.rrd", recording_id=recording_id)
+        save_plan_recording(result, ship.proxy, folder / "plan.rrd", recording_id=recording_id, other_paths=shown)
+        recordings += [folder / "ship.rrd", folder / "plan.rrd"]
         timings[variant.name] = time.perf_counter() - start
         print(f"[wrp-eval run] study {number}/{len(built)}: {variant.name}: done in {timings[variant.name]:.1f} s",
               flush=True)
@@ -216,6 +228,7 @@ def run_study(config, config_path: Path, *, smallest: bool = False, quiet: bool 
                               "yaw_half_width_deg": box.yaw_half_width_deg},
            "shared_training": shared, "timings_s": timings}
     write_json_atomic(out / "study.json", doc)
+    merge_recordings(recordings, out / RUN_RECORDING)
     report = write_study_report(out, doc, figures)
     doc["timings_s"]["total"] = time.perf_counter() - job_start
     write_json_atomic(out / "study.json", doc)
