@@ -6,12 +6,14 @@ Writes <out>/surrogate.pt (state_dict + metadata, loaded with torch.load(weights
 <out>/metrics.json (R^2, RMSE, MAE of the held-out test trials; train/val too) and <out>/parity.png.
 With --cv K also K-fold cross-validation (K more trainings; every trial tested once) into <out>/cv.json:
 one test split's R^2 scatters widely on heavy-tailed errors, the fold mean and range do not. The folds train
-W at a time in separate processes (default: one per CPU core); the figures do not depend on W.
+with the model itself, W at a time in separate processes (default: one per CPU core); the figures do not depend
+on W.
 """
 
 from __future__ import annotations
 
 import argparse
+import time
 from pathlib import Path
 
 
@@ -30,7 +32,9 @@ def default_out_dir(config) -> Path:
 def _train(args: argparse.Namespace) -> int:
     from wrp_eval.config import load_experiment
     from wrp_eval.atomic import write_json_atomic
-    from wrp_eval.surrogate.train import CHECKPOINT_NAME, cross_validate, train_from_campaign
+    from wrp_eval.surrogate.data import load_campaign_trials
+    from wrp_eval.surrogate.train import (CHECKPOINT_NAME, fold_splits, fold_summary, train_from_campaign,
+                                          train_in_parallel, write_outputs)
     from wrp_eval.campaign.backends import default_workers
     workers = args.workers if args.workers is not None else default_workers()
     from wrp_eval.errors import InputError
@@ -42,14 +46,25 @@ def _train(args: argparse.Namespace) -> int:
     section = config.surrogate
     campaign = Path(args.campaign) if args.campaign else default_campaign_dir(config)
     out = Path(args.out) if args.out else default_out_dir(config)
-    result, data = train_from_campaign(config, campaign, out, progress=not args.quiet)
     seed = section.seed_or(config.run.seed)
+    if args.cv:   # the model and the K folds train together, W at a time
+        data = load_campaign_trials(campaign)
+        splits = fold_splits(data, section, seed, args.cv)
+        if not args.quiet:
+            print(f"training the surrogate and {args.cv} cross-validation folds on {data.n_trials} trials, "
+                  f"{min(workers, args.cv + 1)} at a time ...", flush=True)
+        start = time.perf_counter()
+        results = train_in_parallel(data, section, seed, [None, *splits], workers)
+        result = results[0]
+        write_outputs(result, out)
+        cv = fold_summary(results[1:], seed, time.perf_counter() - start, min(workers, args.cv + 1))
+    else:
+        result, data = train_from_campaign(config, campaign, out, progress=not args.quiet)
     m = result.metrics["test"]
     print(f"surrogate {out / CHECKPOINT_NAME}: test R^2 {m['r2']:.4f}, RMSE {m['rmse']:.4g} m, MAE {m['mae']:.4g} m "
           f"on {m['n']} held-out trials ({result.metrics['n_used']} used of {data.n_trials}; "
           f"{result.metrics['epochs_run']} epochs, {result.seconds:.1f} s)")
     if args.cv:
-        cv = cross_validate(data, section, seed=seed, folds=args.cv, workers=workers)
         write_json_atomic(out / "cv.json", cv)
         print(f"cross-validation {out / 'cv.json'}: {args.cv} folds, test R^2 mean {cv['r2_mean']:.4f} "
               f"(min {cv['r2_min']:.4f}, max {cv['r2_max']:.4f}), pooled {cv['pooled']['r2']:.4f}, "

@@ -232,8 +232,13 @@ def train_surrogate(data: TrialData, section: SurrogateSection = SurrogateSectio
                        preds["test"][0], preds["test"][1], seconds)
 
 
-def _fold_splits(rows: np.ndarray, section: SurrogateSection, seed: int, folds: int) -> list[tuple]:
-    """(train, val, test) trial indices of each fold: test = the k-th of ``folds`` seeded parts of ``rows``."""
+def fold_splits(data: TrialData, section: SurrogateSection, seed: int, folds: int) -> list[tuple]:
+    """(train, val, test) trial indices of each of ``folds`` folds: fold k tests on the k-th of ``folds`` seeded
+    parts of the training rows (:func:`usable_rows`); of the rest, ``val_fraction`` validates and the others
+    train. Every training row is a test trial exactly once."""
+    if folds < 2:
+        raise InputError("surrogate cross-validation", f"folds must be >= 2, got {folds}")
+    _, rows = usable_rows(data, section)
     rng = np.random.default_rng(np.random.SeedSequence(seed, spawn_key=(1,)))
     parts = np.array_split(rng.permutation(rows), folds)
     n_val = max(1, int(round(section.val_fraction * rows.size)))
@@ -244,11 +249,36 @@ def _fold_splits(rows: np.ndarray, section: SurrogateSection, seed: int, folds: 
     return splits
 
 
-def _train_fold(data: TrialData, section: SurrogateSection, seed: int, split: tuple) -> tuple[dict, np.ndarray,
-                                                                                            np.ndarray]:
-    """(test metrics with test_trials, test_true, test_pred) of one fold (module level: pool processes call it)."""
-    result = train_surrogate(data, section, seed=seed, split=split)
-    return {**result.metrics["test"], "test_trials": split[2].tolist()}, result.test_true, result.test_pred
+def train_in_parallel(data: TrialData, section: SurrogateSection, seed: int, splits: list, workers: int = 1
+                      ) -> list[TrainResult]:
+    """:func:`train_surrogate` once per entry of ``splits`` (an explicit (train, val, test) split, or None for
+    the seeded default split), ``workers`` at a time in spawned processes (each with ``section.threads`` torch
+    threads). Each training is seeded the same way wherever it runs: the results equal the serial ones."""
+    if workers < 1:
+        raise InputError("surrogate training", f"workers must be >= 1, got {workers}")
+    if workers == 1 or len(splits) == 1:
+        return [train_surrogate(data, section, seed=seed, split=split) for split in splits]
+    import multiprocessing
+    from concurrent.futures import ProcessPoolExecutor
+    # spawn, not fork: no forked copy of torch's thread pool; the data travel to each process once per job
+    with ProcessPoolExecutor(max_workers=min(workers, len(splits)),
+                             mp_context=multiprocessing.get_context("spawn")) as pool:
+        jobs = [pool.submit(train_surrogate, data, section, seed, False, split) for split in splits]
+        return [job.result() for job in jobs]
+
+
+def fold_summary(results: list[TrainResult], seed: int, seconds: float, workers: int) -> dict:
+    """The cross-validation document of the fold trainings ``results`` (see :func:`cross_validate`)."""
+    per_fold = [{**r.metrics["test"], "test_trials": list(r.split["test"])} for r in results]
+    pooled = regression_metrics(np.concatenate([r.test_true for r in results]),
+                                np.concatenate([r.test_pred for r in results]))
+    summary = {"folds": len(results), "seed": seed, "per_fold": per_fold, "pooled": pooled,
+               "seconds": seconds, "workers": int(workers)}
+    for key in ("r2", "rmse", "mae"):
+        values = np.array([m[key] for m in per_fold], float)
+        summary[f"{key}_mean"], summary[f"{key}_min"], summary[f"{key}_max"] = (
+            float(values.mean()), float(values.min()), float(values.max()))
+    return summary
 
 
 def cross_validate(data: TrialData, section: SurrogateSection = SurrogateSection(), seed: int = 0,
@@ -257,37 +287,14 @@ def cross_validate(data: TrialData, section: SurrogateSection = SurrogateSection
 
     One R^2 from one random test split of a few hundred trials scatters widely when the error is heavy-tailed
     (measured on 1,500 flights of the surrogate bench: 0.85, 0.92 and 0.95 for split seeds 2, 1, 0), so the
-    mean and range over folds are the figure to quote. Fold k tests on the k-th of ``folds`` seeded parts of
-    the usable trials; of the rest, ``val_fraction`` validates (early stopping) and the others train.
-    workers > 1 trains that many folds at once in spawned processes (each with ``section.threads`` torch
-    threads); every fold's training is seeded the same way either way. Returns per-fold R^2 / RMSE / MAE / n /
-    test_trials, their mean, min and max, the pooled figures of all out-of-fold predictions, seconds.
+    mean and range over folds are the figure to quote. Folds: :func:`fold_splits`; workers > 1 trains that
+    many folds at once (:func:`train_in_parallel`, same figures). Returns per-fold R^2 / RMSE / MAE / n /
+    test_trials, their mean, min and max, the pooled figures of all out-of-fold predictions, seconds, workers.
     """
-    if folds < 2:
-        raise InputError("surrogate cross-validation", f"folds must be >= 2, got {folds}")
-    if workers < 1:
-        raise InputError("surrogate cross-validation", f"workers must be >= 1, got {workers}")
     start = time.perf_counter()
-    _, rows = usable_rows(data, section)
-    splits = _fold_splits(rows, section, seed, folds)
-    if workers == 1:
-        results = [_train_fold(data, section, seed, split) for split in splits]
-    else:
-        import multiprocessing
-        from concurrent.futures import ProcessPoolExecutor
-        # spawn, not fork: no forked copy of torch's thread pool; the data travel to each process once per fold
-        with ProcessPoolExecutor(max_workers=min(workers, folds),
-                                 mp_context=multiprocessing.get_context("spawn")) as pool:
-            results = list(pool.map(_train_fold, [data] * folds, [section] * folds, [seed] * folds, splits))
-    per_fold = [r[0] for r in results]
-    pooled = regression_metrics(np.concatenate([r[1] for r in results]), np.concatenate([r[2] for r in results]))
-    summary = {"folds": folds, "seed": seed, "per_fold": per_fold, "pooled": pooled,
-               "seconds": time.perf_counter() - start, "workers": int(min(workers, folds))}
-    for key in ("r2", "rmse", "mae"):
-        values = np.array([m[key] for m in per_fold], float)
-        summary[f"{key}_mean"], summary[f"{key}_min"], summary[f"{key}_max"] = (
-            float(values.mean()), float(values.min()), float(values.max()))
-    return summary
+    splits = fold_splits(data, section, seed, folds)
+    results = train_in_parallel(data, section, seed, splits, workers)
+    return fold_summary(results, seed, time.perf_counter() - start, min(workers, folds))
 
 
 def train_from_campaign(config, campaign_dir: str | Path, out_dir: str | Path, progress: bool = False

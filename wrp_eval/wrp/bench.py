@@ -25,7 +25,7 @@ def run_bench() -> list[BenchRecord]:
     from wrp_eval.surrogate.bench import bench_surrogate
     from wrp_eval.wrp.optimize import WrpParams, interval_optimise, sample_radii
     torch.set_num_threads(1)
-    result, data, what = bench_surrogate()
+    result, data, what, _ = bench_surrogate()
     s = result.surrogate
     n = s.n_views
     e0 = float(s.predict(np.zeros((1, n, 4)))[0])
