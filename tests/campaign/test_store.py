@@ -6,7 +6,7 @@ import numpy as np
 import pytest
 
 from wrp_eval.campaign.config import CampaignSection
-from wrp_eval.campaign.records import TrialOutcome, column_array, make_record
+from wrp_eval.campaign.records import TrialOutcome, column_array, make_record, pitch_array
 from wrp_eval.campaign.sampling import trial_inputs
 from wrp_eval.campaign.store import TrialStore
 from wrp_eval.errors import InputError
@@ -19,7 +19,7 @@ def records(ids, n_views=3, raised=()):
         inp = trial_inputs(section, 1, k, n_views)
         outcome = None if k in raised else TrialOutcome(
             flown_offsets=inp.commanded_offsets + k, metrics={"error_m": 0.1 * k}, trajectory=np.zeros((5, 3)),
-            wind_at_views=np.ones((n_views, 3)))
+            wind_at_views=np.ones((n_views, 3)), camera_pitch=-0.5 - 0.01 * k + np.zeros(n_views))
         out.append(make_record(inp, outcome, root_seed=1, path_digest="p", n_views=n_views, attempts=1,
                                trial_s=0.0, worker="w", finished_unix=0.0, error="boom" if k in raised else None))
     return out
@@ -49,3 +49,19 @@ def test_a_second_writer_is_refused(tmp_path):
             TrialStore(tmp_path).acquire()
     with TrialStore(tmp_path):  # released: fine again
         pass
+
+
+def test_achieved_pitch_round_trips_and_old_chunks_read_as_nan(tmp_path):
+    import pyarrow as pa
+    import pyarrow.parquet as pq
+    with TrialStore(tmp_path) as store:
+        store.append(records([0, 1, 2], raised=(1,)))
+    # a chunk written before the camera_pitch column existed (earlier campaigns): same store, column absent
+    old = store.read_table().drop_columns(["camera_pitch"])
+    old = old.set_column(0, "trial_id", pa.array([5, 6, 7], pa.int64()))
+    pq.write_table(old, store.trials_dir / "chunk-99999999.parquet")
+    table = TrialStore(tmp_path).read_table()
+    pitch = pitch_array(table)
+    assert pitch.shape == (6, 3)
+    np.testing.assert_allclose(pitch[[0, 2]], [[-0.5] * 3, [-0.52] * 3])
+    assert np.all(np.isnan(pitch[1])) and np.all(np.isnan(pitch[3:]))    # raised trial; chunk without the column

@@ -103,7 +103,8 @@ class FlightEvaluator:
                        "completeness": recon.completeness, "precision": recon.precision, "fscore": recon.fscore,
                        "registered_fraction": recon.registered_views / max(1, len(self.path))}
             outcomes.append(TrialOutcome(
-                flown_offsets=flown[i], metrics=metrics, failed=bool(result.failed[i] or recon.failed),
+                flown_offsets=flown[i], camera_pitch=np.where(taken, result.camera_pitch[i], np.nan),
+                metrics=metrics, failed=bool(result.failed[i] or recon.failed),
                 reason="; ".join(reasons), trajectory=trajectories[i], wind_at_views=wind_at_views[i],
                 timings={"flight_s": flight_s, "oracle_s": time.perf_counter() - t0}))
         return outcomes

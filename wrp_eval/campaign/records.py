@@ -24,7 +24,8 @@ class TrialOutcome:
     views not taken; metrics: oracle figures by name (``METRIC_NAMES``; missing ones are stored as NaN);
     failed/reason: the flight or the reconstruction failed (a result, not an error); trajectory (m, 3) m:
     down-sampled flown positions; wind_at_views (n_views, 3) m/s: the wind felt at each capture;
-    timings: seconds by phase (e.g. flight_s, oracle_s)."""
+    timings: seconds by phase (e.g. flight_s, oracle_s); camera_pitch (n_views,) rad: the gimbal pitch
+    achieved at each capture (the planned one unless the gimbal saturated), NaN for views not taken."""
 
     flown_offsets: np.ndarray
     metrics: dict[str, float]
@@ -33,6 +34,7 @@ class TrialOutcome:
     trajectory: np.ndarray = field(default_factory=lambda: np.zeros((0, 3)))
     wind_at_views: np.ndarray | None = None
     timings: dict[str, float] = field(default_factory=dict)
+    camera_pitch: np.ndarray | None = None
 
 
 def _nested(k: int) -> pa.DataType:
@@ -58,6 +60,7 @@ SCHEMA = pa.schema([
     pa.field("disturbance", _nested(4)),
     # flown
     pa.field("flown_offsets", _nested(4)),
+    pa.field("camera_pitch", pa.list_(pa.float64())),   # rad per view; null in campaigns stored before it
     pa.field("wind_at_views", _nested(3)),
     pa.field("trajectory", _nested(3)),
     # oracle
@@ -96,12 +99,14 @@ def make_record(inputs, outcome: TrialOutcome | None, *, root_seed: int, path_di
     }
     if outcome is None:
         nan = np.full((n_views, 4), np.nan)
-        row.update({"flown_offsets": _rows(nan, 4), "wind_at_views": None, "trajectory": None,
+        row.update({"flown_offsets": _rows(nan, 4), "camera_pitch": None, "wind_at_views": None, "trajectory": None,
                     **{m: float("nan") for m in METRIC_NAMES}, "failed": True,
                     "failure_reason": "error", "error": error, "flight_s": None, "oracle_s": None})
         return row
     row.update({
-        "flown_offsets": _rows(outcome.flown_offsets, 4), "wind_at_views": _rows(outcome.wind_at_views, 3),
+        "flown_offsets": _rows(outcome.flown_offsets, 4),
+        "camera_pitch": None if outcome.camera_pitch is None else np.asarray(outcome.camera_pitch, float).tolist(),
+        "wind_at_views": _rows(outcome.wind_at_views, 3),
         "trajectory": _rows(outcome.trajectory, 3),
         **{m: float(outcome.metrics.get(m, float("nan"))) for m in METRIC_NAMES},
         "failed": bool(outcome.failed), "failure_reason": outcome.reason, "error": None,
@@ -125,4 +130,16 @@ def column_array(table: pa.Table, name: str) -> np.ndarray:
     if valid.any():
         values = pc.list_flatten(pc.list_flatten(col.filter(pa.array(valid)))).to_numpy(zero_copy_only=False)
         out[valid] = values.reshape(-1, n, k)
+    return out
+
+
+def pitch_array(table: pa.Table) -> np.ndarray:
+    """(rows, n_views) achieved gimbal pitch (rad) of the ``camera_pitch`` column; NaN where a view was not
+    taken, the trial raised, or the campaign predates the column (then use the planned pitch)."""
+    col = table.column("camera_pitch").combine_chunks()
+    n = int(pc.max(table.column("n_views")).as_py()) if len(table) else 0
+    out = np.full((len(table), n), np.nan)
+    valid = col.is_valid().to_numpy(zero_copy_only=False)
+    if valid.any():
+        out[valid] = pc.list_flatten(col.filter(pa.array(valid))).to_numpy(zero_copy_only=False).reshape(-1, n)
     return out

@@ -13,15 +13,20 @@ from wrp_eval.sim.captures import CaptureSet
 CAPTURE_COLUMNS = ("trial", "view", "taken", "x_m", "y_m", "z_m", "yaw_deg", "pitch_deg")
 
 
-def captures_from_path(path: Path, offsets: np.ndarray | None = None) -> CaptureSet:
+def captures_from_path(path: Path, offsets: np.ndarray | None = None, pitch: np.ndarray | None = None
+                       ) -> CaptureSet:
     """Every view of a path as a capture set: the planned poses (a windless, perfectly flown trial), moved by
-    ``offsets`` (n, 4: dx, dy, dz m, dyaw rad) when given; the gimbal at its planned pitch."""
+    ``offsets`` (n, 4: dx, dy, dz m, dyaw rad) when given; the gimbal at ``pitch`` (n,) rad where given and
+    finite (an achieved pitch from a campaign), else at its planned pitch."""
     pose = np.concatenate([np.asarray(path.positions, dtype=float), np.asarray(path.yaw, dtype=float)[:, None]],
                           axis=1)
     if offsets is not None:
         pose = pose + np.asarray(offsets, dtype=float).reshape(pose.shape)
-    return CaptureSet(pose[:, :3], pose[:, 3], np.asarray(path.pitch, dtype=float), np.arange(len(path)),
-                      path.camera)
+    planned_pitch = np.asarray(path.pitch, dtype=float)
+    if pitch is not None:
+        pitch = np.asarray(pitch, dtype=float).reshape(planned_pitch.shape)
+        planned_pitch = np.where(np.isfinite(pitch), pitch, planned_pitch)
+    return CaptureSet(pose[:, :3], pose[:, 3], planned_pitch, np.arange(len(path)), path.camera)
 
 
 def captures_from_parquet(file: str | FsPath, trial: int, path: Path) -> CaptureSet:

@@ -17,8 +17,10 @@ imply the surrogate knows that (trials move every viewpoint at once). This draws
 training box around the planned path, scores each with the oracle and the surrogate, and compares the changes
 against the unmoved path: Spearman rank correlation and both spreads.
 
-Both re-score with the PLANNED gimbal pitch (the store keeps no achieved pitch; it differs only where the
-gimbal saturated) and are estimates from a finite sample, returned with their settings.
+The roughness re-scores each trial with the gimbal pitch it achieved (the store's ``camera_pitch``; campaigns
+stored before that column fall back to the planned pitch, which differs only where the gimbal saturated); the
+single-viewpoint moves use the planned pitch (they are moves of the plan). Both are estimates from a finite
+sample, returned with their settings.
 """
 
 from __future__ import annotations
@@ -39,10 +41,11 @@ class CampaignOracle:
     ship: object
     planned: np.ndarray      # (n, 4) x, y, z m, yaw rad
 
-    def error(self, offsets: np.ndarray, seed: int) -> float:
-        """Oracle error_m (m) of the path flown at planned + ``offsets`` (n, 4), every view taken."""
+    def error(self, offsets: np.ndarray, seed: int, pitch: np.ndarray | None = None) -> float:
+        """Oracle error_m (m) of the path flown at planned + ``offsets`` (n, 4), every view taken, the gimbal at
+        ``pitch`` (n,) rad where finite (a trial's achieved pitch), else at the planned pitch."""
         from wrp_eval.recon.capture_io import captures_from_path
-        return float(self.ship.score(captures_from_path(self.path, offsets), seed).error_m)
+        return float(self.ship.score(captures_from_path(self.path, offsets, pitch), seed).error_m)
 
 
 def campaign_oracle(campaign_dir: str | Path, config_dir: str | Path = ".") -> tuple[CampaignOracle, object]:
@@ -72,12 +75,13 @@ def oracle_roughness(campaign_dir: str | Path, *, n_trials: int = 60, repeats: i
     noise_var_m2 (mean within-trial variance), noise_std_m, total_var_m2 (variance of error_m over every trial
     that did not fail), r2_ceiling, and the settings.
     """
-    from wrp_eval.campaign.records import column_array
+    from wrp_eval.campaign.records import column_array, pitch_array
     if repeats < 2:
         raise InputError("oracle_roughness", f"repeats must be >= 2 to measure a variance, got {repeats}")
     scorer, store = campaign_oracle(campaign_dir, config_dir)
-    table = store.read_table(["n_views", "flown_offsets", "error_m", "failed", "oracle_seed"])
+    table = store.read_table(["n_views", "flown_offsets", "camera_pitch", "error_m", "failed", "oracle_seed"])
     flown = column_array(table, "flown_offsets")
+    pitch = pitch_array(table)       # NaN (-> planned pitch) in campaigns stored before the column
     error = table.column("error_m").to_numpy(zero_copy_only=False).astype(float)
     failed = table.column("failed").to_numpy(zero_copy_only=False).astype(bool)
     oracle_seed = table.column("oracle_seed").to_numpy().astype(np.int64)
@@ -92,7 +96,7 @@ def oracle_roughness(campaign_dir: str | Path, *, n_trials: int = 60, repeats: i
         for rep in range(repeats):
             jitter = np.concatenate([rng.normal(0.0, position_jitter_m, (n, 3)),
                                      rng.normal(0.0, yaw_jitter_rad, (n, 1))], axis=1)
-            scores[row, rep] = scorer.error(flown[trial] + jitter, oracle_seed[trial])
+            scores[row, rep] = scorer.error(flown[trial] + jitter, oracle_seed[trial], pitch[trial])
     finite = np.all(np.isfinite(scores), axis=1)
     if not finite.any():
         raise InputError(campaign_dir, "the oracle returned no finite error on the re-scored trials")
