@@ -110,8 +110,11 @@ class CampaignRecorder:
         taken = np.all(np.isfinite(flown), axis=1)
         capture = self.planned[taken] + flown[taken, :3]
         if capture.size:
-            strips = frustum_strips(capture, self.planned_yaw[taken] + flown[taken, 3], self.planned_pitch[taken],
-                                    *self.half_fov)
+            pitch = self.planned_pitch[taken]
+            if record.get("camera_pitch"):    # the achieved pitch (absent in campaigns stored before it)
+                achieved = np.asarray(record["camera_pitch"], dtype=float)[taken]
+                pitch = np.where(np.isfinite(achieved), achieved, pitch)
+            strips = frustum_strips(capture, self.planned_yaw[taken] + flown[taken, 3], pitch, *self.half_fov)
             rec.log("world/trial/frusta", rr.LineStrips3D(strips, colors=[[255, 220, 0]], radii=0.03))
             wind = record.get("wind_at_views")
             if wind:
