@@ -112,7 +112,7 @@ def run_pipeline(config_path: Path, *, quiet: bool = True, smallest: bool = Fals
 
     surrogate_dir = Path(config.surrogate.out_dir or out / "surrogate")
     with Step(timings, "surrogate", "train the CNN surrogate on the campaign"):
-        trained, _ = train_from_campaign(config, campaign_dir, surrogate_dir, progress=not quiet)
+        trained, _, _ = train_from_campaign(config, campaign_dir, surrogate_dir, progress=not quiet)
         summary["surrogate"] = trained.metrics["test"]
 
     evaluate_dir = Path(config.wrp.evaluate.out_dir or out / "evaluate")

@@ -6,7 +6,7 @@ import numpy as np
 import pytest
 
 from wrp_eval.campaign.config import CampaignSection
-from wrp_eval.campaign.records import TrialOutcome, column_array, make_record, pitch_array
+from wrp_eval.campaign.records import TrialOutcome, column_array, make_record
 from wrp_eval.campaign.sampling import trial_inputs
 from wrp_eval.campaign.store import TrialStore
 from wrp_eval.errors import InputError
@@ -61,7 +61,7 @@ def test_achieved_pitch_round_trips_and_old_chunks_read_as_nan(tmp_path):
     old = old.set_column(0, "trial_id", pa.array([5, 6, 7], pa.int64()))
     pq.write_table(old, store.trials_dir / "chunk-99999999.parquet")
     table = TrialStore(tmp_path).read_table()
-    pitch = pitch_array(table)
+    pitch = column_array(table, "camera_pitch")
     assert pitch.shape == (6, 3)
     np.testing.assert_allclose(pitch[[0, 2]], [[-0.5] * 3, [-0.52] * 3])
     assert np.all(np.isnan(pitch[1])) and np.all(np.isnan(pitch[3:]))    # raised trial; chunk without the column

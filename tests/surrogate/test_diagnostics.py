@@ -47,11 +47,11 @@ def test_ceiling_is_one_without_jitter_and_below_one_with_it(campaign_dir):
 
 def test_stored_trials_rescore_to_their_stored_error(campaign_dir):
     # the stored flown offsets, achieved pitch and oracle seed are the whole input of the stored error
-    from wrp_eval.campaign.records import column_array, pitch_array
+    from wrp_eval.campaign.records import column_array
     from wrp_eval.surrogate.diagnostics import campaign_oracle
     scorer, store = campaign_oracle(campaign_dir)
     table = store.read_table(["n_views", "flown_offsets", "camera_pitch", "error_m", "oracle_seed"])
-    flown, pitch = column_array(table, "flown_offsets"), pitch_array(table)
+    flown, pitch = column_array(table, "flown_offsets"), column_array(table, "camera_pitch")
     error = table.column("error_m").to_numpy(zero_copy_only=False)
     seeds = table.column("oracle_seed").to_pylist()
     complete = np.flatnonzero(np.all(np.isfinite(flown), axis=(1, 2)) & np.isfinite(error))

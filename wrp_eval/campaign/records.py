@@ -120,26 +120,19 @@ def records_to_table(records: list[dict]) -> pa.Table:
 
 
 def column_array(table: pa.Table, name: str) -> np.ndarray:
-    """(rows, n_views, k) float array of a per-viewpoint column (``commanded_offsets``, ``flown_offsets``,
-    ``disturbance``, ``wind_at_views``); a null cell (a trial that raised) becomes NaN rows."""
+    """Float array of a per-viewpoint column: (rows, n_views, k) for the vector columns (``commanded_offsets``,
+    ``flown_offsets``, ``disturbance``, ``wind_at_views``), (rows, n_views) for ``camera_pitch``. A null cell
+    (a trial that raised; ``camera_pitch`` in chunks stored before the column: use the planned pitch) becomes
+    NaN."""
     col = table.column(name).combine_chunks()
-    k = col.type.value_type.list_size
+    vector = pa.types.is_fixed_size_list(col.type.value_type)
+    shape = (col.type.value_type.list_size,) if vector else ()
     n = int(pc.max(table.column("n_views")).as_py()) if len(table) else 0
-    out = np.full((len(table), n, k), np.nan)
+    out = np.full((len(table), n, *shape), np.nan)
     valid = col.is_valid().to_numpy(zero_copy_only=False)
     if valid.any():
-        values = pc.list_flatten(pc.list_flatten(col.filter(pa.array(valid)))).to_numpy(zero_copy_only=False)
-        out[valid] = values.reshape(-1, n, k)
+        values = pc.list_flatten(col.filter(pa.array(valid)))
+        values = pc.list_flatten(values) if vector else values
+        out[valid] = values.to_numpy(zero_copy_only=False).reshape(-1, n, *shape)
     return out
 
-
-def pitch_array(table: pa.Table) -> np.ndarray:
-    """(rows, n_views) achieved gimbal pitch (rad) of the ``camera_pitch`` column; NaN where a view was not
-    taken, the trial raised, or the campaign predates the column (then use the planned pitch)."""
-    col = table.column("camera_pitch").combine_chunks()
-    n = int(pc.max(table.column("n_views")).as_py()) if len(table) else 0
-    out = np.full((len(table), n), np.nan)
-    valid = col.is_valid().to_numpy(zero_copy_only=False)
-    if valid.any():
-        out[valid] = pc.list_flatten(col.filter(pa.array(valid))).to_numpy(zero_copy_only=False).reshape(-1, n)
-    return out

@@ -18,7 +18,7 @@ def _ship_mesh(config, config_file: str):
 
 def _cmd_reconstruct(args: argparse.Namespace) -> int:
     from wrp_eval.planning.path import Path
-    from wrp_eval.recon import make_oracle
+    from wrp_eval.recon.scene import scored_ship
     from wrp_eval.recon.capture_io import captures_from_parquet, captures_from_path
     config = load_experiment(args.config)
     path = Path.load(args.path)
@@ -28,10 +28,9 @@ def _cmd_reconstruct(args: argparse.Namespace) -> int:
         captures = captures_from_parquet(args.captures, args.trial or 0, path)
     else:
         captures = captures_from_path(path)
-    mesh = _ship_mesh(config, args.config)
-    oracle = make_oracle(config.oracle, args.oracle)
+    ship = scored_ship(config, FsPath(args.config).parent, args.oracle or config.oracle.kind)
     seed = config.run.seed if args.seed is None else args.seed
-    result = oracle.evaluate(captures, mesh, seed=seed)
+    result = ship.score(captures, seed=seed)
     if args.json:
         print(json.dumps(result.to_json_dict(), indent=1))
     else:

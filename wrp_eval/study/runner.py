@@ -96,7 +96,7 @@ def _train(config, path, config_dir: Path, folder: Path, quiet: bool) -> dict:
     start = time.perf_counter()
     camp = run_campaign(config, out_dir=campaign_dir, config_dir=config_dir, path=path, progress=not quiet)
     campaign_s = time.perf_counter() - start
-    trained, _ = train_from_campaign(config, campaign_dir, surrogate_dir, progress=not quiet)
+    trained, _, _ = train_from_campaign(config, campaign_dir, surrogate_dir, progress=not quiet)
     return {"campaign": str(campaign_dir), "checkpoint": str(surrogate_dir / "surrogate.pt"), "trials": camp.done,
             "failed": camp.failed, "campaign_s": campaign_s,
             "surrogate_s": time.perf_counter() - start - campaign_s, "surrogate_test": trained.metrics["test"]}

@@ -44,7 +44,7 @@ def bench_surrogate(cv: bool = False):
     from wrp_eval.campaign.backends import default_workers
     from wrp_eval.surrogate.config import SurrogateSection
     from wrp_eval.surrogate.data import known_function_trials, load_campaign_trials
-    from wrp_eval.surrogate.train import fold_splits, fold_summary, train_in_parallel
+    from wrp_eval.surrogate.train import train_with_folds
     if "model" in _TRAINED and (_TRAINED["cv"] is not None or not cv):
         return _TRAINED["model"], _TRAINED["data"], _TRAINED["what"], _TRAINED["cv"]
     torch.set_num_threads(1)
@@ -56,12 +56,9 @@ def bench_surrogate(cv: bool = False):
         data, _ = known_function_trials(2000, 49, np.random.default_rng(0), noise_m=0.01)
         what = ("SYNTHETIC known-function data (2000 trials x 49 views), not real campaign data: NOT comparable "
                 f"with the paper's R^2; set {BENCH_ENV}=<campaign dir> for the real figure")
-    section, workers, start = SurrogateSection(), default_workers(), time.perf_counter()
-    splits = [None, *fold_splits(data, section, 0, 5)] if cv else [None]
-    results = train_in_parallel(data, section, 0, splits, workers)
-    summary = fold_summary(results[1:], 0, time.perf_counter() - start, min(workers, len(results))) if cv else None
-    _TRAINED.update(model=results[0], data=data, what=what, cv=summary)
-    return results[0], data, what, summary
+    model, summary = train_with_folds(data, SurrogateSection(), 0, 5 if cv else 0, default_workers())
+    _TRAINED.update(model=model, data=data, what=what, cv=summary)
+    return model, data, what, summary
 
 
 def _rate(fn, queries: int, min_s: float = 1.0) -> float:

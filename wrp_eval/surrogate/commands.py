@@ -13,7 +13,6 @@ on W.
 from __future__ import annotations
 
 import argparse
-import time
 from pathlib import Path
 
 
@@ -30,36 +29,24 @@ def default_out_dir(config) -> Path:
 
 
 def _train(args: argparse.Namespace) -> int:
-    from wrp_eval.config import load_experiment
     from wrp_eval.atomic import write_json_atomic
-    from wrp_eval.surrogate.data import load_campaign_trials
-    from wrp_eval.surrogate.train import (CHECKPOINT_NAME, fold_splits, fold_summary, train_from_campaign,
-                                          train_in_parallel, write_outputs)
     from wrp_eval.campaign.backends import default_workers
-    workers = args.workers if args.workers is not None else default_workers()
+    from wrp_eval.config import load_experiment
     from wrp_eval.errors import InputError
+    from wrp_eval.surrogate.train import CHECKPOINT_NAME, train_from_campaign
+    workers = args.workers if args.workers is not None else default_workers()
     if workers < 1:                     # refused before an hour of training, not after
         raise InputError("--workers", f"must be >= 1, got {workers}")
     if args.cv == 1 or args.cv < 0:
         raise InputError("--cv", f"needs K >= 2 folds (or 0: none), got {args.cv}")
     config = load_experiment(args.config)
-    section = config.surrogate
     campaign = Path(args.campaign) if args.campaign else default_campaign_dir(config)
     out = Path(args.out) if args.out else default_out_dir(config)
-    seed = section.seed_or(config.run.seed)
-    if args.cv:   # the model and the K folds train together, W at a time
-        data = load_campaign_trials(campaign)
-        splits = fold_splits(data, section, seed, args.cv)
-        if not args.quiet:
-            print(f"training the surrogate and {args.cv} cross-validation folds on {data.n_trials} trials, "
-                  f"{min(workers, args.cv + 1)} at a time ...", flush=True)
-        start = time.perf_counter()
-        results = train_in_parallel(data, section, seed, [None, *splits], workers)
-        result = results[0]
-        write_outputs(result, out)
-        cv = fold_summary(results[1:], seed, time.perf_counter() - start, min(workers, args.cv + 1))
-    else:
-        result, data = train_from_campaign(config, campaign, out, progress=not args.quiet)
+    if args.cv and not args.quiet:
+        print(f"training the surrogate and {args.cv} cross-validation folds, {min(workers, args.cv + 1)} at a "
+              f"time ...", flush=True)
+    result, data, cv = train_from_campaign(config, campaign, out, progress=not args.quiet, folds=args.cv,
+                                           workers=workers)
     m = result.metrics["test"]
     print(f"surrogate {out / CHECKPOINT_NAME}: test R^2 {m['r2']:.4f}, RMSE {m['rmse']:.4g} m, MAE {m['mae']:.4g} m "
           f"on {m['n']} held-out trials ({result.metrics['n_used']} used of {data.n_trials}; "

@@ -75,13 +75,13 @@ def oracle_roughness(campaign_dir: str | Path, *, n_trials: int = 60, repeats: i
     noise_var_m2 (mean within-trial variance), noise_std_m, total_var_m2 (variance of error_m over every trial
     that did not fail), r2_ceiling, and the settings.
     """
-    from wrp_eval.campaign.records import column_array, pitch_array
+    from wrp_eval.campaign.records import column_array
     if repeats < 2:
         raise InputError("oracle_roughness", f"repeats must be >= 2 to measure a variance, got {repeats}")
     scorer, store = campaign_oracle(campaign_dir, config_dir)
     table = store.read_table(["n_views", "flown_offsets", "camera_pitch", "error_m", "failed", "oracle_seed"])
     flown = column_array(table, "flown_offsets")
-    pitch = pitch_array(table)       # NaN (-> planned pitch) in campaigns stored before the column
+    pitch = column_array(table, "camera_pitch")       # NaN (-> planned pitch) in campaigns stored before the column
     error = table.column("error_m").to_numpy(zero_copy_only=False).astype(float)
     failed = table.column("failed").to_numpy(zero_copy_only=False).astype(bool)
     oracle_seed = table.column("oracle_seed").to_numpy().astype(np.int64)

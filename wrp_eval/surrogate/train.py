@@ -249,15 +249,16 @@ def fold_splits(data: TrialData, section: SurrogateSection, seed: int, folds: in
     return splits
 
 
-def train_in_parallel(data: TrialData, section: SurrogateSection, seed: int, splits: list, workers: int = 1
-                      ) -> list[TrainResult]:
+def train_in_parallel(data: TrialData, section: SurrogateSection, seed: int, splits: list, workers: int = 1,
+                      progress: bool = False) -> list[TrainResult]:
     """:func:`train_surrogate` once per entry of ``splits`` (an explicit (train, val, test) split, or None for
     the seeded default split), ``workers`` at a time in spawned processes (each with ``section.threads`` torch
-    threads). Each training is seeded the same way wherever it runs: the results equal the serial ones."""
+    threads). Each training is seeded the same way wherever it runs: the results equal the serial ones.
+    ``progress`` shows the trainings run in this process (serial), not those of pool processes."""
     if workers < 1:
         raise InputError("surrogate training", f"workers must be >= 1, got {workers}")
     if workers == 1 or len(splits) == 1:
-        return [train_surrogate(data, section, seed=seed, split=split) for split in splits]
+        return [train_surrogate(data, section, seed=seed, progress=progress, split=split) for split in splits]
     import multiprocessing
     from concurrent.futures import ProcessPoolExecutor
     # spawn, not fork: no forked copy of torch's thread pool; the data travel to each process once per job
@@ -297,17 +298,32 @@ def cross_validate(data: TrialData, section: SurrogateSection = SurrogateSection
     return fold_summary(results, seed, time.perf_counter() - start, min(workers, folds))
 
 
-def train_from_campaign(config, campaign_dir: str | Path, out_dir: str | Path, progress: bool = False
-                        ) -> tuple[TrainResult, "TrialData"]:
+def train_with_folds(data: TrialData, section: SurrogateSection, seed: int, folds: int = 0, workers: int = 1,
+                     progress: bool = False) -> tuple[TrainResult, dict | None]:
+    """The model on the seeded default split and, with ``folds`` >= 2, ``folds``-fold cross-validation, all
+    trained together ``workers`` at a time (:func:`train_in_parallel`). Returns (model, the
+    :func:`cross_validate` document or None); ``seconds`` there is the wall time of every training."""
+    start = time.perf_counter()
+    splits = fold_splits(data, section, seed, folds) if folds else []
+    results = train_in_parallel(data, section, seed, [None, *splits], workers, progress=progress)
+    cv = (fold_summary(results[1:], seed, time.perf_counter() - start, min(workers, len(results)))
+          if folds else None)
+    return results[0], cv
+
+
+def train_from_campaign(config, campaign_dir: str | Path, out_dir: str | Path, progress: bool = False,
+                        folds: int = 0, workers: int = 1) -> tuple[TrainResult, TrialData, dict | None]:
     """The training job of an ExperimentConfig: its ``surrogate:`` section fitted on a campaign folder's trials
-    (seed: ``surrogate.seed``, else ``run.seed``), outputs written to ``out_dir`` (:func:`write_outputs`).
-    Returns (result, the trials) -- what ``wrp-eval train``, ``wrp-eval run`` and the studies all do."""
+    (seed: ``surrogate.seed``, else ``run.seed``), outputs written to ``out_dir`` (:func:`write_outputs`), with
+    ``folds``-fold cross-validation trained beside it when ``folds`` >= 2 (:func:`train_with_folds`).
+    Returns (result, the trials, the cross-validation document or None) -- what ``wrp-eval train``,
+    ``wrp-eval run`` and the studies all do."""
     from wrp_eval.surrogate.data import load_campaign_trials
     data = load_campaign_trials(campaign_dir)
-    result = train_surrogate(data, config.surrogate, seed=config.surrogate.seed_or(config.run.seed),
-                             progress=progress)
+    result, cv = train_with_folds(data, config.surrogate, config.surrogate.seed_or(config.run.seed), folds,
+                                  workers, progress=progress)
     write_outputs(result, out_dir)
-    return result, data
+    return result, data, cv
 
 
 def parity_plot(result: TrainResult, file: str | Path, title: str = "surrogate: held-out test trials") -> None:
