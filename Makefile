@@ -26,6 +26,7 @@ run: setup
 	$(BIN)/wrp-eval run experiments/quickstart.yaml
 
 test: setup
+	$(BIN)/lint-imports --no-cache
 	$(BIN)/python -m pytest -q -p no:cacheprovider
 
 bench: setup

@@ -10,6 +10,7 @@ import pytest
 from wrp_eval.cli import main
 from wrp_eval.config import ExperimentConfig, load_experiment
 from wrp_eval.errors import InputError
+from wrp_eval.planning.path import Path as FlightPath
 from wrp_eval.study.runner import deep_merge, random_offsets, variant_configs
 from wrp_eval.wrp.optimize import apply_offsets, offset_totals
 from wrp_eval.validation import parse_model
@@ -94,7 +95,7 @@ def test_offset_rows_move_positions_and_wrap_yaw(stylized_path):
 
 @pytest.fixture(scope="module")
 def stylized_path():
-    from wrp_eval.planning.commands import planning_rng
+    from wrp_eval.planning.planner import planning_rng
     from wrp_eval.planning.planner import plan
     from wrp_eval.ship.config import ShipSection
     from wrp_eval.ship.resolve import resolve_ship_full
@@ -139,14 +140,24 @@ def _run_smallest(table, tmp_path, monkeypatch) -> tuple[dict, str]:
     return doc, report
 
 
+def _top_view_z(row: dict) -> float:
+    """Height (m) of the highest viewpoint of a variant's planned path."""
+    return float(FlightPath.load(Path(row["folder"], "plan", "path.json")).positions[:, 2].max())
+
+
 def test_table1_smallest_plans_on_the_disturbed_proxy(tmp_path, monkeypatch):
     doc, _ = _run_smallest(1, tmp_path, monkeypatch)
     original, disturbed = doc["rows"]
-    assert original["ours"]["proxy_height_m"] == pytest.approx(25.0)
-    assert disturbed["ours"]["height_disturbance_m"] == pytest.approx(-0.08691 * 25.0)
-    assert disturbed["ours"]["height_disturbance_m"] == pytest.approx(disturbed["paper"]["height_disturbance_m"],
-                                                                      abs=1e-3)
-    assert original["paper"]["error_m"] == 2.94981
+    variant = load_experiment(PAPER / "table1.yaml").study.variants[1]
+    assert disturbed["variant"] == variant.name
+    fraction = variant.overrides["ship"]["proxy_height_error"]
+    # the variant's override reached its proxy ...
+    height, shift = original["ours"]["proxy_height_m"], disturbed["ours"]["height_disturbance_m"]
+    assert original["ours"]["height_disturbance_m"] == 0.0 and shift != 0.0
+    assert shift == pytest.approx(fraction * height)
+    assert disturbed["ours"]["proxy_height_m"] == pytest.approx(height + shift)
+    # ... and its plan: the views above the deck are planned on the disturbed proxy's top, shift lower/higher
+    assert _top_view_z(disturbed) - _top_view_z(original) == pytest.approx(shift, abs=1e-6)
 
 
 def test_table2_smallest_maximisation_raises_h(tmp_path, monkeypatch):
@@ -165,12 +176,25 @@ def test_table6_smallest_drops_the_transition_views(tmp_path, monkeypatch):
 
 def test_table7_and_table8_smallest(tmp_path, monkeypatch):
     doc, _ = _run_smallest(7, tmp_path / "7", monkeypatch)
-    assert [r["ours"]["method"] for r in doc["rows"]] == ["ours", "zhou2020"]
+    ours, zhou = (r["ours"] for r in doc["rows"])
+    assert zhou["transition_views"] == 0 < ours["transition_views"]   # zhou2020 plans no transition views
     assert all(r["ours"]["tsp_s"] > 0 for r in doc["rows"])
     doc, _ = _run_smallest(8, tmp_path / "8", monkeypatch)
     ours, op = (r["ours"] for r in doc["rows"])
-    assert (op["method"], op["pitch_deg"], op["front_overlap"], op["side_overlap"]) == ("oblique", 60, 0.7, 0.75)
     assert ours["pitch_deg"] is None and op["views"] > ours["views"]
+    # the OP variant's overrides reached its flown path: nadir plus four obliques at the configured pitch ...
+    planning = load_experiment(PAPER / "table8.yaml").study.variants[1].overrides["planning"]
+    path = FlightPath.load(Path(doc["rows"][1]["folder"], "plan", "path.json"))
+    pitch = np.round(np.degrees(path.pitch), 6)
+    assert set(pitch) == {-90.0, -planning["oblique_pitch_deg"]}
+    nadir = path.positions[pitch == -90.0]
+    assert (pitch != -90.0).sum() == 4 * len(nadir)
+    # ... flown on a grid whose spacing the overlaps set: stations no further apart than footprint x (1 - overlap)
+    width, length = path.camera.footprint_m(path.metadata["planned_distance_m"])
+    for axis, footprint, overlap in ((0, length, planning["front_overlap"]), (1, width, planning["side_overlap"])):
+        stations = np.unique(np.round(nadir[:, axis], 6))
+        extent = stations[-1] - stations[0]
+        assert len(stations) - 1 == int(np.ceil(extent / (footprint * (1.0 - overlap))))
 
 
 @pytest.mark.slow
@@ -180,8 +204,10 @@ def test_table3_smallest_shares_one_surrogate_across_the_eight_wrps(tmp_path, mo
     wrp = [r["ours"] for r in doc["rows"][1:]]
     e0 = wrp[0]["e_original_m"]
     assert doc["rows"][0]["ours"]["error_m"] == pytest.approx(e0)      # the initial path's error is E_original
-    for ours, fraction in zip(wrp, [0.06279, 0.07849, 0.09419] * 2 + [0.09419] * 2):
-        assert ours["threshold_m"] == pytest.approx(fraction * e0)
+    variants = load_experiment(PAPER / "table3.yaml").study.variants[1:]
+    assert [r["variant"] for r in doc["rows"][1:]] == [v.name for v in variants]
+    for ours, variant in zip(wrp, variants):   # each variant's threshold fraction reached its optimisation
+        assert ours["threshold_m"] == pytest.approx(variant.overrides["wrp"]["threshold_fraction"] * e0)
         assert 0 <= ours["offset_rate_pct"] <= 100 and ours["wrp_time_s"] > 0
     assert [r["path"] for r in doc["rows"]] == ["plan"] + ["iswrp"] * 3 + ["swrp"] * 3 + ["iswrp", "swrp"]
 

@@ -8,15 +8,14 @@ machine and library versions. These machines are noisy: compare ratios taken wit
 
 from __future__ import annotations
 
-import argparse
 import importlib
 import json
-import os
-import platform
 import time
-from dataclasses import asdict, dataclass
+from dataclasses import asdict
 from pathlib import Path
 
+from wrp_eval.atomic import write_text_atomic
+from wrp_eval.bench_record import environment
 from wrp_eval.errors import InputError
 
 # group name -> module with run_bench()
@@ -32,29 +31,6 @@ BENCH_GROUPS: dict[str, str] = {
 }
 
 
-@dataclass(frozen=True)
-class BenchRecord:
-    name: str
-    value: float
-    unit: str
-    anchor: str | None = None
-    anchor_value: float | None = None
-    note: str = ""
-
-
-def environment() -> dict:
-    """Machine and library versions, stored with every bench file."""
-    import numpy
-    versions = {"python": platform.python_version(), "numpy": numpy.__version__}
-    for mod in ("scipy", "mujoco", "open3d", "torch", "trimesh", "rerun"):
-        try:
-            versions[mod] = importlib.import_module(mod).__version__
-        except Exception:  # a missing optional library is simply not reported
-            pass
-    return {"machine": platform.machine(), "processor": platform.processor(), "cpus": os.cpu_count(),
-            "system": platform.platform(), "versions": versions}
-
-
 def run_groups(groups: list[str], out_dir: Path) -> list[dict]:
     out_dir.mkdir(parents=True, exist_ok=True)
     all_records = []
@@ -63,10 +39,7 @@ def run_groups(groups: list[str], out_dir: Path) -> list[dict]:
         records = importlib.import_module(BENCH_GROUPS[group]).run_bench()
         doc = {"group": group, "created_unix": time.time(), "wall_s": time.perf_counter() - start,
                "environment": environment(), "records": [asdict(r) for r in records]}
-        target = out_dir / f"{group}.json"
-        tmp = target.with_name(target.name + ".tmp")
-        tmp.write_text(json.dumps(doc, indent=1))
-        tmp.replace(target)
+        write_text_atomic(out_dir / f"{group}.json", json.dumps(doc, indent=1))
         for r in records:
             anchor = f"  (anchor {r.anchor}: {r.anchor_value})" if r.anchor is not None else ""
             print(f"{r.name:34s} {r.value:14.6g} {r.unit}{anchor}")
@@ -74,21 +47,10 @@ def run_groups(groups: list[str], out_dir: Path) -> list[dict]:
     return all_records
 
 
-def _cmd_bench(args: argparse.Namespace) -> int:
-    if not BENCH_GROUPS:
-        raise InputError("bench", "no benchmark groups are available")
-    groups = list(BENCH_GROUPS) if not args.only else [g.strip() for g in args.only.split(",") if g.strip()]
+def select_groups(only: str) -> list[str]:
+    """The groups named in a comma-separated ``only`` (empty: all); an unknown name is an InputError."""
+    groups = list(BENCH_GROUPS) if not only else [g.strip() for g in only.split(",") if g.strip()]
     unknown = [g for g in groups if g not in BENCH_GROUPS]
     if unknown:
         raise InputError("--only", f"unknown group(s) {unknown}; choose from {sorted(BENCH_GROUPS)}")
-    run_groups(groups, Path(args.out))
-    return 0
-
-
-def register(sub: argparse._SubParsersAction) -> None:
-    p = sub.add_parser("bench", help="run the benchmarks and write JSON records",
-                       description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
-    p.add_argument("--only", default="", help="comma-separated groups (default: all): "
-                   + ", ".join(BENCH_GROUPS) if BENCH_GROUPS else "comma-separated groups")
-    p.add_argument("--out", default="logs/bench/", help="output folder (default logs/bench/)")
-    p.set_defaults(func=_cmd_bench)
+    return groups

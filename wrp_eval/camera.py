@@ -1,6 +1,7 @@
 """The camera model and the pose conventions every stage shares.
 
-Conventions (see DESIGN.md): world frame x along the ship (bow +x), y to port, z up, sea at z = 0.
+Conventions (the project's, README.md "Where things live"): world frame x along the ship (bow +x), y to
+port, z up, sea at z = 0.
 A view is a position plus ``yaw`` (heading of the optical axis, radians, counter-clockwise from +x)
 and ``pitch`` (gimbal pitch of the optical axis above the horizontal, radians; negative looks down).
 The camera frame is OpenCV's: x right, y down, z along the optical axis.
@@ -55,13 +56,6 @@ class Camera:
         """(width, height) in metres of the image footprint on a plane facing the camera at ``distance_m``."""
         gsd = self.gsd_m(distance_m)
         return gsd * self.image_width_px, gsd * self.image_height_px
-
-    def intrinsic_matrix(self) -> np.ndarray:
-        """3x3 K in pixels, principal point at the image centre."""
-        f = self.focal_px
-        return np.array([[f, 0.0, self.image_width_px / 2.0],
-                         [0.0, f, self.image_height_px / 2.0],
-                         [0.0, 0.0, 1.0]])
 
 
 def optical_axes(yaw: np.ndarray, pitch: np.ndarray) -> np.ndarray:

@@ -11,10 +11,10 @@ from pathlib import Path
 
 from pydantic import Field
 
-from wrp_eval.campaign.config import CampaignSection
+from wrp_eval.campaign.config import CampaignSection, TrialConfig
 from wrp_eval.export.config import ExportSection
-from wrp_eval.recon.config import OracleSection
 from wrp_eval.planning.config import PlanningSection
+from wrp_eval.recon.config import OracleSection
 from wrp_eval.ship.config import ShipSection
 from wrp_eval.sim.config import SimSection
 from wrp_eval.study.config import StudySection
@@ -47,6 +47,12 @@ class ExperimentConfig(StrictModel):
     export: ExportSection = ExportSection()
     study: StudySection | None = Field(None, description="variants of this config measured side by side "
                                        "(the paper's tables, experiments/paper/); none: the single pipeline")
+
+    def trial_config(self) -> TrialConfig:
+        """The sections one campaign trial reads (ship, wind, sim, oracle, campaign), taken from this already
+        validated config without validating them again."""
+        return TrialConfig.model_construct(ship=self.ship, wind=self.wind, sim=self.sim, oracle=self.oracle,
+                                           campaign=self.campaign)
 
 
 def load_experiment(path: str | Path) -> ExperimentConfig:

@@ -6,10 +6,18 @@ scene, ContextCapture, a Xeon + RTX 3090): they are printed beside what we measu
 
 from __future__ import annotations
 
-import os
 from pathlib import Path
 
+import matplotlib
 import numpy as np
+from matplotlib.figure import Figure
+from mpl_toolkits.mplot3d.art3d import Poly3DCollection
+
+from wrp_eval.atomic import atomic_path, write_text_atomic
+from wrp_eval.experiment import ExperimentContext
+from wrp_eval.surrogate.data import TrialData
+from wrp_eval.wind.field import sample_mean_field
+from wrp_eval.wind.outputs import quiver_png
 
 # Paper anchors (wind-resistance-aerial-path-planning, Sec. 4.1 and Tables 3, 4, 7; stylized ship).
 PAPER = {
@@ -25,26 +33,21 @@ PAPER = {
 
 
 def _savefig(fig, file: Path) -> Path:
-    file.parent.mkdir(parents=True, exist_ok=True)
-    tmp = file.with_name(file.name + ".tmp.png")
-    fig.savefig(tmp, dpi=90)
-    os.replace(tmp, file)
+    """``fig`` as a PNG at 90 dpi, written atomically; returns ``file``."""
+    with atomic_path(file) as tmp:
+        fig.savefig(tmp, dpi=90, format="png")
     return file
 
 
 def ship_path_figure(mesh, path, file: Path) -> Path:
     """The ship mesh (shaded), the tour and the viewpoints (surface blue, transition orange)."""
-    import matplotlib
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
-    from mpl_toolkits.mplot3d.art3d import Poly3DCollection
 
-    fig = plt.figure(figsize=(11, 6))
+    fig = Figure(figsize=(11, 6))
     ax = fig.add_subplot(projection="3d")
     above = mesh.triangles_center[:, 2] > 0
     light = np.array([0.3, -0.5, 0.8]) / np.linalg.norm([0.3, -0.5, 0.8])
     shade = 0.35 + 0.65 * np.clip(mesh.face_normals[above] @ light, 0, 1)
-    ax.add_collection3d(Poly3DCollection(mesh.triangles[above], facecolors=plt.cm.gray(shade), linewidths=0))
+    ax.add_collection3d(Poly3DCollection(mesh.triangles[above], facecolors=matplotlib.colormaps["gray"](shade), linewidths=0))
     p = path.positions
     ax.plot(p[:, 0], p[:, 1], p[:, 2], "-", color="0.4", lw=0.8)
     transition = path.kind == 1
@@ -66,19 +69,16 @@ def ship_path_figure(mesh, path, file: Path) -> Path:
     ax.set_title(f"{len(path)} viewpoints, {path.length_m:.0f} m")
     fig.tight_layout()
     out = _savefig(fig, file)
-    plt.close(fig)
     return out
 
 
 def offsets_figure(offsets: np.ndarray, file: Path) -> Path:
     """Histograms of the flown offsets (all trials x viewpoints): dx, dy, dz (m) and dyaw (deg)."""
-    import matplotlib
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
 
     flat = offsets.reshape(-1, 4)
     flat = flat[np.all(np.isfinite(flat), axis=1)]
-    fig, axes = plt.subplots(1, 4, figsize=(14, 3.2))
+    fig = Figure(figsize=(14, 3.2))
+    axes = fig.subplots(1, 4)
     for ax, k, name in zip(axes, range(4), ("dx (m)", "dy (m)", "dz (m)", "dyaw (deg)")):
         values = np.degrees(flat[:, k]) if k == 3 else flat[:, k]
         ax.hist(values, bins=60, color="tab:blue")
@@ -87,11 +87,10 @@ def offsets_figure(offsets: np.ndarray, file: Path) -> Path:
     fig.suptitle("flown offsets from the planned viewpoints (commanded box + wind)")
     fig.tight_layout()
     out = _savefig(fig, file)
-    plt.close(fig)
     return out
 
 
-def _fmt(value, digits: int = 3) -> str:
+def fmt(value, digits: int = 3) -> str:
     if value is None:
         return "n/a"
     if isinstance(value, (int, np.integer)):
@@ -100,21 +99,19 @@ def _fmt(value, digits: int = 3) -> str:
 
 
 def _ci(ci) -> str:
-    return f"[{_fmt(ci[0])}, {_fmt(ci[1])}]" if ci else "n/a"
+    return f"[{fmt(ci[0])}, {fmt(ci[1])}]" if ci else "n/a"
 
 
-def write_report(out: Path, config, ship, path, summary: dict) -> Path:
-    """Figures under ``out/figures`` and ``out/report.md``; returns the report's path."""
-    from wrp_eval.surrogate.data import load_campaign_trials
-    from wrp_eval.wind.commands import quiver_png, sample_mean_field
-
+def write_report(ctx: ExperimentContext, path, summary: dict, trials: TrialData) -> Path:
+    """Figures under ``<run>/figures`` and ``<run>/report.md``; returns the report's path. path: the planned
+    Path; summary: the run summary so far; trials: the campaign's trials (as the surrogate was trained on)."""
+    config, ship, out = ctx.config, ctx.ship, ctx.folders.root
     figures = out / "figures"
     ship_path_figure(ship.mesh, path, figures / "ship_path.png")
-    x, y, z, velocity = sample_mean_field(config.wind, ship.particulars, Path(summary["config"]).parent)
+    x, y, z, velocity = sample_mean_field(config.wind, ship.particulars, ctx.config_dir)
     figures.mkdir(parents=True, exist_ok=True)
     quiver_png(figures / "wind_field.png", x, y, z, velocity, config.wind.source)
-    data = load_campaign_trials(summary["campaign"]["dir"])
-    offsets_figure(data.offsets, figures / "offsets.png")
+    offsets_figure(trials.offsets, figures / "offsets.png")
 
     plan_m = summary["plan"]
     t = plan_m["timings"]
@@ -134,17 +131,17 @@ def write_report(out: Path, config, ship, path, summary: dict) -> Path:
         "",
         "| per face | " + " | ".join(ship.complexity.face_names) + " |",
         "|---|" + "---|" * 5,
-        "| surface complexity (tri/m^2) | " + " | ".join(_fmt(c) for c in ship.complexity.complexity) + " |",
+        "| surface complexity (tri/m^2) | " + " | ".join(fmt(c) for c in ship.complexity.complexity) + " |",
         "",
         "| figure | ours | paper (Table 7, stylized ship) |",
         "|---|---|---|",
         f"| viewpoints | {len(path)} ({plan_m.get('n_transition_views', 0)} transition) | {PAPER['views']} |",
         f"| length (m) | {path.length_m:.1f} | {PAPER['length_m']} |",
         f"| flight time (s) | {path.flight_time_s:.1f} | {PAPER['flight_time_s']} |",
-        f"| Min (s) | {_fmt(t.get('min_s'))} | {PAPER['min_s']} |",
-        f"| Max (s) | {_fmt(t.get('max_s'))} | {PAPER['max_s']} |",
-        f"| tour (s) | {_fmt(t.get('tsp_s'))} | {PAPER['tsp_s']} (GA) |",
-        f"| planning total (s) | {_fmt(t.get('total_s'))} | |",
+        f"| Min (s) | {fmt(t.get('min_s'))} | {PAPER['min_s']} |",
+        f"| Max (s) | {fmt(t.get('max_s'))} | {PAPER['max_s']} |",
+        f"| tour (s) | {fmt(t.get('tsp_s'))} | {PAPER['tsp_s']} (GA) |",
+        f"| planning total (s) | {fmt(t.get('total_s'))} | |",
         "",
         "## Wind (mean field; Dryden turbulence on top in every flight)",
         "",
@@ -162,9 +159,9 @@ def write_report(out: Path, config, ship, path, summary: dict) -> Path:
         "",
         "| held-out test trials | ours | paper |",
         "|---|---|---|",
-        f"| R^2 | {_fmt(sur['r2'], 3)} | {PAPER['surrogate_r2']} |",
-        f"| RMSE (m) | {_fmt(sur['rmse'], 3)} | {PAPER['surrogate_rmse']} (on errors of ~3 m) |",
-        f"| MAE (m) | {_fmt(sur['mae'], 3)} | |",
+        f"| R^2 | {fmt(sur['r2'], 3)} | {PAPER['surrogate_r2']} |",
+        f"| RMSE (m) | {fmt(sur['rmse'], 3)} | {PAPER['surrogate_rmse']} (on errors of ~3 m) |",
+        f"| MAE (m) | {fmt(sur['mae'], 3)} | |",
         f"| trials | {sur['n']} | 300 experiments in all |",
         "",
         "![parity](surrogate/parity.png)",
@@ -177,9 +174,9 @@ def write_report(out: Path, config, ship, path, summary: dict) -> Path:
     ]
     for kind in ("iswrp", "swrp"):
         row, p = ev["wrp"][kind], PAPER[f"{kind}_t030"]
-        lines.append(f"| {kind.upper()} | {_fmt(row['threshold_m'])} | {_fmt(row['offset_rate_pct'])} | "
-                     f"{_fmt(row['position_offset_m'])} | {_fmt(row['rotation_offset_deg'])} | "
-                     f"{_fmt(row['time_s'])} | {_fmt(row.get('oracle_error_m'))} | {p['offset_rate_pct']} / "
+        lines.append(f"| {kind.upper()} | {fmt(row['threshold_m'])} | {fmt(row['offset_rate_pct'])} | "
+                     f"{fmt(row['position_offset_m'])} | {fmt(row['rotation_offset_deg'])} | "
+                     f"{fmt(row['time_s'])} | {fmt(row.get('oracle_error_m'))} | {p['offset_rate_pct']} / "
                      f"{p['position_offset_m']} / {p['rotation_offset_deg']} / {p['time_s']} / {p['error']} |")
     lines += [
         "",
@@ -192,8 +189,8 @@ def write_report(out: Path, config, ship, path, summary: dict) -> Path:
         "|---|---|---|---|---|---|---|",
     ]
     for row in ev["paths"]:
-        lines.append(f"| {row['path']} | {row['trials']} | {_fmt(row['mean_error_m'], 4)} | "
-                     f"{_ci(row.get('mean_error_m_ci'))} | {_fmt(row['std_error_m'])} | {_fmt(row['p95_error_m'], 4)} | "
+        lines.append(f"| {row['path']} | {row['trials']} | {fmt(row['mean_error_m'], 4)} | "
+                     f"{_ci(row.get('mean_error_m_ci'))} | {fmt(row['std_error_m'])} | {fmt(row['p95_error_m'], 4)} | "
                      f"{100 * row['failure_rate']:.1f} % |")
     lines += ["", "| paired vs initial | mean error difference (m) | CI | pairs | failure-rate difference |",
               "|---|---|---|---|---|"]
@@ -216,86 +213,4 @@ def write_report(out: Path, config, ship, path, summary: dict) -> Path:
     lines += ["", "## Timings (s)", "", "| step | wall (s) |", "|---|---|"]
     lines += [f"| {k} | {v:.1f} |" for k, v in summary["timings_s"].items()]
     lines += ["", f"Recording: `rerun {out / 'run.rrd'}`", ""]
-    report = out / "report.md"
-    tmp = report.with_name(report.name + ".tmp")
-    tmp.write_text("\n".join(lines))
-    tmp.replace(report)
-    return report
-
-
-def _cell(value, kind: str) -> str:
-    """One table cell: None -> '/', text as is, ints as ints, numbers to 4 significant digits."""
-    if value is None:
-        return "/"
-    if kind == "text" or isinstance(value, str):
-        return str(value)
-    if kind == "int":
-        return str(int(value))
-    return _fmt(value, 4)
-
-
-def study_table(doc: dict) -> list[str]:
-    """Markdown rows of a study: per column, ours then the paper's figure beside it."""
-    from wrp_eval.study.config import COLUMNS
-    cols = doc["columns"]
-    head = ["variant"]
-    for c in cols:
-        head += [COLUMNS[c][0], "paper"]
-    lines = ["| " + " | ".join(head) + " |", "|---" * len(head) + "|"]
-    for row in doc["rows"]:
-        name = row["variant"] + (f" #{row['repetition']}" if row.get("repetition") else "")
-        cells = [name]
-        for c in cols:
-            ours = _cell(row["ours"].get(c), COLUMNS[c][1])
-            if c == "error_m" and row["ours"].get("failed"):
-                ours = f"failed ({ours})"
-            paper = row["paper"].get(c)   # the paper's figure verbatim (as the config gives it)
-            cells += [ours, ("/" if paper is None else str(paper)) if c in row["paper"] else ""]
-        lines.append("| " + " | ".join(cells) + " |")
-    return lines
-
-
-def write_study_report(out: Path, doc: dict, figures: list) -> Path:
-    """``out/report.md`` of a study (``wrp_eval.study``): the table with the paper's figures beside ours, where
-    each variant failed and why, the shared campaigns, the timings and a ship-and-path figure per variant.
-    figures: [(variant name, path, resolved ship, variant folder)]."""
-    heading = f"Table {doc['table']}" if doc.get("table") else "Study"
-    lines = [
-        f"# wrp-eval study `{doc['run']}`: {heading}" + (f" — {doc['title']}" if doc.get("title") else ""),
-        "",
-        f"Config `{doc['config']}`, seed {doc['seed']}" + (" (smallest setting)" if doc.get("smallest") else "")
-        + ". Each variant's column pair shows ours, then the paper's figure. The paper's figures are anchors from "
-        "another system (Unity scene, ContextCapture errors on another scale, a Xeon + RTX 3090), not targets: "
-        "ours are what this run measured. Reconstruction error: the configured oracle on the path flown exactly "
-        "as planned (or as offset), in metres; 'failed' is the oracle's verdict.",
-        "",
-        *study_table(doc),
-        "",
-    ]
-    failed = [r for r in doc["rows"] if r["ours"].get("failed")]
-    if failed:
-        lines += ["Failed reconstructions:", ""]
-        lines += [f"- {r['variant']}" + (f" #{r['repetition']}" if r.get("repetition") else "")
-                  + f": {r['ours'].get('reason', '')}" for r in failed]
-        lines.append("")
-    if doc.get("shared_training"):
-        lines += ["## Campaigns and surrogates", "", "| key | campaign | trials (failed) | campaign (s) | "
-                  "surrogate R^2 / RMSE (m) |", "|---|---|---|---|---|"]
-        for key, t in doc["shared_training"].items():
-            test = t.get("surrogate_test") or {}
-            lines.append(f"| {key} | `{t['campaign']}` | {t['trials']} ({t['failed']}) | {t['campaign_s']:.1f} | "
-                         f"{_fmt(test.get('r2'))} / {_fmt(test.get('rmse'))} |")
-        lines.append("")
-    if figures:
-        lines += ["## Paths", ""]
-        for name, path, ship, folder in figures:
-            png = ship_path_figure(ship.mesh, path, Path(folder) / "path.png")
-            lines += [f"{name}:", "", f"![{name}]({png.relative_to(out)})", ""]
-    lines += ["## Timings (s)", "", "| variant | wall (s) |", "|---|---|"]
-    lines += [f"| {k} | {v:.1f} |" for k, v in doc["timings_s"].items()]
-    lines.append("")
-    report = out / "report.md"
-    tmp = report.with_name(report.name + ".tmp")
-    tmp.write_text("\n".join(lines))
-    tmp.replace(report)
-    return report
+    return write_text_atomic(out / "report.md", "\n".join(lines))

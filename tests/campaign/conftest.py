@@ -10,8 +10,10 @@ import pyarrow as pa
 import pytest
 
 from wrp_eval.campaign.evaluators import ANALYTIC_EVALUATOR
+from wrp_eval.campaign.jobs import campaign_job
 from wrp_eval.campaign.records import TIMING_COLUMNS
 from wrp_eval.config import ExperimentConfig
+from wrp_eval.experiment import ExperimentContext
 from wrp_eval.planning.path import Path as FlightPath
 
 
@@ -69,9 +71,10 @@ def _tiny_path_fixture():
 
 @pytest.fixture
 def run_analytic():
-    """run_analytic(config, out, **evaluator_options) -> CampaignSummary, with the analytic evaluator."""
-    from wrp_eval.campaign.runner import run_campaign
+    """run_analytic(config, out, overrides=None, **evaluator_options) -> CampaignSummary, with the analytic
+    evaluator; ``overrides``: the command line's campaign overrides (n_trials, backend, workers, rerun)."""
 
-    def run(config, out, **options):
-        return run_campaign(config, out_dir=out, evaluator=EVALUATOR, evaluator_options=options, progress=False)
+    def run(config, out, overrides=None, **options):
+        return campaign_job(ExperimentContext(config), out_dir=out, evaluator=EVALUATOR, evaluator_options=options,
+                            progress=False, **(overrides or {}))
     return run

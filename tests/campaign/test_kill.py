@@ -1,5 +1,5 @@
-"""kill -9 at any moment loses at most the chunk in flight; re-running completes the campaign without
-duplicates (a campaign run in a subprocess with the analytic stand-in evaluator, a little work per trial)."""
+"""kill -9 mid-campaign loses at most the chunk in flight; re-running completes the campaign without duplicates
+(a campaign run in a subprocess with the analytic stand-in evaluator, which kill -9s it at a set trial)."""
 
 from __future__ import annotations
 
@@ -8,80 +8,101 @@ import signal
 import subprocess
 import sys
 import textwrap
-import time
 
 import numpy as np
 import pytest
 
+from wrp_eval.atomic import temporaries
 from wrp_eval.campaign.evaluators import ANALYTIC_EVALUATOR
-from wrp_eval.campaign.runner import run_campaign
+from wrp_eval.campaign.jobs import campaign_job
+from wrp_eval.campaign.rerun_log import read_trial_ids
 from wrp_eval.campaign.store import TrialStore
+from wrp_eval.experiment import ExperimentContext
+
+N_TRIALS, KILL_AT, CHUNK_TRIALS = 60, 30, 4
 
 SCRIPT = textwrap.dedent("""
+    import os
+    import signal
     import sys
-    if __name__ == "__main__":  # imports here: spawned pool workers re-import this script, keep them light
-        from wrp_eval.campaign.evaluators import ANALYTIC_EVALUATOR
-        from wrp_eval.campaign.runner import run_campaign
+
+    from wrp_eval.campaign.evaluators import make_analytic_evaluator
+
+
+    class KillingEvaluator:
+        # The analytic evaluator, except that the first process to reach trial `kill_at` kill -9s its whole
+        # session (the campaign and its pool workers) right there: a kill mid-campaign at a set trial, not after
+        # a guessed time. The marker file makes the same command, run again, pass that trial (same evaluator
+        # and options, so the same fingerprint: a resume).
+        def __init__(self, context, kill_at, marker, **options):
+            self.inner = make_analytic_evaluator(context, **options)
+            self.kill_at, self.marker = kill_at, marker
+
+        def evaluate(self, batch):
+            if any(t.trial_id >= self.kill_at for t in batch):
+                try:
+                    os.close(os.open(self.marker, os.O_CREAT | os.O_EXCL))
+                except FileExistsError:
+                    pass
+                else:
+                    os.killpg(os.getpgid(0), signal.SIGKILL)
+            return self.inner.evaluate(batch)
+
+
+    if __name__ == "__main__":  # spawned pool workers re-import this script: only the class above for them
+        from wrp_eval.campaign.jobs import campaign_job
         from wrp_eval.config import ExperimentConfig
+        from wrp_eval.experiment import ExperimentContext
+        path, out, workers, n_trials, kill_at, chunk_trials, marker = sys.argv[1:]
         config = ExperimentConfig.model_validate({"campaign": {
-            "path": sys.argv[1], "n_trials": 60, "batch_size": 2, "seed": 3,
-            "backend": {"workers": int(sys.argv[3])}, "outputs": {"rerun": True, "chunk_trials": 4}}})
-        run_campaign(config, out_dir=sys.argv[2], evaluator=ANALYTIC_EVALUATOR,
-                     evaluator_options={"sleep_s": float(sys.argv[4])}, progress=False)
+            "path": path, "n_trials": int(n_trials), "batch_size": 2, "seed": 3,
+            "backend": {"workers": int(workers)}, "outputs": {"rerun": True, "chunk_trials": int(chunk_trials)}}})
+        campaign_job(ExperimentContext(config), out_dir=out, evaluator="__main__:KillingEvaluator",
+                     evaluator_options={"kill_at": int(kill_at), "marker": marker}, progress=False)
 """)
 
 
-def _start(tmp_path, path_file, workers, sleep_s):
+def _run(tmp_path, path_file, workers) -> int:
+    """Run the campaign script to its end (or its kill); returns its exit status (-9: killed)."""
     script = tmp_path / "campaign_script.py"
     script.write_text(SCRIPT)
-    return subprocess.Popen([sys.executable, str(script), str(path_file), str(tmp_path / "c"), str(workers),
-                             str(sleep_s)], start_new_session=True, stdout=subprocess.DEVNULL,
-                            stderr=subprocess.PIPE)
-
-
-def _kill_group(proc):
+    proc = subprocess.Popen([sys.executable, str(script), str(path_file), str(tmp_path / "c"), str(workers),
+                             str(N_TRIALS), str(KILL_AT), str(CHUNK_TRIALS), str(tmp_path / "killed.marker")],
+                            start_new_session=True, stdout=subprocess.DEVNULL, stderr=subprocess.PIPE)
     try:
-        os.killpg(proc.pid, signal.SIGKILL)   # the campaign and its pool workers (its own session)
-    except ProcessLookupError:
-        pass
-    proc.wait(timeout=10)
+        _, err = proc.communicate(timeout=180)
+    except subprocess.TimeoutExpired:
+        os.killpg(proc.pid, signal.SIGKILL)   # its own session: the campaign and its pool workers
+        raise
+    assert proc.returncode in (0, -signal.SIGKILL), err.decode()[-2000:]
+    return proc.returncode
 
 
 def test_kill_9_mid_campaign_then_rerun_completes_without_duplicates(tmp_path, path_file, comparable,
                                                                      make_config):
-    proc = _start(tmp_path, path_file, workers=0, sleep_s=0.02)
+    assert _run(tmp_path, path_file, workers=0) == -signal.SIGKILL   # kill -9 while evaluating trial KILL_AT
     store = TrialStore(tmp_path / "c")
-    deadline = time.monotonic() + 60
-    while time.monotonic() < deadline and (not store.trials_dir.exists() or len(store.chunk_files()) < 2):
-        time.sleep(0.05)
-    os.kill(proc.pid, signal.SIGKILL)   # kill -9 the campaign process itself, mid-way
-    _kill_group(proc)
     partial = store.stored_ids()
-    assert 8 <= partial.size < 60, f"killed too late or too early: {partial.size} trials stored"
-    assert np.unique(partial).size == partial.size
+    # one trial after another: whole chunks of the trials before the kill; the chunk in flight is all it lost
+    assert KILL_AT - CHUNK_TRIALS < partial.size <= KILL_AT
+    np.testing.assert_array_equal(partial, np.arange(partial.size))
 
-    proc = _start(tmp_path, path_file, workers=0, sleep_s=0.02)   # the same command again resumes
-    assert proc.wait(timeout=120) == 0, proc.stderr.read().decode()[-2000:]
-    ids = store.stored_ids()
-    np.testing.assert_array_equal(ids, np.arange(60))   # complete and unique
+    assert _run(tmp_path, path_file, workers=0) == 0   # the same command again resumes
+    np.testing.assert_array_equal(store.stored_ids(), np.arange(N_TRIALS))   # complete and unique
     # the resumed campaign's records equal those of an uninterrupted one
-    config = make_config(path_file, n_trials=60, batch_size=2, seed=3)
-    fresh = run_campaign(config, out_dir=tmp_path / "fresh", evaluator=ANALYTIC_EVALUATOR,
-                         evaluator_options={"sleep_s": 0.02}, progress=False)
+    config = make_config(path_file, n_trials=N_TRIALS, batch_size=2, seed=3)
+    fresh = campaign_job(ExperimentContext(config), out_dir=tmp_path / "fresh", evaluator=ANALYTIC_EVALUATOR,
+                         progress=False)
     assert comparable(store.read_table()) == comparable(TrialStore(fresh.out_dir).read_table())
-    from wrp_eval.campaign.rerun_log import read_trial_ids
-    np.testing.assert_array_equal(read_trial_ids(tmp_path / "c" / "campaign.rrd"), np.arange(60))
+    np.testing.assert_array_equal(read_trial_ids(tmp_path / "c" / "campaign.rrd"), np.arange(N_TRIALS))
+    assert temporaries(tmp_path / "c") == [] and temporaries(store.trials_dir) == []
 
 
 @pytest.mark.slow
 def test_kill_9_of_a_process_pool_campaign(tmp_path, path_file):
-    proc = _start(tmp_path, path_file, workers=2, sleep_s=0.02)
+    assert _run(tmp_path, path_file, workers=2) == -signal.SIGKILL
     store = TrialStore(tmp_path / "c")
-    deadline = time.monotonic() + 90
-    while time.monotonic() < deadline and (not store.trials_dir.exists() or len(store.chunk_files()) < 1):
-        time.sleep(0.05)
-    _kill_group(proc)
-    assert store.stored_ids().size < 60
-    proc = _start(tmp_path, path_file, workers=2, sleep_s=0.02)
-    assert proc.wait(timeout=120) == 0, proc.stderr.read().decode()[-2000:]
-    np.testing.assert_array_equal(store.stored_ids(), np.arange(60))
+    partial = store.stored_ids()
+    assert partial.size < N_TRIALS and np.unique(partial).size == partial.size   # the batch of KILL_AT is lost
+    assert _run(tmp_path, path_file, workers=2) == 0
+    np.testing.assert_array_equal(store.stored_ids(), np.arange(N_TRIALS))

@@ -20,14 +20,16 @@ def test_ray_matches_local_and_shuts_down_its_instance(tmp_path, path_file, make
 
 
 def test_ray_set_up_error_is_the_campaigns_input_error(tmp_path, path_file, make_config):
-    from wrp_eval.campaign.runner import run_campaign
+    from wrp_eval.campaign.jobs import campaign_job
     from wrp_eval.config import ExperimentConfig
+    from wrp_eval.experiment import ExperimentContext
     doc = make_config(path_file, backend={"kind": "ray", "workers": 1}).model_dump(mode="json")
     doc["ship"]["mesh"] = {"path": str(tmp_path / "no_such_ship.stl")}
     ray.init(num_cpus=1, include_dashboard=False, log_to_driver=False)   # reused by the campaign
     try:
         with pytest.raises(InputError, match="no_such_ship"):
-            run_campaign(ExperimentConfig.model_validate(doc), out_dir=tmp_path / "c", progress=False)
+            campaign_job(ExperimentContext(ExperimentConfig.model_validate(doc)), out_dir=tmp_path / "c",
+                         progress=False)
         assert ray.is_initialized()   # an instance the caller started is left running
     finally:
         ray.shutdown()

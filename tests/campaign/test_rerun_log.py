@@ -5,6 +5,7 @@ from __future__ import annotations
 
 import numpy as np
 
+from wrp_eval.atomic import temporaries
 from wrp_eval.campaign.rerun_log import frustum_strips, read_trial_ids
 
 
@@ -16,7 +17,7 @@ def test_every_trial_is_in_the_recording_after_a_resume(tmp_path, path_file, mak
     summary = run_analytic(bigger, tmp_path / "c")
     assert summary.rerun_s > 0
     np.testing.assert_array_equal(read_trial_ids(tmp_path / "c" / "campaign.rrd"), np.arange(9))
-    assert not (tmp_path / "c" / "campaign.rrd.tmp").exists()
+    assert temporaries(tmp_path / "c") == []   # the recording's temporary was renamed onto campaign.rrd
 
 
 def test_frustum_points_along_the_optical_axis():

@@ -6,7 +6,7 @@ import numpy as np
 import pytest
 
 from wrp_eval.campaign.records import column_array
-from wrp_eval.campaign.runner import campaign_status, resolve_config
+from wrp_eval.campaign.runner import campaign_status
 from wrp_eval.campaign.store import TrialStore
 from wrp_eval.errors import InputError
 
@@ -17,7 +17,7 @@ def test_resume_skips_stored_trials_and_never_duplicates(tmp_path, path_file, ma
     assert (first.done, first.ran) == (6, 6)
     again = run_analytic(make_config(path_file, n_trials=6), tmp_path / "c")
     assert again.ran == 0 and again.done == 6
-    extended = run_analytic(resolve_config(make_config(path_file, n_trials=6), n_trials=14), tmp_path / "c")
+    extended = run_analytic(make_config(path_file, n_trials=6), tmp_path / "c", overrides={"n_trials": 14})
     assert extended.ran == 8
     ids = TrialStore(tmp_path / "c").stored_ids()
     np.testing.assert_array_equal(ids, np.arange(14))
@@ -112,12 +112,13 @@ def test_local_process_pool_matches_in_process(tmp_path, path_file, make_config,
 def test_a_worker_set_up_error_stops_the_campaign_with_its_message(tmp_path, path_file, make_config):
     """A bad input found while a worker builds its evaluator (here: the ship mesh file) is the campaign's
     InputError, not a pile of crashed trials (the real evaluator, in a process pool)."""
-    from wrp_eval.campaign.runner import run_campaign
+    from wrp_eval.campaign.jobs import campaign_job
     from wrp_eval.config import ExperimentConfig
+    from wrp_eval.experiment import ExperimentContext
     doc = make_config(path_file, backend={"workers": 1}).model_dump(mode="json")
     doc["ship"]["mesh"] = {"path": str(tmp_path / "no_such_ship.stl")}
     with pytest.raises(InputError, match="no_such_ship"):
-        run_campaign(ExperimentConfig.model_validate(doc), out_dir=tmp_path / "c", progress=False)
+        campaign_job(ExperimentContext(ExperimentConfig.model_validate(doc)), out_dir=tmp_path / "c", progress=False)
     assert TrialStore(tmp_path / "c").stored_ids().size == 0
 
 

@@ -13,10 +13,11 @@ import pytest
 from wrp_eval.errors import InputError
 from wrp_eval.export.config import ExportSection
 from wrp_eval.export.dji import KML_NS, WPML_NS
-from wrp_eval.export.formats import FORMATS, export_path, sortie_files
-from wrp_eval.export.geodesy import compass_to_yaw_rad, geographic_to_ship, wrap_180
-from wrp_eval.export.mission import build_missions, home_point, ship_pose
+from wrp_eval.export.formats import FORMATS, export_path, sortie_files, write_all_atomic
+from wrp_eval.export.mission import build_missions, home_point
+from wrp_eval.frames import compass_to_yaw_rad, geographic_to_ship, ship_pose, wrap_180
 from wrp_eval.export.qgc import qgc_plan_bytes
+from wrp_eval.ship.nofly import inside_no_fly_box
 
 
 @pytest.mark.parametrize("fmt", sorted(FORMATS))
@@ -192,26 +193,23 @@ def test_leg_through_the_ship_refused_though_both_waypoints_are_clear(ship, path
     particulars, proxy = ship
     x, y, z = path.positions[5]
     across = _with_position(path, 5, (x, -y, z))      # the mirror point on the other side of the hull
-    assert not proxy.in_no_fly_zone(across.positions).any()
+    assert not inside_no_fly_box(across.positions, proxy.no_fly_bounds()).any()
     with pytest.raises(InputError, match="leg") as info:
         export_path(across, particulars, proxy, "qgc-plan", tmp_path / "m.plan", section, source="p.json")
     assert "#4 -> #5" in str(info.value) and "\n" not in str(info.value)
     assert not (tmp_path / "m.plan").exists()
 
 
-def test_segments_cross_no_fly_zone_slab_test(ship):
-    _, proxy = ship
-    lo, hi = proxy.no_fly_bounds()
-    mid = (lo + hi) / 2
-    out = hi + 5.0
-    starts = np.array([[mid[0], lo[1] - 5, mid[2]],      # straight through the hull
-                       [mid[0], lo[1] - 5, hi[2] + 1],   # over the top
-                       [lo[0] - 5, lo[1] - 5, mid[2]],   # along the side, outside
-                       [mid[0], lo[1] - 5, mid[2]],      # ends inside
-                       mid,                              # zero length, inside
-                       out,                              # zero length, outside
-                       [lo[0] - 5, mid[1], mid[2]]])     # stops short of the bow
-    ends = np.array([[mid[0], hi[1] + 5, mid[2]], [mid[0], hi[1] + 5, hi[2] + 1], [hi[0] + 5, lo[1] - 5, mid[2]],
-                     mid, mid, out, [lo[0] - 1, mid[1], mid[2]]])
-    np.testing.assert_array_equal(proxy.segments_cross_no_fly_zone(starts, ends),
-                                  [True, False, False, True, True, False, False])
+def test_a_failure_on_any_sortie_file_replaces_none(tmp_path):
+    first, second = tmp_path / "m_sortie0.plan", tmp_path / "m_sortie1.plan"
+    first.write_bytes(b"old 0")
+    second.write_bytes(b"old 1")
+    blocked = tmp_path / "not_a_folder"
+    blocked.write_bytes(b"")          # a file where the third mission's folder should be: its write fails
+    outputs = [(first, b"new 0"), (second, b"new 1"), (blocked / "m_sortie2.plan", b"new 2")]
+    with pytest.raises(InputError, match="cannot write the mission file"):
+        write_all_atomic(outputs)
+    assert (first.read_bytes(), second.read_bytes()) == (b"old 0", b"old 1")
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["m_sortie0.plan", "m_sortie1.plan", "not_a_folder"]
+    write_all_atomic(outputs[:2])
+    assert (first.read_bytes(), second.read_bytes()) == (b"new 0", b"new 1")

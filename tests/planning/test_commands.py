@@ -4,6 +4,7 @@ import json
 import numpy as np
 import pytest
 
+from wrp_eval.atomic import temporaries
 from wrp_eval.cli import main
 from wrp_eval.errors import InputError
 from wrp_eval.planning.path import Path
@@ -61,7 +62,7 @@ def test_cli_plan_writes_path_and_metrics(tmp_path, capsys):
         assert key in metrics["timings"]
     path = Path.load(out / "path.json")
     assert path.method == "zhou2020" and len(path) == metrics["n_path_views"]
-    assert not list(out.glob("*.tmp"))
+    assert temporaries(out) == []
 
 
 def test_cli_bad_config_exits_2(tmp_path, capsys):
@@ -79,7 +80,7 @@ def test_rerun_recording_is_written(plans, proxies, tmp_path):
     moved = dataclasses.replace(result.path, positions=result.path.positions + [0.0, 0.0, 1.0])
     out = save_plan_recording(result, proxies["stylized"], tmp_path / "plan.rrd", other_paths={"wrp": moved})
     assert out.exists() and out.stat().st_size > 10_000
-    assert not list(tmp_path.glob("*.tmp"))
+    assert temporaries(tmp_path) == []
     entities = {chunk.entity_path for chunk in RrdReader(str(out)).stream()}
     n = len(result.path)
     for prefix in ("/plan", "/paths/wrp"):    # both paths: one frustum entity per view and a tour

@@ -4,8 +4,8 @@ import pytest
 from wrp_eval.planning.config import PlanningSection
 from wrp_eval.planning.path import KIND_SURFACE, KIND_TRANSITION
 from wrp_eval.planning.planner import assign_sorties, plan
-from wrp_eval.planning.tour import segments_hit_box
 from wrp_eval.planning.views import GIMBAL_MAX_PITCH
+from wrp_eval.ship.nofly import inside_no_fly_box, segments_intrude
 
 CASES = [(ship, method) for ship in ("stylized", "cruise") for method in ("ours", "zhou2020", "oblique")]
 
@@ -15,8 +15,8 @@ def test_every_view_is_safe_and_every_leg_avoids_the_ship(plans, proxies, ship, 
     path, proxy = plans[(ship, method)].path, proxies[ship]
     assert len(path) > 10
     assert np.all(path.positions[:, 2] >= 5.0 - 1e-9)               # >= 5 m above the sea
-    assert not proxy.in_no_fly_zone(path.positions).any()            # outside the no-fly box
-    assert not segments_hit_box(path.positions[:-1], path.positions[1:], proxy.no_fly_bounds()).any()
+    assert not inside_no_fly_box(path.positions, proxy.no_fly_bounds()).any()   # outside the no-fly box
+    assert not segments_intrude(path.positions[:-1], path.positions[1:], proxy.no_fly_bounds()).any()
     assert np.all(path.pitch <= GIMBAL_MAX_PITCH + 1e-9)
     assert np.all(np.isfinite(path.yaw))
 
@@ -92,4 +92,4 @@ def test_blocked_legs_get_detour_corners(stylized_proxy):
     assert n == 2 and len(path) == 5
     np.testing.assert_allclose(path.positions[1:3], [[0, 40, 32], [0, -40, 32]])   # box top 30 m + 2 m
     assert path.kind.tolist() == [0, 1, 1, 0, 0] and path.face_id.tolist() == [2, -1, -1, 3, 3]
-    assert not segments_hit_box(path.positions[:-1], path.positions[1:], stylized_proxy.no_fly_bounds()).any()
+    assert not segments_intrude(path.positions[:-1], path.positions[1:], stylized_proxy.no_fly_bounds()).any()

@@ -2,8 +2,8 @@ import numpy as np
 import pytest
 
 from wrp_eval.planning.tour import (detour_waypoints, flight_costs, local_search, open_at_longest_edge,
-                                    segments_hit_box, solve_genetic, solve_multistart, solve_ortools,
-                                    tour_length)
+                                    solve_genetic, solve_multistart, solve_ortools, tour_length)
+from wrp_eval.ship.nofly import segments_intrude
 
 BOX = np.array([[-10.0, -5.0, 0.0], [10.0, 5.0, 20.0]])
 
@@ -11,7 +11,7 @@ BOX = np.array([[-10.0, -5.0, 0.0], [10.0, 5.0, 20.0]])
 def test_segment_box_hits():
     a = np.array([[-20.0, 0, 10], [-20.0, 0, 30], [-20.0, 8, 10], [0.0, -20, 10], [15.0, 0, 10]])
     b = np.array([[20.0, 0, 10], [20.0, 0, 30], [20.0, 8, 10], [0.0, 20, 10], [30.0, 0, 10]])
-    assert segments_hit_box(a, b, BOX).tolist() == [True, False, False, True, False]
+    assert segments_intrude(a, b, BOX).tolist() == [True, False, False, True, False]
 
 
 def test_blocked_pairs_cost_the_over_the_top_detour():
@@ -24,7 +24,7 @@ def test_blocked_pairs_cost_the_over_the_top_detour():
     wp = detour_waypoints(pos[0], pos[1], BOX)
     np.testing.assert_allclose(wp, [[0, -20, 22], [0, 20, 22]])
     legs = np.array([pos[0], wp[0], wp[1]]), np.array([wp[0], wp[1], pos[1]])
-    assert not segments_hit_box(*legs, BOX).any()
+    assert not segments_intrude(*legs, BOX).any()
 
 
 def _circle(n, seed):

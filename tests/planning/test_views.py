@@ -2,7 +2,8 @@ import numpy as np
 
 from wrp_eval.camera import optical_axes
 from wrp_eval.planning.sampling import Samples
-from wrp_eval.planning.views import candidate_views, is_safe, make_safe
+from wrp_eval.planning.views import candidate_views, make_safe
+from wrp_eval.ship.nofly import flyable
 
 
 def _one_sample(proxy, face, uv):
@@ -42,7 +43,7 @@ def test_views_inside_the_no_fly_box_are_pushed_out_along_their_ray(stylized_pro
     anchor = np.array([[70.0, 0.0, 12.5]])                   # bow face centre
     inside = anchor + np.array([[2.0, 0.0, 0.0]])            # 2 m in front, inside the 5 m margin
     out = make_safe(inside, anchor, stylized_proxy, 5.0)
-    assert is_safe(out, stylized_proxy, 5.0).all()
+    assert flyable(out, stylized_proxy.no_fly_bounds(), 5.0).all()
     np.testing.assert_allclose(out[0, 1:], anchor[0, 1:])    # moved along +x only
     assert 75.0 < out[0, 0] <= 75.5 + 1e-9
 
@@ -50,4 +51,4 @@ def test_views_inside_the_no_fly_box_are_pushed_out_along_their_ray(stylized_pro
 def test_every_candidate_is_safe(plans, proxies):
     for (ship, method), result in plans.items():
         if result.candidates is not None:
-            assert is_safe(result.candidates.positions, proxies[ship], 5.0).all()
+            assert flyable(result.candidates.positions, proxies[ship].no_fly_bounds(), 5.0).all()

@@ -17,7 +17,7 @@ def _write(tmp_path, ship, name="c.yaml"):
 
 @pytest.fixture(autouse=True)
 def _cache(tmp_path, monkeypatch):
-    monkeypatch.setenv("WRP_EVAL_MODELS_DIR", str(tmp_path / "models"))
+    monkeypatch.setenv("WRP_EVAL_CACHE_DIR", str(tmp_path / "cache"))
 
 
 def test_ship_listed_in_help():
@@ -37,7 +37,7 @@ def test_ship_json_for_every_type(tmp_path, capsys, ship_type):
     assert set(doc["complexity"]) == {"bow", "stern", "port", "starboard", "top"}
     assert all(v["complexity_per_m2"] > 0 for v in doc["complexity"].values())
     assert doc["proxy"]["no_fly_margin_m"] > 0
-    assert list((tmp_path / "models" / "ships").glob(f"{ship_type}-*.npz"))
+    assert list((tmp_path / "cache" / "ships").glob(f"{ship_type}-*.npz"))
 
 
 def test_stylized_is_the_papers_ship(tmp_path, capsys):

@@ -97,7 +97,7 @@ def test_commanded_offsets_are_flown(simulator, short_path):
 def dryden_wind(severity: str, n_flights: int, seed: int, dt_s: float, speed_10m: float = 3.0):
     """The wind stage's field: synthetic marine mean wind + MIL-F-8785C Dryden turbulence at ``severity``."""
     section = WindSection(speed_10m_mps=speed_10m, turbulence=TurbulenceSection(severity=severity))
-    return build_wind_field(section, (0.0, 0.0, 0.0), n_flights, np.random.SeedSequence(seed), dt_s)
+    return build_wind_field([section] * n_flights, (0.0, 0.0, 0.0), np.random.SeedSequence(seed), dt_s)
 
 
 def _control_dt(simulator):

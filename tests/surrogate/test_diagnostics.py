@@ -22,12 +22,12 @@ campaign:
 
 @pytest.fixture(scope="module")
 def campaign_dir(tmp_path_factory):
-    from wrp_eval.campaign.runner import run_campaign
-    from wrp_eval.config import load_experiment
+    from wrp_eval.campaign.jobs import campaign_job
+    from wrp_eval.experiment import ExperimentContext
     folder = tmp_path_factory.mktemp("ceiling")
     cfg = folder / "c.yaml"
     cfg.write_text(CONFIG)
-    summary = run_campaign(load_experiment(cfg), out_dir=folder / "campaign", progress=False)
+    summary = campaign_job(ExperimentContext.load(cfg), out_dir=folder / "campaign", progress=False)
     assert summary.done == 4 and summary.failed < 4
     return folder / "campaign"
 

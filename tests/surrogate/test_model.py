@@ -2,6 +2,7 @@ import numpy as np
 import pytest
 import torch
 
+from wrp_eval.atomic import temporaries
 from wrp_eval.errors import InputError
 from wrp_eval.surrogate.model import Surrogate, ViewQuery
 
@@ -44,7 +45,7 @@ def test_checkpoint_round_trip(tmp_path):
     x = np.random.default_rng(0).normal(size=(5, 7, 4))
     np.testing.assert_array_equal(loaded.predict(x), s.predict(x))
     assert loaded.meta == s.meta
-    assert not list(tmp_path.glob("*.tmp"))
+    assert temporaries(tmp_path) == []
 
 
 def test_checkpoint_refuses_other_path(tmp_path):

@@ -1,13 +1,12 @@
-"""Charnock roughness, the log law, frame conventions and the synthetic marine field."""
+"""Charnock roughness, the log law and the synthetic marine field (frames: tests/test_frames.py)."""
 
 from __future__ import annotations
 
 import numpy as np
 import pytest
 
-from wrp_eval.wind.boundary_layer import (GRAVITY_MPS2, VON_KARMAN, charnock_roughness, earth_to_ship,
-                                          log_law_factor, ship_to_earth, synthetic_marine_grid,
-                                          wind_from_direction)
+from wrp_eval.wind.boundary_layer import (GRAVITY_MPS2, VON_KARMAN, charnock_roughness, log_law_factor,
+                                          synthetic_marine_grid)
 from wrp_eval.wind.grid import interpolate
 
 
@@ -23,17 +22,6 @@ def test_log_law_factor():
     assert log_law_factor(10.0, 2e-4) == pytest.approx(1.0)
     assert log_law_factor(0.0, 2e-4) == 0.0
     assert log_law_factor(100.0, 2e-4) == pytest.approx(np.log(100 / 2e-4) / np.log(10 / 2e-4))
-
-
-def test_frame_conventions():
-    # heading north: bow = north, port = west
-    x, y = earth_to_ship(np.array([0.0, 1.0]), np.array([1.0, 0.0]), 0.0)
-    np.testing.assert_allclose(x, [1, 0], atol=1e-12)
-    np.testing.assert_allclose(y, [0, -1], atol=1e-12)
-    e, n = ship_to_earth(*earth_to_ship(np.array([0.3]), np.array([-2.0]), 1.1), 1.1)
-    np.testing.assert_allclose([e[0], n[0]], [0.3, -2.0])
-    # a westerly (from 270) blows toward the east
-    np.testing.assert_allclose(wind_from_direction(5.0, np.deg2rad(270.0)), [5.0, 0.0], atol=1e-12)
 
 
 def test_synthetic_field_profile_and_direction():

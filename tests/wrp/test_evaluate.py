@@ -38,7 +38,8 @@ def test_evaluate_flies_all_paths_with_the_same_winds(tmp_path):
     from wrp_eval.surrogate.data import load_campaign_trials
     from wrp_eval.surrogate.config import SurrogateSection
     from wrp_eval.surrogate.train import train_surrogate
-    from wrp_eval.wrp.commands import run_evaluate
+    from wrp_eval.experiment import ExperimentContext
+    from wrp_eval.wrp.jobs import evaluate_job
     camp = tmp_path / "campaign"
     helpers.make_campaign(camp, 40, 5, seed=3)
     train_surrogate(load_campaign_trials(camp), SurrogateSection(epochs=2, channels=4), seed=0) \
@@ -48,7 +49,7 @@ def test_evaluate_flies_all_paths_with_the_same_winds(tmp_path):
         "campaign": {"backend": {"workers": 0}, "batch_size": 4},
         "wrp": {"iterations": 16, "attitude_samples": 3, "neighbourhood_samples": 3, "block_iterations": 8,
                 "oracle_error": False, "threshold_m": 0.2, "evaluate": {"n_trials": 6, "bootstrap": 200}}})
-    doc = run_evaluate(config, tmp_path, tmp_path / "ev", checkpoint=str(tmp_path / "s.pt"), campaign=str(camp),
+    doc = evaluate_job(ExperimentContext(config, tmp_path), tmp_path / "ev", checkpoint=str(tmp_path / "s.pt"), campaign=str(camp),
                        e_original=0.6, quiet=True, evaluator=ANALYTIC_EVALUATOR)
     assert [p["path"] for p in doc["paths"]] == ["initial", "iswrp", "swrp"]
     assert all(p["trials"] == 6 for p in doc["paths"])

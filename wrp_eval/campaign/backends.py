@@ -8,11 +8,15 @@ from __future__ import annotations
 
 import multiprocessing
 import os
+import socket
+import time
 from collections.abc import Iterator
 from concurrent.futures import FIRST_COMPLETED, ProcessPoolExecutor, wait
 from concurrent.futures.process import BrokenProcessPool
 from contextlib import contextmanager
 
+from wrp_eval.campaign.records import make_record
+from wrp_eval.campaign.sampling import trial_inputs
 from wrp_eval.campaign.worker import ray_run_batch, run_batch, thread_env
 from wrp_eval.errors import InputError
 
@@ -46,17 +50,11 @@ def _child_environment(threads: int):
 
 def _crash_records(spec: dict, ids: list[int], message: str) -> list[dict]:
     """Records for trials whose worker process died every time it tried them."""
-    import socket
-    import time
 
-    from wrp_eval.campaign.config import CampaignSection
-    from wrp_eval.campaign.records import make_record
-    from wrp_eval.campaign.sampling import trial_inputs
     ctx = spec["context"]
-    section = CampaignSection.model_validate(ctx["config"]["campaign"])
-    n_views = len(ctx["path"]["viewpoints"])
-    return [make_record(trial_inputs(section, ctx["root_seed"], k, n_views), None, root_seed=ctx["root_seed"],
-                        path_digest=ctx["path_digest"], n_views=n_views, attempts=spec["max_attempts"],
+    n_views = len(ctx.path)
+    return [make_record(trial_inputs(ctx.trial.campaign, ctx.root_seed, k, n_views), None, root_seed=ctx.root_seed,
+                        path_digest=ctx.path_digest, n_views=n_views, attempts=spec["max_attempts"],
                         trial_s=0.0, worker=socket.gethostname(), finished_unix=time.time(), error=message)
             for k in ids]
 
@@ -70,7 +68,7 @@ def run_local(spec: dict, batches: list[list[int]], workers: int) -> Iterator[li
     todo = list(enumerate(batches))[::-1]  # a stack: pop() takes the lowest batch first
     crashes: dict[int, int] = {}
     while todo:
-        with _child_environment(spec["context"]["threads"]):
+        with _child_environment(spec["context"].threads):
             # no pool initializer: a worker's set-up error (bad ship mesh, netCDF, ...) then surfaces from
             # run_batch as that batch's exception and aborts the campaign with its message, instead of
             # breaking the pool like a crash
@@ -80,7 +78,7 @@ def run_local(spec: dict, batches: list[list[int]], workers: int) -> Iterator[li
             while todo or running:
                 while todo and len(running) < workers * IN_FLIGHT_PER_WORKER:
                     index, ids = todo.pop()
-                    with _child_environment(spec["context"]["threads"]):
+                    with _child_environment(spec["context"].threads):
                         running[pool.submit(run_batch, spec, ids)] = (index, ids)
                 done, _ = wait(running, return_when=FIRST_COMPLETED)
                 for fut in done:
@@ -103,7 +101,7 @@ def run_ray(spec: dict, batches: list[list[int]], workers: int, address: str | N
     ``workers`` CPUs (reusing one already initialised in this process). Tasks are retried by Ray when a
     worker dies (``max_retries``); exceptions inside a trial are handled by the worker's own retries."""
     try:
-        import ray
+        import ray  # lazily: Ray is the optional [cluster] extra, needed only by this backend
     except ImportError:
         raise InputError("campaign.backend", "the ray backend needs Ray: pip install '.[cluster]'") from None
     started_here = False

@@ -15,13 +15,19 @@ from __future__ import annotations
 
 import os
 import tempfile
-from collections import Counter
 import time
+from collections import Counter
 from pathlib import Path
 
 import numpy as np
 
-from wrp_eval.bench import BenchRecord
+from wrp_eval.bench_record import BenchRecord
+from wrp_eval.campaign.backends import default_workers
+from wrp_eval.campaign.jobs import campaign_job
+from wrp_eval.campaign.rerun_log import CampaignRecorder
+from wrp_eval.campaign.store import TrialStore
+from wrp_eval.config import ExperimentConfig
+from wrp_eval.experiment import ExperimentContext
 
 BENCH_BATCH = int(os.environ.get("WRP_EVAL_BENCH_CAMPAIGN_BATCH", "128"))
 BENCH_TRIALS = int(os.environ.get("WRP_EVAL_BENCH_CAMPAIGN_TRIALS", "512"))
@@ -29,7 +35,6 @@ OVERHEAD_TRIALS = 200
 
 
 def _reference_config(path_file: Path, n_trials: int, out: Path, rerun: bool, workers: int | None):
-    from wrp_eval.config import ExperimentConfig
     return ExperimentConfig.model_validate({"campaign": {
         "path": str(path_file), "n_trials": n_trials, "batch_size": BENCH_BATCH, "seed": 1,
         "wind": {"speed_10m_m_s": {"dist": "uniform", "low": 4, "high": 10}, "turbulence": {"severity": "moderate"}},
@@ -39,20 +44,15 @@ def _reference_config(path_file: Path, n_trials: int, out: Path, rerun: bool, wo
 
 
 def run_bench() -> list[BenchRecord]:
-    from wrp_eval.campaign.backends import default_workers
-    from wrp_eval.campaign.rerun_log import CampaignRecorder
-    from wrp_eval.campaign.runner import load_path, run_campaign
-    from wrp_eval.campaign.store import TrialStore
-    from wrp_eval.config import ExperimentConfig
 
     cores = default_workers()
     with tempfile.TemporaryDirectory() as tmp:
         tmp = Path(tmp)
-        path = load_path(ExperimentConfig())          # the reference ship's planned path
+        path = ExperimentContext(ExperimentConfig()).campaign_path      # the reference ship's planned path
         path_file = tmp / "path.json"
         path.save(path_file)
 
-        real = run_campaign(_reference_config(path_file, BENCH_TRIALS, tmp / "real", True, None),
+        real = campaign_job(ExperimentContext(_reference_config(path_file, BENCH_TRIALS, tmp / "real", True, None)),
                             progress=False)
         table = TrialStore(real.out_dir).read_table(["finished_unix", "worker", "failed", "flight_s", "oracle_s"])
         finished = np.sort(table.column("finished_unix").to_numpy())

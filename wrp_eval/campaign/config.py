@@ -14,7 +14,11 @@ from typing import Annotated, Literal, Union
 
 from pydantic import Discriminator, Field, Tag, model_validator
 
+from wrp_eval.recon.config import OracleSection
+from wrp_eval.ship.config import ShipSection
+from wrp_eval.sim.config import SimSection
 from wrp_eval.validation import StrictModel
+from wrp_eval.wind.config import WindSection
 
 
 class Uniform(StrictModel):
@@ -194,3 +198,22 @@ class CampaignSection(StrictModel):
     oracle: Literal["synthetic", "colmap"] = "synthetic"
     backend: Backend = Backend()
     outputs: Outputs = Outputs()
+
+
+class TrialConfig(StrictModel):
+    """What one trial (a flight and its scoring) reads of an experiment: the ``ship:``, ``wind:``, ``sim:``,
+    ``oracle:`` and ``campaign:`` sections. It is the campaign's fingerprint and what a worker receives (a
+    validated model, pickled to processes and Ray nodes, never validated again there); the path enters
+    through its digest, the root seed beside it."""
+
+    ship: ShipSection = ShipSection()
+    wind: WindSection = WindSection()
+    sim: SimSection = SimSection()
+    oracle: OracleSection = OracleSection()
+    campaign: CampaignSection = CampaignSection()
+
+    @classmethod
+    def from_stored(cls, doc: dict) -> "TrialConfig":
+        """The trial config of a stored campaign.json ``config`` (older campaigns stored the whole experiment
+        document: only the trial sections are read)."""
+        return cls.model_validate({name: doc[name] for name in cls.model_fields if name in doc})

@@ -19,9 +19,13 @@ from typing import Protocol
 
 import numpy as np
 
+from wrp_eval.campaign.config import TrialConfig
 from wrp_eval.campaign.records import TrialOutcome
 from wrp_eval.campaign.sampling import TrialInputs
 from wrp_eval.errors import InputError
+from wrp_eval.frames import wind_velocity
+from wrp_eval.planning.path import Path as FlightPath
+from wrp_eval.ship.resolve import resolve_particulars
 
 DEFAULT_EVALUATOR = "wrp_eval.campaign.flight:make_flight_evaluator"
 ANALYTIC_EVALUATOR = "wrp_eval.campaign.evaluators:make_analytic_evaluator"
@@ -29,14 +33,14 @@ ANALYTIC_EVALUATOR = "wrp_eval.campaign.evaluators:make_analytic_evaluator"
 
 @dataclass(frozen=True)
 class CampaignContext:
-    """What every worker knows about the campaign (plain data, cheap to ship to a process or a Ray node).
+    """What every worker knows about the campaign (value types, pickled to a process or a Ray node as they are).
 
-    config: the resolved experiment config (``ExperimentConfig.model_dump(mode="json")``); path: the path's
-    JSON document; root_seed; path_digest; threads: CPU threads a worker may use; config_dir: the folder
-    relative files of the config (ship mesh, AIS, netCDF) are resolved against (None: the working directory)."""
+    trial: the sections a trial reads (validated once, in the calling process); path: the path flown;
+    root_seed; path_digest; threads: CPU threads a worker may use; config_dir: the folder relative files of the
+    config (ship mesh, AIS, netCDF) are resolved against (None: the working directory)."""
 
-    config: dict
-    path: dict
+    trial: TrialConfig
+    path: FlightPath
     root_seed: int
     path_digest: str
     threads: int = 1
@@ -59,23 +63,27 @@ def resolve_factory(name: str):
 class AnalyticEvaluator:
     """Closed-form stand-in evaluator: a pure function of each trial's inputs.
 
-    Wind-induced deviation of view i = gain * W * (cos d, sin d, 0, 0.02) * disturbance_i + turbulence noise
-    (seeded by the trial's wind seed, std grows with severity); flown = commanded + deviation; error_m grows
-    with the mean offset norm; a trial fails when W > fail_speed_m_s. ``fail_trial_ids`` raise (to exercise
-    error recording); ``sleep_s`` per trial emulates work."""
+    Wind-induced deviation of view i = gain * (w_x, w_y, 0, 0.02 W) * disturbance_i + turbulence noise (seeded
+    by the trial's wind seed, std grows with severity), with (w_x, w_y) the drawn wind of speed W in the ship
+    frame (:func:`wrp_eval.frames.wind_velocity`: blowing FROM the drawn compass direction, the ship's heading
+    from its ``ship:`` section; it read the compass direction d as (cos d, sin d), an angle counter-clockwise
+    from the bow, until the frames module made the one convention); flown = commanded + deviation; error_m
+    grows with the mean offset norm; a trial fails when W > fail_speed_m_s. ``fail_trial_ids`` raise (to
+    exercise error recording); ``sleep_s`` per trial emulates work."""
 
     SEVERITY_STD = {"none": 0.0, "from_mean": 0.1, "light": 0.05, "moderate": 0.1, "severe": 0.2}
 
     def __init__(self, context: CampaignContext, gain_m_per_m_s: float = 0.05, fail_speed_m_s: float = 1e9,
                  fail_trial_ids: tuple[int, ...] = (), sleep_s: float = 0.0, trajectory_points: int = 20):
-        self.n_views = len(context.path["viewpoints"])
+        self.n_views = len(context.path)
         self.gain = gain_m_per_m_s
         self.fail_speed = fail_speed_m_s
         self.fail_ids = frozenset(int(k) for k in fail_trial_ids)
         self.sleep_s = sleep_s
-        vps = context.path["viewpoints"]
-        self.planned = np.array([[v["x_m"], v["y_m"], v["z_m"]] for v in vps], dtype=float)
+        self.planned = np.asarray(context.path.positions, dtype=float)
         self.trajectory_points = trajectory_points
+        particulars, _ = resolve_particulars(context.trial.ship, context.config_dir or ".")
+        self.heading_rad = float(np.radians(particulars.heading_deg))
 
     def evaluate(self, batch: list[TrialInputs]) -> list[TrialOutcome]:
         out = []
@@ -86,8 +94,8 @@ class AnalyticEvaluator:
             if self.sleep_s:
                 time.sleep(self.sleep_s)
             w = inputs.wind
-            d = np.radians(w.direction_deg)
-            mean = self.gain * w.speed_10m_m_s * np.array([np.cos(d), np.sin(d), 0.0, 0.02])
+            v = wind_velocity(w.speed_10m_m_s, np.radians(w.direction_deg), self.heading_rad)   # (3,) ship frame
+            mean = self.gain * np.array([v[0], v[1], 0.0, 0.02 * w.speed_10m_m_s])
             std = (self.SEVERITY_STD.get(w.severity, 0.1) if w.sigma_w_mps is None else w.sigma_w_mps) \
                 * w.speed_10m_m_s * self.gain
             noise = np.random.default_rng(w.seed).normal(0.0, std, size=(self.n_views, 4))
@@ -97,7 +105,7 @@ class AnalyticEvaluator:
             capture = self.planned + flown[:, :3]
             idx = np.linspace(0, self.n_views - 1, self.trajectory_points)
             trajectory = np.stack([np.interp(idx, np.arange(self.n_views), capture[:, j]) for j in range(3)], 1)
-            wind = np.tile([w.speed_10m_m_s * np.cos(d), w.speed_10m_m_s * np.sin(d), 0.0], (self.n_views, 1))
+            wind = np.tile(v, (self.n_views, 1))
             metrics = {"error_m": 0.5 + 0.1 * float(norm.mean()), "accuracy_m": 0.3 + 0.05 * float(norm.mean()),
                        "completeness": float(np.exp(-0.1 * norm.mean())), "precision": 1.0,
                        "fscore": float(np.exp(-0.1 * norm.mean())), "registered_fraction": 1.0}

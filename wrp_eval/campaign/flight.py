@@ -1,7 +1,7 @@
 """The real trial evaluator: batched MuJoCo flights of the (perturbed) path through each trial's wind, then
 the reconstruction oracle on each trial's capture poses.
 
-Per batch of trials: one wind model for the batch (:mod:`trial_wind`), one ``FlightSimulator.fly`` call with
+Per batch of trials: one wind field for the batch (the wind stage's ``build_wind_field``), one ``FlightSimulator.fly`` call with
 the commanded offsets, then per trial the paper's extra disturbance of the wind-induced deviation, the
 capture set and one oracle call. Offsets are measured from the planned viewpoints:
     flown = commanded + disturbance * (sim_offset - commanded)
@@ -11,27 +11,18 @@ capture poses are exactly the simulator's.
 
 from __future__ import annotations
 
-import json
-import tempfile
 import time
-from pathlib import Path
 
 import numpy as np
 
 from wrp_eval.campaign.evaluators import CampaignContext
 from wrp_eval.campaign.records import TrialOutcome
-from wrp_eval.campaign.sampling import TrialInputs
+from wrp_eval.campaign.sampling import TrialInputs, trial_wind_rng, trial_wind_section
+from wrp_eval.errors import InputError
+from wrp_eval.recon.scene import scored_ship
 from wrp_eval.sim.captures import CaptureSet
-
-
-def load_path_doc(doc: dict):
-    """A :class:`wrp_eval.planning.path.Path` from its JSON document (through the planning stage's own
-    loader, so the same checks apply)."""
-    from wrp_eval.planning.path import Path as FlightPath
-    with tempfile.TemporaryDirectory() as tmp:
-        file = Path(tmp) / "path.json"
-        file.write_text(json.dumps(doc))
-        return FlightPath.load(file)
+from wrp_eval.sim.flight import FlightSimulator
+from wrp_eval.wind.field import build_wind_field
 
 
 def trajectory_until(times: np.ndarray, positions: np.ndarray, end_s: np.ndarray, points: int) -> list[np.ndarray]:
@@ -59,23 +50,19 @@ class FlightEvaluator:
     """Built once per worker: the ship, the path, the simulator and the oracle stay loaded between batches."""
 
     def __init__(self, context: CampaignContext):
-        from wrp_eval.config import ExperimentConfig
-        from wrp_eval.recon.scene import scored_ship
-        from wrp_eval.sim.flight import FlightSimulator
-        self.config = ExperimentConfig.model_validate(context.config)
+        self.config = context.trial
         self.config_dir = context.config_dir or "."
-        self.path = load_path_doc(context.path)
-        self.ship = scored_ship(self.config, self.config_dir)
+        self.path = context.path
+        self.ship = scored_ship(self.config.ship, self.config.oracle, self.config.campaign.oracle, self.config_dir)
         sim_section = self.config.sim.model_copy(update={"threads": max(1, int(context.threads))})
         self.sim = FlightSimulator(sim_section)
         self.dt_s = sim_section.timestep_s * sim_section.chunk_steps
         self.trajectory_points = self.config.campaign.outputs.trajectory_points
 
     def evaluate(self, batch: list[TrialInputs]) -> list[TrialOutcome]:
-        from wrp_eval.campaign.trial_wind import build_trial_wind
         start = time.perf_counter()
-        wind = build_trial_wind(self.config.wind, [t.wind for t in batch], self.ship.particulars, self.dt_s,
-                                self.config_dir)
+        wind = build_wind_field([trial_wind_section(self.config.wind, t.wind) for t in batch], self.ship.particulars,
+                                [trial_wind_rng(t.wind) for t in batch], self.dt_s, self.config_dir)
         commanded = np.stack([t.commanded_offsets for t in batch])           # (b, n, 4)
         result = self.sim.fly(self.path, wind, len(batch), view_offsets=commanded)
         flight_s = (time.perf_counter() - start) / len(batch)
@@ -115,6 +102,5 @@ class FlightEvaluator:
 
 def make_flight_evaluator(context: CampaignContext, **options) -> FlightEvaluator:
     if options:
-        from wrp_eval.errors import InputError
         raise InputError("evaluator", f"the flight evaluator takes no options, got {sorted(options)}")
     return FlightEvaluator(context)

@@ -6,6 +6,14 @@ import os
 import sys
 import time
 
+from rich.progress import (
+    BarColumn,
+    MofNCompleteColumn,
+    Progress,
+    TextColumn,
+    TimeRemainingColumn,
+)
+
 
 def _is_interactive(stream) -> bool:
     return bool(getattr(stream, "isatty", lambda: False)()) and not os.environ.get("CI")
@@ -24,7 +32,6 @@ class CampaignProgress:
         self._last_line = 0.0
         self._bar = None
         if enabled and _is_interactive(self.stream):
-            from rich.progress import BarColumn, MofNCompleteColumn, Progress, TextColumn, TimeRemainingColumn
             self._bar = Progress(TextColumn("campaign"), BarColumn(), MofNCompleteColumn(),
                                  TextColumn("{task.fields[rate]:.1f} trials/min"), TimeRemainingColumn(),
                                  TextColumn("failed {task.fields[failed]}"), transient=False)

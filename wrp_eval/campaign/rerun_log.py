@@ -4,29 +4,34 @@ Entities (world frame, metres):
   world/ship (static mesh), world/path (static planned line + viewpoints),
   world/trial/trajectory (flown, down-sampled), world/trial/frusta (capture frusta as line strips),
   world/trial/wind (arrows at the capture points, 1 m per m/s), metrics/<name> (scalars per trial).
-The recording is written to ``<out>/campaign.rrd.tmp`` while the campaign runs and renamed to
-``campaign.rrd`` when it ends. On a resume the stored trials are logged again from the Parquet store first
-(it holds everything drawn here), so the file always covers the whole campaign.
+The recording is written to a temporary beside ``<out>/campaign.rrd`` while the campaign runs and renamed to
+``campaign.rrd`` when it ends (:func:`wrp_eval.recording.recording`). On a resume the stored trials are
+logged again from the Parquet store first (it holds everything drawn here), so the file always covers the
+whole campaign.
 Read it back with :func:`read_trial_ids` (rerun's own ``rerun.chunk.RrdReader``).
 """
 
 from __future__ import annotations
 
-import os
 import time
+from contextlib import ExitStack
 from pathlib import Path
 
 import numpy as np
+import rerun as rr
+import rerun.blueprint as rrb
+from rerun.chunk import RrdReader
 
 from wrp_eval.campaign.records import METRIC_NAMES
+from wrp_eval.planning.path import Path as FlightPath
+from wrp_eval.planning.path import digest_of_document
+from wrp_eval.recording import recording
 
-APPLICATION_ID = "wrp-eval"  # the same application as the ship and plan recordings, so a run merges into one
 TIMELINE = "trial"
 FRUSTUM_DEPTH_M = 4.0
 
 
 def blueprint():
-    import rerun.blueprint as rrb
     return rrb.Blueprint(
         rrb.Horizontal(
             rrb.Spatial3DView(name="flights", origin="/world"),
@@ -61,25 +66,26 @@ def frustum_strips(positions: np.ndarray, yaw: np.ndarray, pitch: np.ndarray, ha
     return np.concatenate(order, axis=1)
 
 
-def campaign_recording_id(path_doc: dict) -> str:
+def campaign_recording_id(path: FlightPath) -> str:
     """The recording id of a path's campaign: other recordings of the same run (ship, plan) that use it merge
     into the same recording (``rerun rrd merge``)."""
-    from wrp_eval.campaign.runner import path_digest
-    return f"campaign-{path_digest(path_doc)}"
+    return f"campaign-{path.digest()}"
 
 
 class CampaignRecorder:
     """Writes the campaign's recording. ``seconds`` accumulates the time spent logging (for the overhead)."""
 
     def __init__(self, out_dir: Path, path_doc: dict, ship_mesh=None):
-        import rerun as rr
         self.rr = rr
         self.final = Path(out_dir) / "campaign.rrd"
-        self.tmp = Path(out_dir) / "campaign.rrd.tmp"
         self.seconds = 0.0
         start = time.perf_counter()
-        self.rec = rr.RecordingStream(APPLICATION_ID, recording_id=campaign_recording_id(path_doc))
-        self.rec.save(str(self.tmp), default_blueprint=blueprint())
+        # the stream stays open across log_trial calls: the recording's block ends in close()
+        self._file = ExitStack()
+        # the id campaign_recording_id gives the path this document is (its digest is the document's)
+        recording_id = f"campaign-{digest_of_document(path_doc)}"
+        self.rec = self._file.enter_context(recording(self.final, recording_id=recording_id,
+                                                      default_blueprint=blueprint()))
         vps = path_doc["viewpoints"]
         self.planned = np.array([[v["x_m"], v["y_m"], v["z_m"]] for v in vps], dtype=float)
         self.planned_yaw = np.radians([v["yaw_deg"] for v in vps])
@@ -130,9 +136,7 @@ class CampaignRecorder:
     def close(self) -> Path:
         """Flush, close and move the recording to ``campaign.rrd``."""
         start = time.perf_counter()
-        self.rec.flush()
-        self.rec.disconnect()
-        os.replace(self.tmp, self.final)
+        self._file.close()  # the end of the recording's block: flush, close, rename onto campaign.rrd
         self.seconds += time.perf_counter() - start
         return self.final
 
@@ -140,7 +144,6 @@ class CampaignRecorder:
 def read_trial_ids(rrd_file: str | Path) -> np.ndarray:
     """Sorted unique values of the ``trial`` timeline at which ``metrics/failed`` was logged in a .rrd file,
     read with rerun's own reader (every logged trial has exactly one such row)."""
-    from rerun.chunk import RrdReader
     ids = []
     for chunk in RrdReader(str(rrd_file)).stream():
         if chunk.entity_path == "/metrics/failed" and TIMELINE in chunk.timeline_names:

@@ -1,6 +1,6 @@
 """Run a campaign (resumably) and summarise a campaign folder.
 
-``run_campaign`` = resolve the config -> path -> fingerprint -> take the folder's lock -> skip stored trials
+``run_campaign`` = trial config + path -> fingerprint -> take the folder's lock -> skip stored trials
 -> batches of the remaining trial ids -> backend -> records buffered and written in atomic chunks, each one
 logged to rerun and counted by the progress bar -> close. Re-running the same call resumes.
 """
@@ -9,20 +9,28 @@ from __future__ import annotations
 
 import hashlib
 import json
+import platform
 import time
 from dataclasses import dataclass
+from importlib.metadata import PackageNotFoundError, version
 from pathlib import Path
 
 import numpy as np
 
 from wrp_eval.campaign import backends
-from wrp_eval.campaign.config import CampaignSection
-from wrp_eval.campaign.evaluators import DEFAULT_EVALUATOR, CampaignContext, resolve_factory
+from wrp_eval.campaign.config import CampaignSection, TrialConfig
+from wrp_eval.campaign.evaluators import (
+    DEFAULT_EVALUATOR,
+    CampaignContext,
+    resolve_factory,
+)
 from wrp_eval.campaign.progress import CampaignProgress
+from wrp_eval.campaign.rerun_log import CampaignRecorder
 from wrp_eval.campaign.store import TrialStore
-from wrp_eval.config import ExperimentConfig
 from wrp_eval.errors import InputError
 from wrp_eval.planning.path import Path as FlightPath
+from wrp_eval.planning.path import digest_of_document
+from wrp_eval.ship.resolve import resolve_ship_full
 
 # settings that do not change any trial's result: excluded from the fingerprint
 _NEUTRAL_KEYS = ("n_trials", "batch_size", "backend", "outputs")
@@ -46,31 +54,11 @@ class CampaignSummary:
     rerun_s: float
 
 
-def path_digest(path_doc: dict) -> str:
-    """Content hash of a path's JSON document (viewpoints, camera, speed, dwell)."""
-    key = {k: path_doc[k] for k in ("viewpoints", "camera", "speed_m_s", "dwell_s")}
-    return hashlib.sha256(json.dumps(key, sort_keys=True).encode()).hexdigest()[:16]
-
-
-def load_path(config: ExperimentConfig, config_dir: Path | None = None) -> FlightPath:
-    """The campaign's path: ``campaign.path`` (relative to the config's folder) or planned from ``planning:``."""
-    if config.campaign.path is not None:
-        file = Path(config.campaign.path)
-        if not file.is_absolute() and config_dir is not None and not file.exists():
-            file = config_dir / file
-        return FlightPath.load(file)
-    # as `wrp-eval plan` does: the ship stage's proxy and complexity, the planning stage's seed stream
-    from wrp_eval.planning.commands import planning_rng
-    from wrp_eval.planning.planner import plan
-    from wrp_eval.ship.resolve import resolve_ship_full
-    ship = resolve_ship_full(config.ship, config_dir or ".")
-    return plan(ship.proxy, ship.complexity.complexity, config.planning, planning_rng(config.run.seed)).path
-
-
-def resolve_config(config: ExperimentConfig, *, n_trials: int | None = None, backend: str | None = None,
-                   workers: int | None = None, rerun: bool | None = None) -> ExperimentConfig:
-    """Apply command-line overrides to the ``campaign:`` section (validated again)."""
-    section = config.campaign.model_dump()
+def with_overrides(trial: TrialConfig, *, n_trials: int | None = None, backend: str | None = None,
+                   workers: int | None = None, rerun: bool | None = None) -> TrialConfig:
+    """The trial config with command-line overrides of the ``campaign:`` section (only that section is
+    validated again, for the overridden values)."""
+    section = trial.campaign.model_dump()
     if n_trials is not None:
         section["n_trials"] = n_trials
     if backend is not None:
@@ -79,9 +67,7 @@ def resolve_config(config: ExperimentConfig, *, n_trials: int | None = None, bac
         section["backend"]["workers"] = workers
     if rerun is not None:
         section["outputs"]["rerun"] = rerun
-    doc = config.model_dump(mode="json")
-    doc["campaign"] = CampaignSection.model_validate(section).model_dump(mode="json")
-    return ExperimentConfig.model_validate(doc)
+    return trial.model_copy(update={"campaign": CampaignSection.model_validate(section)})
 
 
 def fingerprint(config_doc: dict, digest: str, root_seed: int, evaluator: str, options: dict) -> str:
@@ -105,22 +91,16 @@ def stored_fingerprint(meta: dict) -> str | None:
     new setting) and a change in which sections count do not orphan the stored trials. None when the stored
     inputs no longer validate."""
     try:
-        doc = ExperimentConfig.model_validate(meta["config"]).model_dump(mode="json")
+        doc = TrialConfig.from_stored(meta["config"]).model_dump(mode="json")
         return fingerprint(doc, meta["path_digest"], meta["root_seed"], meta.get("evaluator", DEFAULT_EVALUATOR),
                            meta.get("evaluator_options") or {})
     except (KeyError, TypeError, ValueError):   # pydantic's ValidationError is a ValueError
         return None
 
 
-def default_out_dir(config: ExperimentConfig) -> Path:
-    return Path(config.campaign.outputs.dir or Path("logs") / config.run.name / "campaign")
-
-
 def versions() -> dict:
     """Python, machine and the versions of the libraries a trial depends on (from package metadata: no
     heavy imports)."""
-    import platform
-    from importlib.metadata import PackageNotFoundError, version
     found = {"python": platform.python_version(), "wrp-eval": __import__("wrp_eval").__version__}
     for name in ("numpy", "scipy", "mujoco", "open3d", "torch", "trimesh", "rerun-sdk", "pyarrow", "ray"):
         try:
@@ -130,29 +110,26 @@ def versions() -> dict:
     return {"machine": platform.machine(), "system": platform.platform(), "versions": found}
 
 
-def _ship_mesh(config: ExperimentConfig, config_dir: Path | None):
-    """The true ship mesh for the recording."""
-    from wrp_eval.ship.resolve import resolve_ship_full
-    return resolve_ship_full(config.ship, config_dir or ".").mesh
-
-
-def run_campaign(config: ExperimentConfig, *, out_dir: str | Path | None = None, config_dir: Path | None = None,
-                 evaluator: str = DEFAULT_EVALUATOR, evaluator_options: dict | None = None,
-                 progress: bool = True, path: FlightPath | None = None) -> CampaignSummary:
-    """Run (or resume) the campaign of ``config`` into ``out_dir``. ``config`` already carries any overrides
-    (see :func:`resolve_config`). ``evaluator`` names the factory ``"module:function"`` of the trial
-    evaluator; ``path`` overrides the path source (used by callers that hold a Path already)."""
+def run_campaign(trial: TrialConfig, path: FlightPath, out_dir: str | Path, *, root_seed: int,
+                 config_dir: Path | None = None, evaluator: str = DEFAULT_EVALUATOR,
+                 evaluator_options: dict | None = None, progress: bool = True,
+                 ship_mesh=None) -> CampaignSummary:
+    """Run (or resume) the campaign of ``trial`` flying ``path`` into ``out_dir``. ``trial`` already carries
+    any overrides (see :func:`with_overrides`). ``evaluator`` names the factory ``"module:function"`` of the
+    trial evaluator; ``ship_mesh``: the true ship mesh for the recording (resolved here when the recording is
+    on and none is given)."""
     wall_start = time.perf_counter()
-    section = config.campaign
+    section = trial.campaign
     evaluator_options = dict(evaluator_options or {})
     resolve_factory(evaluator)  # fail early, in the calling process, on a bad name
-    flight_path = path if path is not None else load_path(config, config_dir)
-    path_doc = flight_path.to_json_dict()
-    digest = path_digest(path_doc)
-    root_seed = section.seed if section.seed is not None else config.run.seed
-    config_doc = config.model_dump(mode="json")
+    path_doc = path.to_json_dict()
+    # the workers fly the path as the folder stores it (path.json holds degrees): the same floats whether the
+    # campaign is run now, resumed from its folder, or re-scored from the stored path later
+    path = FlightPath.from_json_dict(path_doc, source="path")
+    digest = digest_of_document(path_doc)
+    config_doc = trial.model_dump(mode="json")
     print_ = fingerprint(config_doc, digest, root_seed, evaluator, evaluator_options)
-    out = Path(out_dir) if out_dir is not None else default_out_dir(config)
+    out = Path(out_dir)
     workers = section.backend.workers if section.backend.workers is not None else backends.default_workers()
 
     store = TrialStore(out)
@@ -164,7 +141,7 @@ def run_campaign(config: ExperimentConfig, *, out_dir: str | Path | None = None,
                                   f"(fingerprint {previous.get('fingerprint')} vs {print_}); use another --out "
                                   "(or campaign.outputs.dir), or remove the folder")
         store.write_meta({"fingerprint": print_, "config": config_doc, "root_seed": root_seed,
-                          "path_digest": digest, "n_views": len(flight_path), "n_trials": section.n_trials,
+                          "path_digest": digest, "n_views": len(path), "n_trials": section.n_trials,
                           "evaluator": evaluator, "evaluator_options": evaluator_options,
                           "environment": versions(), "updated_unix": time.time()}, path_doc)
         stored = store.stored_ids()
@@ -172,14 +149,13 @@ def run_campaign(config: ExperimentConfig, *, out_dir: str | Path | None = None,
         batches = [todo[i:i + section.batch_size].tolist() for i in range(0, todo.size, section.batch_size)]
         spec = {"key": f"{print_}-{workers}", "evaluator": evaluator, "evaluator_options": evaluator_options,
                 "max_attempts": section.backend.max_attempts,
-                "context": CampaignContext(config=config_doc, path=path_doc, root_seed=root_seed,
-                                           path_digest=digest, threads=1,
-                                           config_dir=str(Path(config_dir or ".").resolve())).__dict__}
+                "context": CampaignContext(trial=trial, path=path, root_seed=root_seed, path_digest=digest, threads=1,
+                                           config_dir=str(Path(config_dir or ".").resolve()))}
 
         recorder = None
         if section.outputs.rerun:
-            from wrp_eval.campaign.rerun_log import CampaignRecorder
-            recorder = CampaignRecorder(out, {**path_doc, "digest": digest}, _ship_mesh(config, config_dir))
+            mesh = ship_mesh if ship_mesh is not None else resolve_ship_full(trial.ship, config_dir or ".").mesh
+            recorder = CampaignRecorder(out, {**path_doc, "digest": digest}, mesh)
             if stored.size:
                 for row in store.read_table().to_pylist():
                     recorder.log_trial(row)

@@ -23,6 +23,8 @@ import numpy as np
 from scipy.stats import qmc
 
 from wrp_eval.campaign.config import CampaignSection, Choice, Normal, Uniform
+from wrp_eval.wind.config import WindSection
+from wrp_eval.wind.dryden import flight_generators
 
 WIND_STREAM, PERTURB_STREAM, DISTURB_STREAM, FLIGHT_STREAM = 0, 1, 2, 3
 # child index of each wind input within the trial's WIND_STREAM children
@@ -63,6 +65,29 @@ class WindDraw:
     file: str | None
     time: str | None
     seed: int
+
+
+def trial_wind_section(base: WindSection, draw: WindDraw) -> WindSection:
+    """The ``wind:`` section of one trial: the base with the trial's drawn values.
+
+    speed/direction apply to the synthetic source (a netCDF field brings its own); ``severity`` replaces the
+    turbulence severity; an explicit ``sigma_w_mps`` replaces the intensity; ``file``/``time`` (None: keep the
+    base's) pick the mesoscale output."""
+    turbulence = base.turbulence.model_copy(update={"severity": draw.severity, "sigma_w_mps": draw.sigma_w_mps})
+    update = {"speed_10m_mps": draw.speed_10m_m_s, "direction_deg": draw.direction_deg % 360.0,
+              "turbulence": turbulence}
+    if draw.file is not None:
+        update["file"] = draw.file
+    if draw.time is not None:
+        update["time"] = draw.time
+    return base.model_copy(update=update)
+
+
+def trial_wind_rng(draw: WindDraw) -> np.random.Generator:
+    """The generator of the trial's wind realisation (its turbulence and gusts): flight 0 of a batch of one
+    seeded by ``draw.seed`` (:func:`wrp_eval.wind.dryden.flight_generators`), whatever batch the trial flies
+    in, so a trial's wind never depends on the others."""
+    return flight_generators(draw.seed, 1)[0]
 
 
 def draw_wind(section: CampaignSection, root_seed: int, trial_id: int) -> WindDraw:

@@ -8,8 +8,9 @@ Layout of ``<out>/``::
     campaign.rrd         the rerun recording (see rerun_log.py)
     .lock                held (flock) by the one process writing the folder
 
-Crash safety: a chunk becomes visible only by ``os.replace`` of a complete, fsync'ed file, so a kill -9 at
-any moment leaves whole chunks plus at most a stray ``.tmp-*`` file (ignored, removed on the next open).
+Crash safety: a chunk becomes visible only by ``os.replace`` of a complete, fsync'ed file
+(:func:`wrp_eval.atomic.atomic_path`), so a kill -9 at any moment leaves whole chunks plus at most a stray
+``.tmp-*`` file (ignored, removed on the next open).
 Records leave the writer's buffer only once their chunk is in place, so nothing is ever written twice.
 """
 
@@ -17,7 +18,6 @@ from __future__ import annotations
 
 import fcntl
 import json
-import os
 import uuid
 from pathlib import Path
 
@@ -25,21 +25,12 @@ import numpy as np
 import pyarrow as pa
 import pyarrow.parquet as pq
 
+from wrp_eval.atomic import atomic_path, temporaries, write_bytes_atomic
 from wrp_eval.campaign.records import SCHEMA, records_to_table
 from wrp_eval.errors import InputError
 
 META_NAME = "campaign.json"
 TRIALS_DIR = "trials"
-
-
-def write_atomic(target: Path, data: bytes) -> None:
-    """Write ``data`` to ``target`` through a temporary name in the same folder, fsync'ed, then rename."""
-    tmp = target.with_name(f".tmp-{uuid.uuid4().hex}-{target.name}")
-    with open(tmp, "wb") as fh:
-        fh.write(data)
-        fh.flush()
-        os.fsync(fh.fileno())
-    os.replace(tmp, target)
 
 
 class TrialStore:
@@ -62,7 +53,10 @@ class TrialStore:
             self._lock_fh.close()
             self._lock_fh = None
             raise InputError(self.out_dir, "another campaign process is writing to this folder") from None
-        for stray in self.trials_dir.glob(".tmp-*"):
+        # only the lock holder writes these, so any temporary of them is a killed writer's leftover
+        owned = [*temporaries(self.trials_dir), *(t for name in (META_NAME, "path.json", "campaign.rrd")
+                                                  for t in temporaries(self.out_dir, name))]
+        for stray in owned:
             stray.unlink(missing_ok=True)
         seqs = [int(p.name.split("-")[1]) for p in self.chunk_files()]
         self._next_seq = max(seqs, default=-1) + 1
@@ -81,8 +75,8 @@ class TrialStore:
         self.release()
 
     def write_meta(self, meta: dict, path_json: dict) -> None:
-        write_atomic(self.out_dir / META_NAME, json.dumps(meta, indent=1, sort_keys=True).encode())
-        write_atomic(self.out_dir / "path.json", json.dumps(path_json, indent=1).encode())
+        write_bytes_atomic(self.out_dir / META_NAME, json.dumps(meta, indent=1, sort_keys=True).encode())
+        write_bytes_atomic(self.out_dir / "path.json", json.dumps(path_json, indent=1).encode())
 
     def append(self, records: list[dict]) -> Path | None:
         """Write ``records`` as one new chunk (atomically). Returns the chunk's path."""
@@ -92,12 +86,8 @@ class TrialStore:
             raise RuntimeError("TrialStore.append needs acquire() first")
         table = records_to_table(records)
         target = self.trials_dir / f"chunk-{self._next_seq:06d}-{uuid.uuid4().hex[:8]}.parquet"
-        tmp = self.trials_dir / f".tmp-{uuid.uuid4().hex}.parquet"
-        with open(tmp, "wb") as fh:
+        with atomic_path(target) as tmp, open(tmp, "wb") as fh:
             pq.write_table(table, fh, compression="zstd")
-            fh.flush()
-            os.fsync(fh.fileno())
-        os.replace(tmp, target)
         self._next_seq += 1
         return target
 

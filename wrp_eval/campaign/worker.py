@@ -13,6 +13,13 @@ import socket
 import time
 import traceback
 
+import torch
+
+from wrp_eval.campaign.evaluators import resolve_factory
+from wrp_eval.campaign.records import make_record
+from wrp_eval.campaign.sampling import trial_inputs
+from wrp_eval.errors import InputError
+
 THREAD_ENV = ("OMP_NUM_THREADS", "OPENBLAS_NUM_THREADS", "MKL_NUM_THREADS", "NUMEXPR_NUM_THREADS")
 
 _STATE: dict = {}
@@ -26,7 +33,6 @@ def thread_env(threads: int) -> dict[str, str]:
 def _limit_threads(threads: int) -> None:
     os.environ.update(thread_env(threads))
     try:  # torch sizes its pools from its own setting, not only the environment
-        import torch
         torch.set_num_threads(threads)
         torch.set_num_interop_threads(threads)
     except (ImportError, RuntimeError):  # no torch, or its interop pool already started
@@ -37,15 +43,13 @@ def init_worker(spec: dict) -> None:
     """Build this process's evaluator for ``spec`` (see :func:`make_spec`) unless already built."""
     if _STATE.get("key") == spec["key"]:
         return
-    _limit_threads(spec["context"]["threads"])
-    from wrp_eval.campaign.config import CampaignSection
-    from wrp_eval.campaign.evaluators import CampaignContext, resolve_factory
-    context = CampaignContext(**spec["context"])
+    context = spec["context"]
+    _limit_threads(context.threads)
     factory = resolve_factory(spec["evaluator"])
     _STATE.clear()
     _STATE.update(key=spec["key"], context=context, evaluator=factory(context, **spec["evaluator_options"]),
-                  section=CampaignSection.model_validate(context.config["campaign"]),
-                  max_attempts=int(spec["max_attempts"]), n_views=len(context.path["viewpoints"]),
+                  section=context.trial.campaign,
+                  max_attempts=int(spec["max_attempts"]), n_views=len(context.path),
                   worker=f"{socket.gethostname()}:{os.getpid()}")
 
 
@@ -57,9 +61,6 @@ def _error_text(err: BaseException) -> str:
 
 def run_batch(spec: dict, trial_ids: list[int]) -> list[dict]:
     """Evaluate trials ``trial_ids`` together; returns one record (dict of :data:`SCHEMA`) per trial."""
-    from wrp_eval.campaign.records import make_record
-    from wrp_eval.campaign.sampling import trial_inputs
-    from wrp_eval.errors import InputError
     try:
         init_worker(spec)
     except InputError:

@@ -15,15 +15,15 @@ Choices:
 from __future__ import annotations
 
 import io
-import zipfile
 import xml.etree.ElementTree as ET
+import zipfile
 from pathlib import Path as FsPath
 
 import numpy as np
 
 from wrp_eval.errors import InputError
-from wrp_eval.export.geodesy import wrap_180
 from wrp_eval.export.mission import GeoMission, ReadMission
+from wrp_eval.frames import wrap_180
 
 KML_NS = "http://www.opengis.net/kml/2.2"
 WPML_NS = "http://www.dji.com/wpmz/1.0.2"

@@ -8,17 +8,23 @@ a complete one.
 
 from __future__ import annotations
 
-import os
+from contextlib import ExitStack
 from dataclasses import dataclass
 from pathlib import Path as FsPath
 from typing import Callable
 
+from wrp_eval.atomic import atomic_path
 from wrp_eval.errors import InputError
 from wrp_eval.export.config import ExportSection
 from wrp_eval.export.dji import dji_kmz_bytes, read_dji_kmz
 from wrp_eval.export.litchi import litchi_csv_bytes, read_litchi_csv
 from wrp_eval.export.mission import GeoMission, ReadMission, build_missions
-from wrp_eval.export.qgc import qgc_plan_bytes, qgc_wpl_bytes, read_qgc_plan, read_qgc_wpl
+from wrp_eval.export.qgc import (
+    qgc_plan_bytes,
+    qgc_wpl_bytes,
+    read_qgc_plan,
+    read_qgc_wpl,
+)
 from wrp_eval.planning.path import Path
 from wrp_eval.ship.particulars import ShipParticulars
 from wrp_eval.ship.proxy import Proxy
@@ -62,20 +68,11 @@ def export_path(path: Path, particulars: ShipParticulars, proxy: Proxy, fmt: str
 
 
 def write_all_atomic(outputs: list[tuple[FsPath, bytes]]) -> None:
-    """Write every file to ``<name>.tmp`` first, then rename them all; on a failure remove the temporaries."""
-    tmps = []
+    """Write every file to its temporary (:func:`wrp_eval.atomic.atomic_path`) first and rename them only
+    when all are written, so a failure on any file replaces none; the temporaries are removed on a failure."""
     try:
-        for file, data in outputs:
-            file.parent.mkdir(parents=True, exist_ok=True)
-            tmp = file.with_name(file.name + ".tmp")
-            tmps.append(tmp)
-            with open(tmp, "wb") as fh:
-                fh.write(data)
-                fh.flush()
-                os.fsync(fh.fileno())
-        for (file, _), tmp in zip(outputs, tmps):
-            tmp.replace(file)
+        with ExitStack() as stack:
+            for file, data in outputs:
+                stack.enter_context(atomic_path(file)).write_bytes(data)
     except OSError as err:
-        for tmp in tmps:
-            tmp.unlink(missing_ok=True)
         raise InputError(outputs[0][0] if outputs else "export", f"cannot write the mission file: {err}") from None

@@ -14,8 +14,9 @@ import numpy as np
 
 from wrp_eval.errors import InputError
 from wrp_eval.export.config import ExportSection
-from wrp_eval.export.geodesy import ShipPose, ship_to_geographic, yaw_to_compass_deg
+from wrp_eval.frames import ship_pose, ship_to_geographic, yaw_to_compass_deg
 from wrp_eval.planning.path import Path
+from wrp_eval.ship.nofly import above_min_altitude, inside_no_fly_box, leg_flyable
 from wrp_eval.ship.particulars import ShipParticulars
 from wrp_eval.ship.proxy import Proxy
 
@@ -63,10 +64,6 @@ class ReadMission:
     home_lat_lon: tuple[float, float] | None = None
 
 
-def ship_pose(particulars: ShipParticulars) -> ShipPose:
-    return ShipPose(particulars.lat_deg, particulars.lon_deg, particulars.heading_deg)
-
-
 def home_point(particulars: ShipParticulars, section: ExportSection) -> np.ndarray:
     """(3,) take-off point in the ship frame: ``section.home_m`` or the main deck amidships."""
     if section.home_m is not None:
@@ -77,14 +74,16 @@ def home_point(particulars: ShipParticulars, section: ExportSection) -> np.ndarr
 def check_exportable(path: Path, proxy: Proxy, section: ExportSection, source: str) -> None:
     """Refuse (InputError) a path with a waypoint below the minimum altitude, inside the no-fly zone, a
     straight leg between two waypoints of a sortie through the no-fly zone, or a pitch beyond the gimbal's
-    range."""
+    range. Altitude and no-fly box are the ship stage's one geometry (:mod:`wrp_eval.ship.nofly`), the
+    planner's: what it plans, export accepts."""
     z = path.positions[:, 2]
-    low = np.flatnonzero(z < section.min_altitude_m)
+    box = proxy.no_fly_bounds()
+    low = np.flatnonzero(~above_min_altitude(path.positions, section.min_altitude_m))
     if low.size:
         i = int(low[0])
         raise InputError(source, f"{low.size} viewpoint(s) below the minimum altitude {section.min_altitude_m:g} m "
                                  f"above the sea (export.min_altitude_m), first #{i} at z={z[i]:.2f} m")
-    inside = np.flatnonzero(proxy.in_no_fly_zone(path.positions))
+    inside = np.flatnonzero(inside_no_fly_box(path.positions, box))
     if inside.size:
         i = int(inside[0])
         x, y, zz = path.positions[i]
@@ -93,8 +92,8 @@ def check_exportable(path: Path, proxy: Proxy, section: ExportSection, source: s
                                  f"({x:.2f}, {y:.2f}, {zz:.2f}) m in the ship frame")
     # the aircraft flies straight between the photos of a sortie: no leg may cut through the no-fly box
     same_sortie = np.asarray(path.sortie)[1:] == np.asarray(path.sortie)[:-1]
-    crossing = np.flatnonzero(same_sortie & proxy.segments_cross_no_fly_zone(path.positions[:-1],
-                                                                             path.positions[1:]))
+    crossing = np.flatnonzero(same_sortie & ~leg_flyable(path.positions[:-1], path.positions[1:], box,
+                                                         section.min_altitude_m))
     if crossing.size:
         i = int(crossing[0])
         raise InputError(source, f"{crossing.size} straight leg(s) between viewpoints cross the ship's no-fly zone "

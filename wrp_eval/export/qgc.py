@@ -21,6 +21,7 @@ import math
 from pathlib import Path as FsPath
 
 import numpy as np
+from pymavlink import mavwp
 
 from wrp_eval.errors import InputError
 from wrp_eval.export.mission import GeoMission, ReadMission
@@ -140,7 +141,6 @@ def read_qgc_plan(file: str | FsPath) -> ReadMission:
 
 def read_qgc_wpl(file: str | FsPath) -> ReadMission:
     """Parse a ``QGC WPL 110`` file with pymavlink's own loader (``mavwp.MAVWPLoader``)."""
-    from pymavlink import mavwp
 
     loader = mavwp.MAVWPLoader()
     try:

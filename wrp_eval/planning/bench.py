@@ -7,11 +7,17 @@ import time
 
 import numpy as np
 
-from wrp_eval.bench import BenchRecord
-from wrp_eval.planning.commands import planning_rng
+from wrp_eval.bench_record import BenchRecord
 from wrp_eval.planning.config import PlanningSection
-from wrp_eval.planning.planner import plan
-from wrp_eval.planning.tour import flight_costs, solve_genetic, solve_ortools, tour_length
+from wrp_eval.planning.planner import plan, planning_rng
+from wrp_eval.planning.tour import (
+    flight_costs,
+    solve_genetic,
+    solve_ortools,
+    tour_length,
+)
+from wrp_eval.ship.config import ShipSection
+from wrp_eval.ship.resolve import resolve_ship_full
 
 TABLE7 = "paper Table 7 (stylized ship)"
 _REPEATS = 3
@@ -26,8 +32,6 @@ def _median_run(proxy, complexity, section: PlanningSection):
 
 
 def run_bench() -> list[BenchRecord]:
-    from wrp_eval.ship.config import ShipSection
-    from wrp_eval.ship.resolve import resolve_ship_full
 
     ship = resolve_ship_full(ShipSection(type="stylized"))
     proxy, complexity = ship.proxy, ship.complexity.complexity

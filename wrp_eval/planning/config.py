@@ -1,4 +1,5 @@
-"""The ``planning:`` section of an experiment config (paper Sec. 3; DESIGN.md).
+"""The ``planning:`` section of an experiment config (paper Sec. 3 and 5.1; reconstructability terms from
+Smith et al. 2018, Min-Max from Zhou et al. 2020; choices where the paper is silent: planning/README.md).
 
 Degrees and millimetres at this edge; the planner converts to radians and metres.
 """

@@ -2,7 +2,8 @@
 oblique cameras (forward, backward, port, starboard) - flown as lawnmower patterns at one fixed altitude.
 
 Altitude = proxy height + planned distance (the deck is photographed at the planned GSD). Spacing from the
-footprint at that distance (DESIGN.md): flight-line spacing = footprint width x (1 - side overlap), photo
+footprint at that distance, the standard flight-plan computation (Wolf, Dewitt & Wilkinson, *Elements of
+Photogrammetry*, Ch. 18 "Project Planning"): flight-line spacing = footprint width x (1 - side overlap), photo
 spacing = footprint length x (1 - front overlap); the image's long side lies across the track. Flight
 lines run along the ship (x). The nadir grid covers the proxy's deck rectangle; an oblique camera looking
 along horizontal direction d with depression angle p aims at mid-height, so its grid is the nadir grid

@@ -5,12 +5,14 @@ Inside the code angles are radians; ``path.json`` stores degrees (the edge of th
 
 from __future__ import annotations
 
+import hashlib
 import json
 from dataclasses import dataclass, field
 from pathlib import Path as FsPath
 
 import numpy as np
 
+from wrp_eval.atomic import write_text_atomic
 from wrp_eval.camera import Camera
 from wrp_eval.errors import InputError
 
@@ -82,12 +84,13 @@ class Path:
         }
 
     def save(self, file: str | FsPath) -> None:
-        """Write path.json atomically (a temporary name, then rename)."""
-        file = FsPath(file)
-        file.parent.mkdir(parents=True, exist_ok=True)
-        tmp = file.with_name(file.name + ".tmp")
-        tmp.write_text(json.dumps(self.to_json_dict(), indent=1))
-        tmp.replace(file)
+        """Write path.json atomically (:func:`wrp_eval.atomic.write_text_atomic`)."""
+        write_text_atomic(file, json.dumps(self.to_json_dict(), indent=1))
+
+    def digest(self) -> str:
+        """16-hex content hash of what a flight depends on (viewpoints, camera, speed, dwell): the key that
+        ties a campaign, a surrogate checkpoint and a WRP to the path they were made for."""
+        return digest_of_document(self.to_json_dict())
 
     @classmethod
     def load(cls, file: str | FsPath) -> "Path":
@@ -99,7 +102,15 @@ class Path:
             raise InputError(file, "no such path file") from None
         except (OSError, UnicodeDecodeError, json.JSONDecodeError) as err:
             raise InputError(file, f"not a readable JSON path file: {err}") from None
+        return cls.from_json_dict(doc, source=file)
+
+    @classmethod
+    def from_json_dict(cls, doc: dict, source: str | FsPath = "path") -> "Path":
+        """The path of a path.json document (as :meth:`to_json_dict` writes it); anything malformed is an
+        :class:`InputError` naming ``source``."""
         try:
+            if not isinstance(doc, dict):
+                raise ValueError("the document is not a JSON object")
             if doc.get("format_version") != PATH_FORMAT_VERSION:
                 raise ValueError(f"format_version {doc.get('format_version')!r} is not {PATH_FORMAT_VERSION}")
             vps = doc["viewpoints"]
@@ -117,10 +128,18 @@ class Path:
             speed, dwell = float(doc["speed_m_s"]), float(doc["dwell_s"])
         except (KeyError, TypeError, ValueError, AttributeError) as err:
             what = f"missing field {err}" if isinstance(err, KeyError) else str(err)
-            raise InputError(file, f"bad path file: {what}") from None
+            raise InputError(source, f"bad path file: {what}") from None
         if not (np.all(np.isfinite(positions)) and np.all(np.isfinite(yaw)) and np.all(np.isfinite(pitch))):
-            raise InputError(file, "bad path file: non-finite viewpoint coordinates")
+            raise InputError(source, "bad path file: non-finite viewpoint coordinates")
         if speed <= 0 or dwell < 0:
-            raise InputError(file, "bad path file: speed_m_s must be > 0 and dwell_s >= 0")
+            raise InputError(source, "bad path file: speed_m_s must be > 0 and dwell_s >= 0")
         return cls(positions, yaw, pitch, face_id, kind, sortie, camera, speed, dwell,
                    str(doc.get("method", "ours")), dict(doc.get("metadata", {})))
+
+
+def digest_of_document(doc: dict) -> str:
+    """16-hex content hash of a path.json document's flight-relevant fields (viewpoints, camera, speed,
+    dwell). A stored file's own document may differ in the last float digit from a reloaded path's
+    :meth:`Path.to_json_dict` after a round trip through degrees, so callers matching a file hash both."""
+    key = {k: doc[k] for k in ("viewpoints", "camera", "speed_m_s", "dwell_s")}
+    return hashlib.sha256(json.dumps(key, sort_keys=True).encode()).hexdigest()[:16]

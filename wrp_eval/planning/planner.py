@@ -20,12 +20,28 @@ from wrp_eval.planning.oblique import oblique_views
 from wrp_eval.planning.path import KIND_SURFACE, KIND_TRANSITION, Path
 from wrp_eval.planning.reconstructability import SlotTable
 from wrp_eval.planning.sampling import Samples, base_radius_m, poisson_samples
-from wrp_eval.planning.tour import (detour_waypoints, flight_costs, open_at_longest_edge, segments_hit_box,
-                                    solve_genetic, solve_multistart, solve_ortools, tour_length)
+from wrp_eval.planning.tour import (
+    detour_waypoints,
+    flight_costs,
+    open_at_longest_edge,
+    solve_genetic,
+    solve_multistart,
+    solve_ortools,
+    tour_length,
+)
 from wrp_eval.planning.transitions import proxy_axis_targets, transition_views
 from wrp_eval.planning.views import ViewSet, candidate_views
 from wrp_eval.planning.visibility import ProxyRaycaster, visibility
+from wrp_eval.ship.nofly import segments_intrude
 from wrp_eval.ship.proxy import Proxy
+
+# Stream id of the planning stage inside the run seed (other stages spawn their own).
+PLANNING_SEED_STREAM = 3
+
+
+def planning_rng(seed: int) -> np.random.Generator:
+    """The planning stage's generator for run seed ``seed``."""
+    return np.random.default_rng(np.random.SeedSequence([seed, PLANNING_SEED_STREAM]))
 
 
 @dataclass(frozen=True)
@@ -89,7 +105,7 @@ def finish_path(positions, yaw, pitch, face, kind, proxy: Proxy, section: Planni
                  method: str, metadata: dict) -> tuple[Path, int]:
     """Insert over-the-top detour waypoints where a leg would cross the no-fly box; split into sorties."""
     box = proxy.no_fly_bounds()
-    blocked = segments_hit_box(positions[:-1], positions[1:], box) if len(positions) > 1 else np.zeros(0, bool)
+    blocked = segments_intrude(positions[:-1], positions[1:], box) if len(positions) > 1 else np.zeros(0, bool)
     legs = np.flatnonzero(blocked)
     if legs.size:
         # two corners of the over-the-top detour after the start of every blocked leg

@@ -1,5 +1,5 @@
 """Reconstructability of samples from view pairs (Smith et al. 2018, "Aerial path planning for urban scene
-reconstruction", Sec. 4; set form as in Zhou et al. 2020; DESIGN.md).
+reconstruction", Sec. 4; set form as in Zhou et al. 2020, "Offsite aerial path planning").
 
 q(s, v1, v2) = w1(alpha) w2(d_m) w3(alpha) cos(theta_m), with alpha the angle between the two viewing rays
 at s, d_m the larger view distance, theta_m the larger angle between a ray and the normal n, and

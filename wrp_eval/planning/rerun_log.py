@@ -3,7 +3,6 @@
 
 from __future__ import annotations
 
-import os
 from pathlib import Path as FsPath
 
 import rerun as rr
@@ -11,6 +10,7 @@ import rerun as rr
 from wrp_eval.camera import camera_rotations
 from wrp_eval.planning.path import KIND_TRANSITION, Path
 from wrp_eval.planning.planner import PlanResult
+from wrp_eval.recording import APPLICATION_ID, recording
 from wrp_eval.ship.proxy import Proxy
 
 _FRUSTUM_DEPTH_M = 4.0  # drawn image-plane distance
@@ -33,16 +33,19 @@ def _log_views(rec: rr.RecordingStream, prefix: str, path: Path, colours: list[l
 
 
 def save_plan_recording(result: PlanResult, proxy: Proxy, file: str | FsPath,
-                        application_id: str = "wrp-eval",
+                        application_id: str = APPLICATION_ID,
                         recording_id: str | None = None, other_paths: dict[str, Path] | None = None) -> FsPath:
-    """Write ``file`` atomically with entities plan/proxy, plan/no_fly, plan/samples, plan/candidates,
-    plan/views/<i> (frusta), plan/tour; and each of ``other_paths`` (e.g. the WRP moved from this plan) as
-    paths/<name>/views/<i> and paths/<name>/tour."""
+    """Write ``file`` atomically (:func:`wrp_eval.recording.recording`) with entities plan/proxy,
+    plan/no_fly, plan/samples, plan/candidates, plan/views/<i> (frusta), plan/tour; and each of
+    ``other_paths`` (e.g. the WRP moved from this plan) as paths/<name>/views/<i> and paths/<name>/tour."""
     file = FsPath(file)
-    file.parent.mkdir(parents=True, exist_ok=True)
-    tmp = file.with_name(f".{file.name}.{os.getpid()}.tmp")
-    rec = rr.RecordingStream(application_id, recording_id=recording_id)
-    rec.save(tmp)
+    with recording(file, recording_id=recording_id, application_id=application_id) as rec:
+        _log_plan(rec, result, proxy, other_paths or {})
+    return file
+
+
+def _log_plan(rec: rr.RecordingStream, result: PlanResult, proxy: Proxy, other_paths: dict[str, Path]) -> None:
+    """The plan's entities and ``other_paths`` (all static; ship frame, metres) into ``rec``."""
     rec.log("plan", rr.ViewCoordinates.RIGHT_HAND_Z_UP, static=True)
     lo, hi = proxy.bounds
     rec.log("plan/proxy", rr.Boxes3D(mins=[lo], sizes=[hi - lo], colors=[[40, 200, 80]]), static=True)
@@ -57,10 +60,6 @@ def save_plan_recording(result: PlanResult, proxy: Proxy, file: str | FsPath,
     path = result.path
     _log_views(rec, "plan", path, [[255, 160, 0] if k == KIND_TRANSITION else [30, 120, 255] for k in path.kind],
                [255, 255, 255])
-    for name, other in (other_paths or {}).items():
+    for name, other in other_paths.items():
         rec.log(f"paths/{name}", rr.ViewCoordinates.RIGHT_HAND_Z_UP, static=True)
         _log_views(rec, f"paths/{name}", other, [[230, 40, 200]] * len(other), [230, 40, 200])
-    rec.flush()
-    rec.disconnect()
-    tmp.replace(file)
-    return file

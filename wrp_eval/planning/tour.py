@@ -1,7 +1,8 @@
 """The closed tour through the views (paper Sec. 3.3: a TSP; the paper uses a genetic algorithm).
 
 Flight cost between two views is the Euclidean distance when the straight segment stays outside the
-no-fly box; otherwise the "over the top" detour: climb vertically to ``clearance`` above the box, fly
+no-fly box (the ship stage's one test, :func:`wrp_eval.ship.nofly.segments_intrude`: touching the box is not
+an intrusion); otherwise the "over the top" detour: climb vertically to ``clearance`` above the box, fly
 level, descend (an upper bound on the shortest way round, always flyable). ``detour_waypoints`` gives the
 two corner points of such a detour so that the path can include them.
 
@@ -17,21 +18,10 @@ from __future__ import annotations
 import numpy as np
 from ortools.constraint_solver import pywrapcp, routing_enums_pb2
 
+from wrp_eval.ship.nofly import segments_intrude
+
 _COST_SCALE = 100.0  # OR-Tools works in integers: centimetres
 _CLEARANCE_M = 2.0
-
-
-def segments_hit_box(a: np.ndarray, b: np.ndarray, box: np.ndarray) -> np.ndarray:
-    """Boolean (...): segment a->b (..., 3) passes through the open box (2, 3) (slab test, vectorised)."""
-    d = b - a
-    with np.errstate(divide="ignore", invalid="ignore"):
-        t1 = (box[0] - a) / d
-        t2 = (box[1] - a) / d
-    lo = np.where(d != 0, np.minimum(t1, t2), np.where((a > box[0]) & (a < box[1]), -np.inf, np.inf))
-    hi = np.where(d != 0, np.maximum(t1, t2), np.where((a > box[0]) & (a < box[1]), np.inf, -np.inf))
-    t_in = np.maximum(lo.max(axis=-1), 0.0)
-    t_out = np.minimum(hi.min(axis=-1), 1.0)
-    return t_out - t_in > 1e-9
 
 
 def detour_height(box: np.ndarray) -> float:
@@ -43,7 +33,7 @@ def flight_costs(positions: np.ndarray, box: np.ndarray) -> tuple[np.ndarray, np
     a = positions[:, None, :]
     b = positions[None, :, :]
     euclid = np.linalg.norm(a - b, axis=-1)
-    blocked = segments_hit_box(np.broadcast_to(a, euclid.shape + (3,)), np.broadcast_to(b, euclid.shape + (3,)),
+    blocked = segments_intrude(np.broadcast_to(a, euclid.shape + (3,)), np.broadcast_to(b, euclid.shape + (3,)),
                                box)
     z_top = np.maximum(detour_height(box), np.maximum(a[..., 2], b[..., 2]))
     level = np.linalg.norm(a[..., :2] - b[..., :2], axis=-1)

@@ -7,7 +7,8 @@ starts from the normal candidates only; the tilted ones are the replacement pool
 
 Safety (paper Sec. 3.1): a view lower than ``min_altitude_m`` is lifted to it, a view inside the no-fly box
 is pushed out along its own direction from the sample, both keep looking at their sample; views the
-gimbal cannot point (pitch above +30 deg) are dropped.
+gimbal cannot point (pitch above +30 deg) are dropped. "Inside" and "flyable" are the ship stage's one
+no-fly geometry (:mod:`wrp_eval.ship.nofly`: an open box, touching it is not an intrusion).
 """
 
 from __future__ import annotations
@@ -18,6 +19,7 @@ import numpy as np
 
 from wrp_eval.camera import yaw_pitch_towards
 from wrp_eval.planning.sampling import Samples
+from wrp_eval.ship.nofly import flyable, inside_no_fly_box
 from wrp_eval.ship.proxy import Proxy
 
 GIMBAL_MAX_PITCH = np.radians(30.0)  # DJI-class gimbals reach about +30 deg up
@@ -61,9 +63,9 @@ def make_safe(positions: np.ndarray, anchors: np.ndarray, proxy: Proxy, min_alti
     """
     pos = np.array(positions, dtype=float, copy=True)
     pos[:, 2] = np.maximum(pos[:, 2], min_altitude_m)
-    inside = proxy.in_no_fly_zone(pos)
+    box = proxy.no_fly_bounds()
+    inside = inside_no_fly_box(pos, box)
     if np.any(inside):
-        box = proxy.no_fly_bounds()
         box = box + np.array([[-1.0, -1.0, -np.inf], [1.0, 1.0, 1.0]]) * _PUSH_CLEARANCE_M
         d = pos[inside] - anchors[inside]
         norm = np.linalg.norm(d, axis=1, keepdims=True)
@@ -72,11 +74,6 @@ def make_safe(positions: np.ndarray, anchors: np.ndarray, proxy: Proxy, min_alti
         pos[inside] = start + exit_distance(start, d, box)[:, None] * d
         pos[:, 2] = np.maximum(pos[:, 2], min_altitude_m)
     return pos
-
-
-def is_safe(positions: np.ndarray, proxy: Proxy, min_altitude_m: float) -> np.ndarray:
-    """Boolean (n,): at or above ``min_altitude_m`` and outside the no-fly box."""
-    return (positions[:, 2] >= min_altitude_m - 1e-9) & ~proxy.in_no_fly_zone(positions)
 
 
 def candidate_views(samples: Samples, proxy: Proxy, distance_m: float, *, tilt_rad: float, n_tilts: int,
@@ -95,7 +92,7 @@ def candidate_views(samples: Samples, proxy: Proxy, distance_m: float, *, tilt_r
     anchors = np.tile(samples.points, (len(dirs), 1))
     positions = make_safe(anchors + distance_m * directions, anchors, proxy, min_altitude_m)
     yaw, pitch = yaw_pitch_towards(positions, anchors)
-    keep = (pitch <= GIMBAL_MAX_PITCH) & is_safe(positions, proxy, min_altitude_m)
+    keep = (pitch <= GIMBAL_MAX_PITCH) & flyable(positions, proxy.no_fly_bounds(), min_altitude_m)
     tilt = np.repeat(np.arange(len(dirs)), n)
     sample = np.tile(np.arange(n), len(dirs))
     face = np.tile(samples.face, len(dirs))

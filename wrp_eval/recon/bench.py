@@ -11,8 +11,12 @@ import time
 
 import numpy as np
 
-from wrp_eval.bench import BenchRecord
+from wrp_eval.bench_record import BenchRecord
+from wrp_eval.recon.colmap import ColmapOracle
 from wrp_eval.recon.scenarios import reference_capture_set, ship_like_mesh
+from wrp_eval.recon.synthetic import SyntheticOracle
+from wrp_eval.ship.config import ShipSection
+from wrp_eval.ship.resolve import resolve_ship
 
 SYNTHETIC_TARGET_S = 0.25  # issue 6: one 50-view capture set of the reference ship
 
@@ -20,8 +24,6 @@ SYNTHETIC_TARGET_S = 0.25  # issue 6: one 50-view capture set of the reference s
 def reference_ship():
     """(mesh, description): the ship stage's stylized procedural mesh, else the recon stage's box ship."""
     try:
-        from wrp_eval.ship.config import ShipSection
-        from wrp_eval.ship.resolve import resolve_ship
         _, _, mesh = resolve_ship(ShipSection())
         return mesh, "ship stage stylized procedural mesh"
     except Exception as err:  # the ship stage is optional for this bench
@@ -29,7 +31,6 @@ def reference_ship():
 
 
 def run_bench(repeats: int = 7) -> list[BenchRecord]:
-    from wrp_eval.recon.synthetic import SyntheticOracle
     mesh, what = reference_ship()
     captures = reference_capture_set(50)
     oracle = SyntheticOracle()
@@ -50,10 +51,9 @@ def run_bench(repeats: int = 7) -> list[BenchRecord]:
                     "once per ship mesh: ray-casting scenes + visible ground-truth samples (cached)"),
     ]
     try:
-        import pycolmap  # noqa: F401
+        import pycolmap  # noqa: F401  # lazily: the optional [photogrammetry] extra; without it no COLMAP record
     except ImportError:
         return records
-    from wrp_eval.recon.colmap import ColmapOracle
     start = time.perf_counter()
     col = ColmapOracle().evaluate(captures, mesh, seed=0)
     records.append(BenchRecord(

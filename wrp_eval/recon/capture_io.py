@@ -5,6 +5,7 @@ from __future__ import annotations
 from pathlib import Path as FsPath
 
 import numpy as np
+import pyarrow.parquet as pq
 
 from wrp_eval.errors import InputError
 from wrp_eval.planning.path import Path
@@ -32,7 +33,6 @@ def captures_from_path(path: Path, offsets: np.ndarray | None = None, pitch: np.
 def captures_from_parquet(file: str | FsPath, trial: int, path: Path) -> CaptureSet:
     """The views actually taken in ``trial`` of a ``captures.parquet`` (the simulator's table; one row per
     trial x view, degrees at the edge); the camera comes from ``path``."""
-    import pyarrow.parquet as pq
     file = FsPath(file)
     try:
         table = pq.read_table(file, columns=list(CAPTURE_COLUMNS))

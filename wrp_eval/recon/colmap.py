@@ -89,7 +89,7 @@ def write_position_priors(database_path: Path, names: list[str], positions: np.n
 
     positions: (n, 3) capture positions in the ship frame, aligned with ``names``. Returns the priors written.
     """
-    import pycolmap
+    import pycolmap  # lazily: pycolmap is the optional [photogrammetry] extra
     db = pycolmap.Database.open(str(database_path))
     try:
         db.clear_pose_priors()
@@ -113,7 +113,7 @@ class ColmapOracle(MeshOracle):
 
     def __init__(self, section: OracleSection = OracleSection(), work_dir: str | Path | None = None):
         try:
-            import pycolmap  # noqa: F401
+            import pycolmap  # noqa: F401  # lazily: pycolmap is the optional [photogrammetry] extra
         except ImportError:
             raise InputError("oracle colmap", "pycolmap is not installed: pip install .[photogrammetry]") from None
         super().__init__(section)
@@ -132,8 +132,8 @@ class ColmapOracle(MeshOracle):
         """Render, SIFT, match into ``work/database.db`` unless a database with the same fingerprint is there.
 
         Returns (timings, reused)."""
-        import pycolmap
-        from PIL import Image
+        import pycolmap  # lazily: pycolmap is the optional [photogrammetry] extra
+        from PIL import Image  # lazily: pillow comes with the [photogrammetry] extra
 
         c = self.section.colmap
         database = work / "database.db"
@@ -182,7 +182,7 @@ class ColmapOracle(MeshOracle):
 
     def _map(self, database: Path, image_dir: Path, out: Path, seed: int) -> dict:
         """COLMAP mapping of ``database`` into ``out``; {index: pycolmap.Reconstruction}."""
-        import pycolmap
+        import pycolmap  # lazily: pycolmap is the optional [photogrammetry] extra
 
         c = self.section.colmap
         seed32 = int(seed) % (2 ** 31)  # COLMAP takes a 32-bit seed

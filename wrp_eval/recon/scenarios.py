@@ -41,13 +41,6 @@ def ship_like_mesh(length_m: float = 140.0, breadth_m: float = 20.0, height_m: f
     return mesh
 
 
-def box_mesh(extents=(10.0, 6.0, 4.0), z_bottom: float = 0.0) -> trimesh.Trimesh:
-    """An axis-aligned box centred in x, y with its bottom at ``z_bottom``."""
-    box = trimesh.creation.box(extents=extents)
-    box.apply_translation((0.0, 0.0, z_bottom + extents[2] / 2))
-    return box
-
-
 def orbit_capture_set(half_length_m: float, half_breadth_m: float, target_z_m: float, standoff_m: float,
                       heights_m: tuple[float, ...], views_per_ring: int,
                       camera: Camera = Camera(), phase: float = 0.0) -> CaptureSet:

@@ -10,9 +10,26 @@ from __future__ import annotations
 from dataclasses import dataclass
 from pathlib import Path
 
-from wrp_eval.recon import make_oracle
+from wrp_eval.errors import InputError
+from wrp_eval.recon.colmap import ColmapOracle
+from wrp_eval.recon.config import OracleSection
+from wrp_eval.recon.synthetic import SyntheticOracle
+from wrp_eval.ship.config import ShipSection
+from wrp_eval.ship.resolve import resolve_ship_full
 
 SEED_MODULUS = 2**31 - 1      # the oracles' RNGs take 31-bit seeds; campaign seeds are 64-bit
+
+
+def make_oracle(section=None, kind: str | None = None):
+    """The oracle (:class:`wrp_eval.recon.base.Oracle`) named by ``kind`` (default ``section.kind``),
+    configured by ``section`` (an :class:`wrp_eval.recon.config.OracleSection`; default its defaults)."""
+    section = OracleSection() if section is None else section
+    kind = kind or section.kind
+    if kind == "synthetic":
+        return SyntheticOracle(section)
+    if kind == "colmap":
+        return ColmapOracle(section)
+    raise InputError("oracle", f"unknown oracle kind {kind!r}; choose synthetic or colmap")
 
 
 @dataclass(frozen=True)
@@ -29,11 +46,10 @@ class ScoredShip:
         return self.oracle.evaluate(captures, self.mesh, seed=int(seed) % SEED_MODULUS)
 
 
-def scored_ship(config, config_dir: str | Path = ".", oracle_kind: str | None = None) -> ScoredShip:
-    """The :class:`ScoredShip` of an ExperimentConfig: its ``ship:`` section resolved relative to ``config_dir``
-    and the oracle of its ``oracle:`` section, of kind ``oracle_kind`` (default: ``campaign.oracle``, the one
-    the campaign's flights are scored with)."""
-    from wrp_eval.ship.resolve import resolve_ship_full
-    ship = resolve_ship_full(config.ship, config_dir)
-    oracle = make_oracle(config.oracle, oracle_kind or config.campaign.oracle)
-    return ScoredShip(ship.particulars, ship.mesh, oracle)
+def scored_ship(ship: ShipSection, oracle: OracleSection, oracle_kind: str,
+                config_dir: str | Path = ".") -> ScoredShip:
+    """The :class:`ScoredShip` of a ``ship:`` section resolved relative to ``config_dir`` with the oracle
+    ``oracle_kind`` ("synthetic" | "colmap"; the campaign scores with ``campaign.oracle``) of an ``oracle:``
+    section."""
+    resolved = resolve_ship_full(ship, config_dir)
+    return ScoredShip(resolved.particulars, resolved.mesh, make_oracle(oracle, oracle_kind))

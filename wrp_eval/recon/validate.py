@@ -12,16 +12,23 @@ from __future__ import annotations
 
 import csv
 import json
-import os
 from pathlib import Path
 
 import numpy as np
 import trimesh
+from matplotlib.figure import Figure
 from scipy.stats import spearmanr
 
+from wrp_eval.atomic import atomic_path, write_text_atomic
 from wrp_eval.camera import Camera, yaw_pitch_towards
+from wrp_eval.errors import InputError
+from wrp_eval.planning.path import Path as FlightPath
 from wrp_eval.recon.base import ReconResult
+from wrp_eval.recon.capture_io import captures_from_path
+from wrp_eval.recon.colmap import ColmapOracle
+from wrp_eval.recon.config import OracleSection
 from wrp_eval.recon.scenarios import orbit_capture_set
+from wrp_eval.recon.synthetic import SyntheticOracle
 from wrp_eval.sim.captures import CaptureSet
 
 
@@ -83,23 +90,10 @@ def validation_capture_sets(mesh: trimesh.Trimesh, seed: int = 0,
     return sets
 
 
-def planned_capture_sets(config, config_dir: Path) -> list[tuple[str, str, CaptureSet]]:
-    """The planning stage's paths for the configured ship (ours, with transition views, and Zhou et al.
-    2020's Min-Max path, without), as flown without wind; [] when the planning stage is unavailable."""
-    try:
-        from wrp_eval.planning.commands import planning_rng
-        from wrp_eval.planning.planner import plan
-        from wrp_eval.ship.resolve import resolve_ship_full
-    except ImportError:
-        return []
-    from wrp_eval.recon.capture_io import captures_from_path
-    ship = resolve_ship_full(config.ship, config_dir)
-    sets = []
-    for method in ("ours", "zhou2020"):
-        section = config.planning.model_copy(update={"method": method})
-        result = plan(ship.proxy, ship.complexity.complexity, section, planning_rng(config.run.seed))
-        sets.append((f"planned_{method}", "planned", captures_from_path(result.path)))
-    return sets
+def planned_capture_sets(paths: dict[str, FlightPath]) -> list[tuple[str, str, CaptureSet]]:
+    """The planning stage's paths of the configured ship (e.g. ours, with transition views, and Zhou et al.
+    2020's Min-Max path, without; name -> Path) as flown without wind."""
+    return [(f"planned_{method}", "planned", captures_from_path(path)) for method, path in paths.items()]
 
 
 def _row(name: str, category: str, cs: CaptureSet, syn: ReconResult, col: ReconResult | None) -> dict:
@@ -111,12 +105,6 @@ def _row(name: str, category: str, cs: CaptureSet, syn: ReconResult, col: ReconR
     row["colmap_model_sizes"] = None if col is None else " ".join(str(k) for k in col.extra.get("model_sizes", []))
     row["colmap_camera_residual_m"] = None if col is None else col.extra.get("camera_residual_m")
     return row
-
-
-def _atomic_write(path: Path, text: str) -> None:
-    tmp = path.with_name(path.name + ".tmp")
-    tmp.write_text(text)
-    os.replace(tmp, path)
 
 
 def summarize(rows: list[dict]) -> dict:
@@ -136,18 +124,13 @@ def summarize(rows: list[dict]) -> dict:
 
 
 def write_outputs(rows: list[dict], summary: dict, out: Path) -> None:
-    out.mkdir(parents=True, exist_ok=True)
-    tmp = out / "table.csv.tmp"
-    with tmp.open("w", newline="") as fh:
+    with atomic_path(out / "table.csv") as tmp, tmp.open("w", newline="") as fh:
         writer = csv.DictWriter(fh, fieldnames=list(rows[0]))
         writer.writeheader()
         writer.writerows(rows)
-    os.replace(tmp, out / "table.csv")
-    _atomic_write(out / "summary.json", json.dumps({**summary, "rows": rows}, indent=1, default=float))
-    import matplotlib
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
-    fig, ax = plt.subplots(figsize=(5.5, 4.5))
+    write_text_atomic(out / "summary.json", json.dumps({**summary, "rows": rows}, indent=1, default=float))
+    fig = Figure(figsize=(5.5, 4.5))
+    ax = fig.subplots()
     colours = {"good": "tab:green", "degraded": "tab:orange", "broken": "tab:red", "planned": "tab:blue"}
     for r in rows:
         if r["colmap_error_m"] is None or r["synthetic_error_m"] is None:
@@ -163,15 +146,12 @@ def write_outputs(rows: list[dict], summary: dict, out: Path) -> None:
                  f"verdict agreement = {summary['failed_verdict_agreement']:.2f}\n(x = failed by either)",
                  fontsize=9)
     fig.tight_layout()
-    tmp = out / "scatter.tmp.png"
-    fig.savefig(tmp, dpi=120)
-    plt.close(fig)
-    os.replace(tmp, out / "scatter.png")
+    with atomic_path(out / "scatter.png") as tmp:
+        fig.savefig(tmp, dpi=120, format="png")
 
 
 def _read_colmap_rows(file: Path) -> dict[str, dict]:
     """COLMAP columns of a previous summary.json, by capture-set name (to re-score only the synthetic side)."""
-    from wrp_eval.errors import InputError
     try:
         rows = json.loads(Path(file).read_text())["rows"]
         return {r["name"]: {k: v for k, v in r.items() if k.startswith("colmap_")} for r in rows}
@@ -181,20 +161,18 @@ def _read_colmap_rows(file: Path) -> dict[str, dict]:
         raise InputError(file, f"not a validate-oracle summary.json: {err}") from None
 
 
-def validate_oracle(config, mesh: trimesh.Trimesh, out: Path, seed: int = 0, config_dir: Path = Path("."),
-                    reuse_colmap: Path | None = None) -> dict:
-    """Run both oracles on every validation capture set (plus the planner's paths when the planning stage is
-    available); write table.csv, summary.json, scatter.png (and COLMAP's databases under OUT/colmap/). With
+def validate_oracle(oracle: OracleSection, mesh: trimesh.Trimesh, out: Path, seed: int = 0,
+                    planned: dict[str, FlightPath] | None = None, reuse_colmap: Path | None = None) -> dict:
+    """Run both oracles on every validation capture set (plus the planner's ``planned`` paths, method -> Path);
+    write table.csv, summary.json, scatter.png (and COLMAP's databases under OUT/colmap/). With
     ``reuse_colmap`` (a previous summary.json of the same config and seed), the COLMAP figures are taken from
     it and only the synthetic oracle runs."""
-    from wrp_eval.recon.synthetic import SyntheticOracle
-    synthetic = SyntheticOracle(config.oracle)
+    synthetic = SyntheticOracle(oracle)
     previous = _read_colmap_rows(reuse_colmap) if reuse_colmap is not None else None
     if previous is None:
-        from wrp_eval.recon.colmap import ColmapOracle
-        colmap = ColmapOracle(config.oracle)
+        colmap = ColmapOracle(oracle)
     rows = []
-    for name, category, cs in validation_capture_sets(mesh, seed) + planned_capture_sets(config, config_dir):
+    for name, category, cs in validation_capture_sets(mesh, seed) + planned_capture_sets(planned or {}):
         syn = synthetic.evaluate(cs, mesh, seed=seed)
         if previous is not None:
             if name not in previous:

@@ -16,7 +16,12 @@ from pyais import NMEAMessage
 from pyais.exceptions import AISBaseException
 
 from wrp_eval.errors import InputError
-from wrp_eval.ship.derive import DIMENSION_FIELDS, POSITION_FIELDS, complete_particulars, ship_type_from_ais_code
+from wrp_eval.ship.derive import (
+    DIMENSION_FIELDS,
+    POSITION_FIELDS,
+    complete_particulars,
+    ship_type_from_ais_code,
+)
 from wrp_eval.ship.particulars import ShipParticulars, ShipType
 
 # Minimum payload bits per message type (nominal lengths of ITU-R M.1371; type 5 is nominally 424 bits but

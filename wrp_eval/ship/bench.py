@@ -8,7 +8,7 @@ from __future__ import annotations
 
 import time
 
-from wrp_eval.bench import BenchRecord
+from wrp_eval.bench_record import BenchRecord
 from wrp_eval.ship.complexity import mesh_surface_complexity
 from wrp_eval.ship.config import ShipSection
 from wrp_eval.ship.meshes import procedural_mesh

@@ -19,12 +19,13 @@ from __future__ import annotations
 
 import hashlib
 import json
-import os
 from pathlib import Path
 
 import numpy as np
 import trimesh
 
+from wrp_eval import resources
+from wrp_eval.atomic import atomic_path
 from wrp_eval.ship.particulars import ShipParticulars, ShipType
 
 GENERATOR_VERSION = 1  # bump when the geometry changes: it is part of the cache key
@@ -265,22 +266,19 @@ def mesh_parameters(particulars: ShipParticulars) -> dict:
 
 
 def default_cache_dir() -> Path:
-    """``$WRP_EVAL_MODELS_DIR/ships`` or ``models/ships`` of the source tree (else of the working directory)."""
-    env = os.environ.get("WRP_EVAL_MODELS_DIR")
-    if env:
-        return Path(env) / "ships"
-    repo = Path(__file__).resolve().parents[2]
-    return (repo if (repo / "pyproject.toml").exists() else Path.cwd()) / "models" / "ships"
+    """``ships/`` of the user cache folder (:func:`wrp_eval.resources.cache_dir`: ``$WRP_EVAL_CACHE_DIR`` or
+    the platform's user cache folder), never the source tree."""
+    return resources.cache_dir("ships")
 
 
 def cached_procedural_mesh(particulars: ShipParticulars, cache_dir: Path | None = None
                            ) -> tuple[trimesh.Trimesh, Path]:
     """Procedural mesh, read from / written to ``cache_dir`` (``<type>-<hash>.npz``: float64 vertices and
     int64 faces, so the cached mesh is bit-identical to a fresh one; PLY/STL would round to float32)."""
-    cache_dir = Path(cache_dir) if cache_dir is not None else default_cache_dir()
+    folder = Path(cache_dir) if cache_dir is not None else default_cache_dir()
     params = mesh_parameters(particulars)
     digest = hashlib.sha256(json.dumps(params, sort_keys=True).encode()).hexdigest()[:16]
-    path = cache_dir / f"{particulars.ship_type.value}-{digest}.npz"
+    path = folder / f"{particulars.ship_type.value}-{digest}.npz"
     if path.exists():
         try:
             with np.load(path, allow_pickle=False) as data:
@@ -290,9 +288,8 @@ def cached_procedural_mesh(particulars: ShipParticulars, cache_dir: Path | None 
         except (OSError, ValueError, KeyError):  # a damaged cache file is simply rebuilt
             pass
     mesh = procedural_mesh(particulars)
-    cache_dir.mkdir(parents=True, exist_ok=True)
-    tmp = path.with_name(f".{path.stem}.{os.getpid()}.tmp.npz")
-    np.savez_compressed(tmp, vertices=np.asarray(mesh.vertices, np.float64),
-                        faces=np.asarray(mesh.faces, np.int64))
-    tmp.replace(path)
+    # atomic: two processes building the same ship (campaign workers) never read each other's half file
+    with atomic_path(path) as tmp:
+        np.savez_compressed(tmp, vertices=np.asarray(mesh.vertices, np.float64),
+                            faces=np.asarray(mesh.faces, np.int64))
     return mesh, path

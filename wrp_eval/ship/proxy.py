@@ -64,32 +64,13 @@ class Proxy:
         return self.bounds.mean(axis=0)
 
     def no_fly_bounds(self) -> np.ndarray:
-        """(2, 3) corners of the no-fly box: the cuboid inflated by r (down to the sea)."""
+        """(2, 3) corners of the no-fly box: the cuboid inflated by r (down to the sea). What is inside it,
+        and what may be flown, is :mod:`wrp_eval.ship.nofly`'s."""
         b = self.bounds.copy()
         b[0, :2] -= self.no_fly_margin_m
         b[1] += self.no_fly_margin_m
         b[0, 2] = 0.0
         return b
-
-    def in_no_fly_zone(self, points: np.ndarray) -> np.ndarray:
-        """Boolean (n,): points (n, 3) inside the inflated box."""
-        b = self.no_fly_bounds()
-        p = np.asarray(points, dtype=float)
-        return np.all((p >= b[0]) & (p <= b[1]), axis=-1)
-
-    def segments_cross_no_fly_zone(self, starts: np.ndarray, ends: np.ndarray) -> np.ndarray:
-        """Boolean (m,): straight segments starts[i] -> ends[i] (m, 3) that touch the inflated box (slab test,
-        Kay & Kajiya 1986: the segment's parameter intervals inside the three slabs overlap within [0, 1])."""
-        b = self.no_fly_bounds()
-        p0 = np.asarray(starts, dtype=float)
-        d = np.asarray(ends, dtype=float) - p0
-        inside_slab = (p0 >= b[0]) & (p0 <= b[1])
-        with np.errstate(divide="ignore", invalid="ignore"):
-            t_lo, t_hi = (b[0] - p0) / d, (b[1] - p0) / d
-        flat = d == 0   # parallel to a slab: inside it for every t, or never
-        enter = np.where(flat, np.where(inside_slab, -np.inf, np.inf), np.minimum(t_lo, t_hi)).max(axis=-1)
-        leave = np.where(flat, np.where(inside_slab, np.inf, -np.inf), np.maximum(t_lo, t_hi)).min(axis=-1)
-        return (enter <= leave) & (leave >= 0.0) & (enter <= 1.0)
 
     def face_points(self, face: int, uv: np.ndarray) -> np.ndarray:
         """Map face coordinates uv (n, 2) in metres from the face centre to world points (n, 3)."""

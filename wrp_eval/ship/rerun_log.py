@@ -3,23 +3,27 @@
 from __future__ import annotations
 
 import json
-import os
 from pathlib import Path
 
 import numpy as np
 import rerun as rr
 
+from wrp_eval.recording import APPLICATION_ID, recording
 from wrp_eval.ship.resolve import ResolvedShip
 
 
-def save_ship_recording(ship: ResolvedShip, path: str | Path, application_id: str = "wrp-eval",
+def save_ship_recording(ship: ResolvedShip, path: str | Path, application_id: str = APPLICATION_ID,
                         recording_id: str | None = None) -> Path:
-    """Write ``path`` (atomically) with entities ship/mesh, ship/proxy, ship/no_fly, ship/faces, ship/info."""
+    """Write ``path`` (atomically, :func:`wrp_eval.recording.recording`) with entities ship/mesh, ship/proxy,
+    ship/no_fly, ship/faces, ship/info."""
     path = Path(path)
-    path.parent.mkdir(parents=True, exist_ok=True)
-    tmp = path.with_name(f".{path.name}.{os.getpid()}.tmp")
-    rec = rr.RecordingStream(application_id, recording_id=recording_id)
-    rec.save(tmp)
+    with recording(path, recording_id=recording_id, application_id=application_id) as rec:
+        _log_ship(rec, ship)
+    return path
+
+
+def _log_ship(rec: rr.RecordingStream, ship: ResolvedShip) -> None:
+    """The ship's entities (all static; ship frame, metres) into ``rec``."""
     mesh, proxy, comp = ship.mesh, ship.proxy, ship.complexity
     rec.log("ship/mesh", rr.Mesh3D(vertex_positions=np.asarray(mesh.vertices, np.float32),
                                    triangle_indices=np.asarray(mesh.faces, np.uint32),
@@ -39,7 +43,3 @@ def save_ship_recording(ship: ResolvedShip, path: str | Path, application_id: st
     info = {"particulars": {k: ship.provenance.get(k) for k in ship.provenance},
             "complexity": comp.as_dict(), "mesh_source": ship.mesh_source}
     rec.log("ship/info", rr.TextDocument(json.dumps(info, indent=1), media_type="text/markdown"), static=True)
-    rec.flush()
-    rec.disconnect()
-    tmp.replace(path)
-    return path

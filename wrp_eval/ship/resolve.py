@@ -29,6 +29,32 @@ class ResolvedShip:
     mesh_source: str
     complexity: SurfaceComplexity
 
+    def report(self) -> dict:
+        """The JSON document printed by ``wrp-eval ship --json`` (and logs/<run>/ship.json)."""
+        ship = self
+        p, proxy = ship.particulars, ship.proxy
+        particulars = {
+            "ship_type": p.ship_type.value, "name": p.name, "mmsi": p.mmsi,
+            "length_bp_m": p.length_bp_m, "breadth_m": p.breadth_m, "depth_m": p.depth_m,
+            "superstructure_height_m": p.superstructure_height_m, "draft_m": p.draft_m,
+            "freeboard_m": p.freeboard_m, "height_above_water_m": p.height_above_water_m,
+            "lat_deg": p.lat_deg, "lon_deg": p.lon_deg, "heading_deg": p.heading_deg,
+            "derived": sorted(p.derived), "provenance": ship.provenance,
+        }
+        faces = [{"name": name, "area_m2": float(area), "normal": proxy.normals[i].tolist(),
+                  "center": proxy.centers[i].tolist(), "half_extents_m": proxy.half_extents[i].tolist()}
+                 for i, (name, area) in enumerate(zip(proxy.face_names, proxy.areas))]
+        mesh = ship.mesh
+        return {
+            "particulars": particulars,
+            "proxy": {"length_m": proxy.length_m, "breadth_m": proxy.breadth_m, "height_m": proxy.height_m,
+                      "no_fly_margin_m": proxy.no_fly_margin_m, "no_fly_bounds": proxy.no_fly_bounds().tolist(),
+                      "faces": faces},
+            "complexity": ship.complexity.as_dict(),
+            "mesh": {"source": ship.mesh_source, "triangles": int(len(mesh.faces)),
+                     "watertight": bool(mesh.is_watertight), "bounds": mesh.bounds.tolist()},
+        }
+
 
 def resolve_particulars(section: ShipSection, config_dir: str | Path = ".", source: str = "config"
                         ) -> tuple[ShipParticulars, dict[str, str]]:

@@ -17,7 +17,8 @@ Our reading, in terms we can compute on a moving, yawing vehicle:
     cuboid's projected area seen along v_rel. Rotors: 4 pi r h, independent of direction.
   - Extension (the paper only has horizontal wind): for a vertical component of v_rel we blend in the
     top area L W of the body, A = A_h cos(e) + L W sin(e), e = elevation of v_rel.
-Drag F = 0.5 rho C_d A |v_rel| v_rel (DESIGN.md), applied at the centre of mass.
+Drag F = 0.5 rho C_d A |v_rel| v_rel (the drag coefficient's definition C_D = D / (0.5 rho V^2 S), e.g.
+Anderson, *Fundamentals of Aerodynamics*, Sec. 1.5), applied at the centre of mass.
 """
 
 from __future__ import annotations

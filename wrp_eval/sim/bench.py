@@ -15,15 +15,18 @@ sim.path_flight_s: wall seconds per flight of a 50-view ~700 m path flown by a b
 
 from __future__ import annotations
 
+import os
 import time
 
 import mujoco
 import numpy as np
 from mujoco import rollout as mj_rollout
 
-from wrp_eval.bench import BenchRecord
+from wrp_eval.bench_record import BenchRecord
 from wrp_eval.planning.path import Path
 from wrp_eval.sim.config import SimSection
+from wrp_eval.sim.flight import FlightSimulator
+from wrp_eval.sim.vehicle import PHANTOM4, build_scene
 from wrp_eval.wind.config import TurbulenceSection, WindSection
 from wrp_eval.wind.field import build_wind_field
 
@@ -54,9 +57,7 @@ def raw_rollout_rate(section: SimSection, batch: int, sim_seconds: float,
     attitude, drifting horizontally at 1 m/s. ``attitude_loop=False``: the same drones without the
     in-MuJoCo attitude actuators (what the bare rigid bodies + motors cost).
     Returns (drone-steps per wall second, drone-steps per CPU second of all the process's threads)."""
-    import os
 
-    from wrp_eval.sim.vehicle import PHANTOM4, build_scene
     scene = build_scene(section.drones_per_model, PHANTOM4, section.timestep_s, attitude_loop=attitude_loop)
     model = scene.model
     full = mujoco.mjtState.mjSTATE_FULLPHYSICS
@@ -106,13 +107,12 @@ def raw_rollout_rate(section: SimSection, batch: int, sim_seconds: float,
 def _moderate_wind(section: SimSection, batch: int, seed: int):
     """Synthetic marine wind 6 m/s at 10 m + moderate Dryden turbulence, one stream per flight."""
     wind = WindSection(speed_10m_mps=6.0, turbulence=TurbulenceSection(severity="moderate"))
-    return build_wind_field(wind, (0.0, 0.0, 0.0), batch, np.random.SeedSequence(seed),
+    return build_wind_field([wind] * batch, (0.0, 0.0, 0.0), np.random.SeedSequence(seed),
                             section.timestep_s * section.chunk_steps)
 
 
 def closed_loop_rate(section: SimSection, batch: int, sim_seconds: float) -> tuple[float, float]:
     """(drone-steps per wall second, per CPU second of all threads) of our flights hovering in turbulence."""
-    from wrp_eval.sim.flight import FlightSimulator
     wind = _moderate_wind(section, batch, 0)
     with FlightSimulator(section) as sim:
         start, start_cpu = time.perf_counter(), time.process_time()
@@ -123,7 +123,6 @@ def closed_loop_rate(section: SimSection, batch: int, sim_seconds: float) -> tup
 
 
 def run_bench() -> list[BenchRecord]:
-    import os
     section = SimSection()
     threads = section.threads or (os.cpu_count() or 1)
     rec = [BenchRecord("sim.timestep_s", section.timestep_s, "s",
@@ -157,7 +156,6 @@ def run_bench() -> list[BenchRecord]:
             BenchRecord(f"sim.ratio_vs_motors_only{suffix}", closed / bare, "ratio",
                         note=f"batch {batch}: whole controller cost against bare rigid bodies + motors"),
         ]
-    from wrp_eval.sim.flight import FlightSimulator
     path = bench_path()
     batch = 32
     wind = _moderate_wind(section, batch, 1)

@@ -18,12 +18,20 @@ then DWELL, then the photo is triggered and the capture pose recorded. A flight 
 behind a waiting reference for longer than ``stall_time_s`` (no headway against the wind), below the sea
 surface, or not finished after ``max_flight_time_s`` is a failed flight (reason recorded); its remaining
 views are not taken.
+
+Structure: :class:`wrp_eval.sim.flight_state.FlightState` holds what the flight logic carries between chunks
+(batch-first arrays), :mod:`wrp_eval.sim.phases` the per-chunk steps on it (reference, failures, phase
+transitions and photo trigger, position loop); this module owns the MuJoCo side (models, rollout buffers,
+threads) and the loop that calls those steps around ``mujoco.rollout``.
 """
 
 from __future__ import annotations
 
 import os
 from concurrent.futures import ThreadPoolExecutor
+from dataclasses import dataclass
+from functools import partial
+from typing import NamedTuple
 
 import mujoco
 import numpy as np
@@ -31,61 +39,41 @@ from mujoco import rollout as mj_rollout
 
 from wrp_eval.planning.path import Path
 from wrp_eval.sim.aero import drag_force
-from wrp_eval.sim.captures import CaptureSet
 from wrp_eval.sim.config import SimSection
-from wrp_eval.sim.controller import GAIN_PRESETS, PositionController, quat_to_matrix, tilt_of, wrap_angle, yaw_of
-from wrp_eval.sim.results import FlightResult, Trajectory
+from wrp_eval.sim.controller import (
+    GAIN_PRESETS,
+    PositionController,
+    quat_to_matrix,
+    tilt_of,
+    yaw_of,
+)
+from wrp_eval.sim.flight_state import (
+    FAILED,
+    NO_FAILURE,
+    FlightState,
+    FlightTargets,
+    TrajectoryLog,
+)
+from wrp_eval.sim.phases import (
+    Profile,
+    apply_failures,
+    apply_transitions,
+    check_failures,
+    control,
+    failure_reasons,
+    parked_pose,
+    reference,
+    reference_profile,
+    setpoints,
+    take_photos,
+    tick,
+    transitions,
+)
+from wrp_eval.sim.results import FlightResult
 from wrp_eval.sim.vehicle import PHANTOM4, QuadrotorParams, Scene, build_scene
 
-TRANSIT, SETTLE, DWELL, DONE, FAILED = 0, 1, 2, 3, 4
-YAW_RATE_REF_RAD_S = np.radians(60.0)  # reference yaw rate when a segment is mostly a rotation
-
-
-def _trapezoid(length, tau, v_max, a_max):
-    """Rest-to-rest trapezoidal speed profile: distance s, speed v, acceleration a and the running integral
-    of s, S = int s dt (each (n,)) at time tau (n,) s, plus the duration (n,). Before 0: at rest at 0;
-    after: at rest at ``length``."""
-    tri = length < v_max ** 2 / a_max
-    v_peak = np.where(tri, np.sqrt(np.maximum(length, 0.0) * a_max), v_max)
-    t_acc = v_peak / a_max
-    t_cruise = np.where(tri, 0.0, length / v_max - t_acc)
-    duration = 2.0 * t_acc + t_cruise
-    s_acc = 0.5 * a_max * t_acc ** 2
-    big_s_acc = a_max * t_acc ** 3 / 6.0
-    big_s_end = big_s_acc + s_acc * t_cruise + 0.5 * v_peak * t_cruise ** 2 + (length * t_acc - big_s_acc)
-    after = np.maximum(tau - duration, 0.0)
-    moving = (tau >= 0.0) & (tau < duration)
-    tau = np.clip(tau, 0.0, duration)
-    t_c = tau - t_acc
-    t_dec = duration - tau
-    in_acc, in_dec = tau < t_acc, t_dec < t_acc
-    s = np.where(in_acc, 0.5 * a_max * tau ** 2,
-                 np.where(in_dec, length - 0.5 * a_max * t_dec ** 2, s_acc + v_peak * t_c))
-    v = np.where(in_acc, a_max * tau, np.where(in_dec, a_max * t_dec, v_peak))
-    a = np.where(moving, np.where(in_acc, a_max, np.where(in_dec, -a_max, 0.0)), 0.0)
-    big_s = np.where(in_acc, a_max * tau ** 3 / 6.0,
-                     np.where(in_dec, big_s_end - (length * t_dec - a_max * t_dec ** 3 / 6.0),
-                              big_s_acc + s_acc * t_c + 0.5 * v_peak * t_c ** 2))
-    return s, v, a, big_s + length * after, duration
-
-
-def _reference_profile(length, tau, v_max, a_max, t_jerk):
-    """Jerk-limited rest-to-rest profile: distance, speed, acceleration (each (n,)) at time tau, and the
-    duration (n,).
-
-    The trapezoidal speed profile averaged over a moving window of ``t_jerk`` s: the acceleration then
-    ramps over t_jerk instead of jumping, i.e. the jerk is limited to a_max / t_jerk, at most twice that
-    on a segment too short to reach a_max (PX4 shapes its auto-mode setpoints with a jerk limit too,
-    MPC_JERK_AUTO, default 4 m/s^3). A step in the
-    acceleration demand is what the attitude loop cannot follow without lag: with the trapezoid alone the
-    vehicle overshot each viewpoint by ~10 cm (README.md). Exact box averages from the closed forms:
-    s_j = (S(t) - S(t-T)) / T, v_j = (s(t) - s(t-T)) / T, a_j = (v(t) - v(t-T)) / T.
-    """
-    s1, v1, a1, big1, duration = _trapezoid(length, tau, v_max, a_max)
-    if t_jerk <= 0.0:
-        return s1, v1, a1, duration
-    s0, v0, _, big0, _ = _trapezoid(length, tau - t_jerk, v_max, a_max)
-    return (big1 - big0) / t_jerk, (s1 - s0) / t_jerk, (v1 - v0) / t_jerk, duration + t_jerk
+# the profile's old home: tests/sim/test_flight.py imports it from here
+_reference_profile = reference_profile
 
 
 def _wind_at(wind, points, t, batch):
@@ -94,6 +82,80 @@ def _wind_at(wind, points, t, batch):
     if out.shape != (batch, 3):
         raise ValueError(f"wind model returned shape {out.shape} for {batch} flights, expected ({batch}, 3)")
     return out
+
+
+def _pad(rows: np.ndarray, padded: int) -> np.ndarray:
+    """``rows`` (batch, ...) followed by zero (False) rows up to ``padded``."""
+    return np.concatenate([rows, np.zeros((padded - len(rows),) + rows.shape[1:], dtype=rows.dtype)])
+
+
+def _start_poses(targets: FlightTargets, padded: int) -> np.ndarray:
+    """Free-joint poses (padded, 7): each flight hovering level at its first body target with its first
+    heading; the fillers of the last model 50 m above the first flight's (out of everyone's way)."""
+    batch = targets.batch
+    start = np.zeros((padded, 7))
+    start[:, 3] = 1.0
+    start[:batch, :3] = targets.body[:, 0]
+    start[batch:, :3] = targets.body[0, 0] + np.array([0.0, 0.0, 50.0])
+    start[:batch, 3] = np.cos(targets.yaw[:, 0] / 2)
+    start[:batch, 6] = np.sin(targets.yaw[:, 0] / 2)
+    return start
+
+
+class Body(NamedTuple):
+    """Vehicles of the padded batch at the start of a chunk: position, velocity (padded, 3) m, m/s world;
+    rot (padded, 3, 3) world from body; yaw (padded,) rad (Z-Y-X heading)."""
+
+    position: np.ndarray
+    velocity: np.ndarray
+    rot: np.ndarray
+    yaw: np.ndarray
+
+
+@dataclass
+class _Batch:
+    """The MuJoCo side of one batch of flights: ``padded`` drones (the ``batch`` flights, then fillers)
+    in ``n_models`` models. state (n_models, nstate): the rollout state; qpos_flat (padded, 7), qvel_flat
+    (padded, 6), motor_flat (padded, 4), drag_flat (padded, 3), mocap_flat (padded, 4): each drone's flat
+    indices into the state and into control_vec (n_models, ncontrol); controls (n_models, chunk_steps,
+    ncontrol) and out (n_models, chunk_steps, nstate): the rollout's buffers; park (padded, 7) the start
+    poses, where failed flights are held level."""
+
+    batch: int
+    padded: int
+    qpos_flat: np.ndarray
+    qvel_flat: np.ndarray
+    motor_flat: np.ndarray
+    drag_flat: np.ndarray
+    mocap_flat: np.ndarray
+    state: np.ndarray
+    control_vec: np.ndarray
+    controls: np.ndarray
+    out: np.ndarray
+    park: np.ndarray
+    models: list
+    task_size: int
+
+    def body(self) -> Body:
+        flat = self.state.reshape(-1)
+        qpos, qvel = flat[self.qpos_flat], flat[self.qvel_flat]
+        rot = quat_to_matrix(qpos[:, 3:])
+        return Body(qpos[:, :3], qvel[:, :3], rot, yaw_of(rot))
+
+    def hold(self, drones: np.ndarray, qpos: np.ndarray) -> None:
+        """Put ``drones`` (padded,) bool at ``qpos`` (n, 7), at rest."""
+        flat = self.state.reshape(-1)
+        flat[self.qpos_flat[drones]] = qpos
+        flat[self.qvel_flat[drones]] = 0.0
+
+    def set_controls(self, motors: np.ndarray, drag: np.ndarray, quat: np.ndarray) -> None:
+        """Hold motor thrusts (padded, 4) N, drag (padded, 3) N and attitude targets (padded, 4) over the
+        chunk (skip_checks rollout: no singleton expansion, so they are tiled over its steps)."""
+        flat = self.control_vec.reshape(-1)
+        flat[self.motor_flat] = motors
+        flat[self.drag_flat] = drag
+        flat[self.mocap_flat] = quat
+        self.controls[:] = self.control_vec[:, None, :]
 
 
 class FlightSimulator:
@@ -154,6 +216,57 @@ class FlightSimulator:
         mocap_flat = model_of[:, None] * self.ncontrol + nu + 4 * sc.mocap_index[drone_of][:, None] + np.arange(4)
         return n_models, padded, qpos_flat, qvel_flat, motor_flat, drag_flat, mocap_flat
 
+    def _start_batch(self, targets: FlightTargets, sec: SimSection) -> _Batch:
+        """Rollout state and buffers for ``targets.batch`` flights, every drone at its start pose."""
+        n_models, padded, qpos_flat, qvel_flat, motor_flat, drag_flat, mocap_flat = self._layout(targets.batch)
+        state = np.tile(self._initial_state, (n_models, 1))
+        park = _start_poses(targets, padded)
+        state.reshape(-1)[qpos_flat] = park
+        # ~4 tasks per thread: with chunks of a few steps the default (10 per thread) costs more in dispatch
+        # than it gains in balance (measured, README.md)
+        task_size = max(1, n_models // (4 * max(1, self.nthread)))
+        return _Batch(targets.batch, padded, qpos_flat, qvel_flat, motor_flat, drag_flat, mocap_flat, state,
+                      np.zeros((n_models, self.ncontrol)), np.zeros((n_models, sec.chunk_steps, self.ncontrol)),
+                      np.empty((n_models, sec.chunk_steps, self.nstate)), park, [self.scene.model] * n_models,
+                      task_size)
+
+    def _run_chunk(self, run: _Batch, sec: SimSection, sample_wind=None):
+        """Advance ``run`` by one chunk under its held controls. ``sample_wind`` (optional, no arguments) is
+        called while the rollout runs (it releases the GIL); its value is returned."""
+        args = (run.models, self._datas, run.state, run.controls)
+        kw = dict(control_spec=self.control_spec, skip_checks=True, nstep=sec.chunk_steps, state=run.out,
+                  chunk_size=run.task_size)
+        wind = None
+        if sample_wind is None:
+            self._pool.rollout(*args, **kw)
+        else:
+            job = self._worker.submit(self._pool.rollout, *args, **kw)
+            try:
+                wind = sample_wind()
+            finally:
+                job.result()
+        run.state = np.ascontiguousarray(run.out[:, -1])
+        return wind
+
+    def _commands(self, run: _Batch, controller: PositionController, body: Body, ref, state: FlightState,
+                  wind_b: np.ndarray, dt: float, sec: SimSection):
+        """Motor thrusts (padded, 4) N, attitude targets (padded, 4) and drag (padded, 3) N for the next
+        chunk, from the wind ``wind_b`` (batch, 3) m/s at the flights (calm at the fillers). Failed flights
+        are parked (held still, no forces): they take no further photos."""
+        par = self.params
+        drag = drag_force(_pad(wind_b, run.padded) - body.velocity, body.yaw, par, sec.drag_coefficient,
+                          sec.air_density_kg_m3)
+        motors, quat_d = control(controller, body.position, body.velocity, body.rot,
+                                 setpoints(ref, state.phase, run.park[run.batch:, :3]), dt, par)
+        dead = _pad(state.phase == FAILED, run.padded)
+        if np.any(dead):
+            run.hold(dead, parked_pose(body.position[dead], run.park[dead]))
+            motors[dead] = par.weight_n / 4.0
+            quat_d[dead] = run.park[dead, 3:]
+            drag[dead] = 0.0
+            controller.reset(dead)
+        return motors, quat_d, drag
+
     # -- flights --------------------------------------------------------------------------------------
     def fly(self, path: Path, wind, batch: int, view_offsets: np.ndarray | None = None,
             start_time_s: float = 0.0) -> FlightResult:
@@ -165,262 +278,50 @@ class FlightSimulator:
 
     def _fly(self, path, wind, batch, view_offsets, start_time_s, sec: SimSection) -> FlightResult:
         par = self.params
-        n_views = len(path)
         dt = sec.timestep_s * sec.chunk_steps
         dwell = path.dwell_s if sec.dwell_s is None else sec.dwell_s
-        plan_pos = np.asarray(path.positions, dtype=float)
-        plan_yaw = np.asarray(path.yaw, dtype=float)
-        plan_pitch = np.asarray(path.pitch, dtype=float)
-        cmd_pos = np.broadcast_to(plan_pos, (batch, n_views, 3)).copy()
-        cmd_yaw = np.broadcast_to(plan_yaw, (batch, n_views)).copy()
-        if view_offsets is not None:
-            view_offsets = np.asarray(view_offsets, dtype=float)
-            if view_offsets.shape != (batch, n_views, 4):
-                raise ValueError(f"view_offsets must have shape {(batch, n_views, 4)}, got {view_offsets.shape}")
-            cmd_pos += view_offsets[..., :3]
-            cmd_yaw += view_offsets[..., 3]
-        # body targets: the camera (not the centre of mass) goes to the viewpoint, level attitude
-        cam = np.asarray(par.camera_offset_m)
-        cy, sy = np.cos(cmd_yaw), np.sin(cmd_yaw)
-        body_tgt = cmd_pos - np.stack([cy * cam[0] - sy * cam[1], sy * cam[0] + cy * cam[1],
-                                       np.full_like(cy, cam[2])], axis=-1)
-
-        n_models, padded, qpos_flat, qvel_flat, motor_flat, drag_flat, mocap_flat = self._layout(batch)
-        state = np.tile(self._initial_state, (n_models, 1))
-        flat_state = state.reshape(-1)
-        # start hovering level at (each flight's) first body target
-        start = np.zeros((padded, 7))
-        start[:, 3] = 1.0
-        start[:batch, :3] = body_tgt[:, 0]
-        start[batch:, :3] = body_tgt[0, 0] + np.array([0.0, 0.0, 50.0])
-        start[:batch, 3] = np.cos(cmd_yaw[:, 0] / 2)
-        start[:batch, 6] = np.sin(cmd_yaw[:, 0] / 2)
-        flat_state[qpos_flat] = start
-        park = start.copy()
-
-        controller = PositionController(par, self.gains, padded)
-        # skip_checks rollout: no singleton expansion, so the held controls are tiled over the chunk
-        control_vec = np.zeros((n_models, self.ncontrol))
-        flat_ctrl = control_vec.reshape(-1)
-        controls = np.zeros((n_models, sec.chunk_steps, self.ncontrol))
-        models = [self.scene.model] * n_models
-        # ~4 tasks per thread: with chunks of a few steps the default (10 per thread) costs more in dispatch
-        # than it gains in balance (measured, README.md)
-        task_size = max(1, n_models // (4 * max(1, self.nthread)))
-        out_buf = np.empty((n_models, sec.chunk_steps, self.nstate))
-
-        # per-flight reference state
-        idx = np.zeros(batch, dtype=int)
-        phase = np.full(batch, SETTLE)
-        phase_time = np.zeros(batch)
-        seg_start = body_tgt[:, 0].copy()
-        seg_end = body_tgt[:, 0].copy()
-        seg_yaw0 = cmd_yaw[:, 0].copy()
-        seg_dyaw = np.zeros(batch)
-        seg_len = np.zeros(batch)
-        seg_dir = np.zeros((batch, 3))
-        seg_duration = np.zeros(batch)
-        lost_time = np.zeros(batch)
-        held_time = np.zeros(batch)
-        reasons = [""] * batch
-        flight_time = np.zeros(batch)
-
-        offsets = np.full((batch, n_views, 4), np.nan)
-        taken = np.zeros((batch, n_views), dtype=bool)
-        cap_time = np.full((batch, n_views), np.nan)
-        cap_pos = np.full((batch, n_views, 3), np.nan)
-        cap_yaw = np.full((batch, n_views), np.nan)
-        cap_pitch = np.full((batch, n_views), np.nan)
-        resid_roll = np.full((batch, n_views), np.nan)
-        saturated = np.zeros((batch, n_views), dtype=bool)
-
+        targets = FlightTargets.from_path(path, batch, view_offsets, par.camera_offset_m)
+        run = self._start_batch(targets, sec)
+        state = FlightState.start(targets)
+        controller = PositionController(par, self.gains, run.padded)
+        profile = Profile.of(path.speed_m_s, sec)
+        log = TrajectoryLog()
         record_every = max(1, int(round(sec.record_interval_s / dt)))
-        rec = {k: [] for k in ("time", "position", "reference", "yaw", "tilt", "thrust", "wind", "drag")}
-        rows = np.arange(batch)
-        hover_thrust = par.weight_n / 4.0
-        zeros_pad = np.zeros((padded - batch, 3))
-        v_cruise, a_max = path.speed_m_s, sec.acceleration_m_s2
-        t_jerk = a_max / sec.jerk_m_s3 if sec.jerk_m_s3 else 0.0
-        settle_yaw = np.radians(sec.settle_yaw_deg)
-        lo_pitch, hi_pitch = par.gimbal_pitch_range_rad
-        lo_roll, hi_roll = par.gimbal_roll_range_rad
         max_chunks = int(np.ceil(sec.max_flight_time_s / dt))
-
         wind_next = None
         for chunk in range(max_chunks + 1):
             t = chunk * dt
-            qpos = flat_state[qpos_flat]
-            qvel = flat_state[qvel_flat]
-            pos, quat = qpos[:, :3], qpos[:, 3:]
-            vel = qvel[:, :3]
-            rot = quat_to_matrix(quat)
-            yaw_all = yaw_of(rot)
-            yaw = yaw_all[:batch]
-            p_b, v_b = pos[:batch], vel[:batch]
-
-            # ---- reference along the current segment
-            s, v, a, _ = _reference_profile(seg_len, phase_time, v_cruise, a_max, t_jerk)
-            transit = phase == TRANSIT
-            ref_pos = np.where(transit[:, None], seg_start + seg_dir * s[:, None], seg_end)
-            # Leash: a vehicle held back by a head wind is not "lost"; its reference waits for it (what a
-            # waypoint autopilot does: it flies towards the next waypoint as fast as it can).
-            err = p_b - ref_pos
-            dist2 = np.einsum("ij,ij->i", err, err)
-            held = transit & (dist2 > sec.leash_m ** 2)
-            moving = transit & ~held
-            ref_vel = np.where(moving[:, None], seg_dir * v[:, None], 0.0)
-            ref_acc = np.where(moving[:, None], seg_dir * a[:, None], 0.0)
-            frac = np.where(transit, np.clip(phase_time / np.maximum(seg_duration, 1e-9), 0.0, 1.0), 1.0)
-            ref_yaw = seg_yaw0 + seg_dyaw * frac
-
-            # ---- failures: lost position, ditched, non-finite
-            active = phase < DONE
-            lost_time = np.where(active & (dist2 > sec.fail_distance_m ** 2), lost_time + dt, 0.0)
-            held_time = np.where(held, held_time + dt, 0.0)
-            bad = ~np.isfinite(p_b.sum(axis=1) + v_b.sum(axis=1))
-            stalled = held_time > sec.stall_time_s
-            newly = active & ((lost_time > sec.fail_time_s) | stalled | (p_b[:, 2] < 0.0) | bad)
-            if chunk == max_chunks:
-                newly |= active
-            for i in np.flatnonzero(newly):
-                if bad[i]:
-                    reasons[i] = f"non-finite state at t={t:.2f}s"
-                elif p_b[i, 2] < 0.0:
-                    reasons[i] = f"ditched (below sea level) at t={t:.2f}s"
-                elif stalled[i]:
-                    reasons[i] = (f"no headway: > {sec.leash_m:g} m behind the reference for "
-                                  f"> {sec.stall_time_s:g} s at t={t:.2f}s (before view {idx[i]})")
-                elif lost_time[i] > sec.fail_time_s:
-                    reasons[i] = (f"lost position: > {sec.fail_distance_m:g} m from the reference for "
-                                  f"> {sec.fail_time_s:g} s at t={t:.2f}s (before view {idx[i]})")
-                else:
-                    reasons[i] = f"not finished within max_flight_time_s={sec.max_flight_time_s:g}"
-                flight_time[i] = t
-            phase = np.where(newly, FAILED, phase)
-
-            # ---- phase transitions (vectorised state machine)
-            to_settle = (phase == TRANSIT) & (phase_time >= seg_duration)
-            yaw_err = wrap_angle(yaw - cmd_yaw[rows, idx])
-            settled = ((((p_b - seg_end) ** 2).sum(axis=1) < sec.settle_position_m ** 2)
-                       & ((v_b ** 2).sum(axis=1) < sec.settle_speed_m_s ** 2)
-                       & (np.abs(yaw_err) < settle_yaw))
-            to_dwell = (phase == SETTLE) & (settled | (phase_time >= sec.settle_timeout_s))
-            trigger = (phase == DWELL) & (phase_time >= dwell - 1e-9)
-            if np.any(trigger):
-                f = np.flatnonzero(trigger)
-                k = idx[f]
-                r = rot[f]
-                cam_pos = p_b[f] + r @ cam
-                cam_yaw = yaw[f]
-                # gimbal: joint angle = wanted world pitch - elevation of the nose, within its range
-                nose_elev = np.arcsin(np.clip(r[:, 2, 0], -1, 1))
-                wanted = plan_pitch[k]
-                joint = np.clip(wanted - nose_elev, lo_pitch, hi_pitch)
-                pitch = joint + nose_elev
-                roll = np.arcsin(np.clip(r[:, 2, 1], -1, 1))
-                residual = roll - np.clip(roll, lo_roll, hi_roll)
-                cap_pos[f, k] = cam_pos
-                cap_yaw[f, k] = cam_yaw
-                cap_pitch[f, k] = pitch
-                resid_roll[f, k] = residual
-                saturated[f, k] = (np.abs(pitch - wanted) > 1e-9) | (residual != 0.0)
-                offsets[f, k, :3] = cam_pos - plan_pos[k]
-                offsets[f, k, 3] = wrap_angle(cam_yaw - plan_yaw[k])
-                taken[f, k] = True
-                cap_time[f, k] = t
-                flight_time[f] = t
-                last = k == n_views - 1
-                phase[f[last]] = DONE
-                nxt = f[~last]
-                if nxt.size:
-                    k1 = idx[nxt] + 1
-                    seg_start[nxt] = seg_end[nxt]
-                    seg_end[nxt] = body_tgt[nxt, k1]
-                    delta = seg_end[nxt] - seg_start[nxt]
-                    length = np.linalg.norm(delta, axis=1)
-                    seg_len[nxt] = length
-                    seg_dir[nxt] = delta / np.maximum(length, 1e-12)[:, None]
-                    seg_yaw0[nxt] = cmd_yaw[nxt, k1 - 1]
-                    seg_dyaw[nxt] = wrap_angle(cmd_yaw[nxt, k1] - cmd_yaw[nxt, k1 - 1])
-                    dur = _reference_profile(length, np.zeros_like(length), v_cruise, a_max, t_jerk)[3]
-                    seg_duration[nxt] = np.maximum(dur, np.abs(seg_dyaw[nxt]) / YAW_RATE_REF_RAD_S)
-                    idx[nxt] = k1
-                    phase[nxt] = TRANSIT
-            phase = np.where(to_settle, SETTLE, phase)
-            phase = np.where(to_dwell, DWELL, phase)
-            phase_time = np.where(trigger | to_settle | to_dwell, 0.0, phase_time)
+            body = run.body()
+            p_b, v_b, yaw = body.position[:batch], body.velocity[:batch], body.yaw[:batch]
+            ref = reference(state, p_b, profile, sec.leash_m)
+            apply_failures(state, check_failures(state, p_b, v_b, ref, dt, sec, chunk == max_chunks), t)
+            moves = transitions(state, p_b, v_b, yaw, targets, sec, dwell)
+            take_photos(state, targets, np.flatnonzero(moves.trigger), p_b, body.rot, yaw, t, profile, par)
+            apply_transitions(state, moves)
+            wind_b = _wind_at(wind, p_b, start_time_s + t, batch) if wind_next is None else wind_next
+            motors, quat_d, drag = self._commands(run, controller, body, ref, state, wind_b, dt, sec)
+            if chunk % record_every == 0:
+                log.append(t, position=p_b, reference=ref.position, yaw=yaw, tilt=tilt_of(body.rot[:batch]),
+                           thrust=motors[:batch].sum(axis=1), wind=wind_b, drag=drag[:batch])
             # the last chunk is still recorded (wind, drag, control included) before the loop ends, so a
             # flight's record does not depend on whether other flights of its batch are still flying
-            finished = not np.any(phase < DONE)
-
-            # ---- wind, drag, control for the whole (padded) batch
-            wind_b = _wind_at(wind, p_b, start_time_s + t, batch) if wind_next is None else wind_next
-            wind_all = np.concatenate([wind_b, zeros_pad]) if padded > batch else wind_b
-            drag = drag_force(wind_all - vel, yaw_all, par, sec.drag_coefficient, sec.air_density_kg_m3)
-            rp = np.concatenate([ref_pos, park[batch:, :3]]) if padded > batch else ref_pos
-            rv = np.concatenate([ref_vel, zeros_pad]) if padded > batch else ref_vel
-            ra = np.concatenate([ref_acc, zeros_pad]) if padded > batch else ref_acc
-            ryaw = np.concatenate([ref_yaw, np.zeros(padded - batch)]) if padded > batch else ref_yaw
-            integrate = np.concatenate([phase != TRANSIT, np.ones(padded - batch, dtype=bool)])
-            thrust, quat_d = controller(pos, vel, rot[:, :, 2], rp, rv, ra, ryaw, dt, integrate)
-            motors = np.repeat(np.minimum(thrust / 4.0, par.max_thrust_per_motor_n)[:, None], 4, axis=1)
-            # failed flights are parked (held still, no forces): they take no further photos
-            dead = np.concatenate([phase == FAILED, np.zeros(padded - batch, dtype=bool)])
-            if np.any(dead):
-                qpos_dead = park[dead].copy()
-                qpos_dead[:, :3] = np.where(np.isfinite(pos[dead]), pos[dead], park[dead, :3])
-                qpos_dead[:, 2] = np.maximum(qpos_dead[:, 2], 1.0)
-                flat_state[qpos_flat[dead]] = qpos_dead
-                flat_state[qvel_flat[dead]] = 0.0
-                motors[dead] = hover_thrust
-                quat_d[dead] = park[dead, 3:]
-                drag[dead] = 0.0
-                controller.reset(dead)
-
-            if chunk % record_every == 0:
-                rec["time"].append(t)
-                rec["position"].append(p_b.copy())
-                rec["reference"].append(ref_pos.copy())
-                rec["yaw"].append(yaw)
-                rec["tilt"].append(tilt_of(rot[:batch]))
-                rec["thrust"].append(motors[:batch].sum(axis=1))
-                rec["wind"].append(wind_b)
-                rec["drag"].append(drag[:batch].copy())
-            if finished:
+            if not np.any(state.flying):
                 break
+            run.set_controls(motors, drag, quat_d)
+            # prefetch: the wind of the next chunk is sampled while this one's rollout runs, at the
+            # positions predicted for its end, p + v dt (the vehicle moves < 0.5 m per chunk, the
+            # prediction is off by 0.5 a dt^2 < 1 cm, and the wind field varies over metres; README.md).
+            # The controller itself always uses the true state.
+            sample = (partial(_wind_at, wind, p_b + v_b * dt, start_time_s + t + dt, batch)
+                      if sec.prefetch_wind else None)
+            wind_next = self._run_chunk(run, sec, sample)
+            tick(state, ref, dt)
 
-            flat_ctrl[motor_flat] = motors
-            flat_ctrl[drag_flat] = drag
-            flat_ctrl[mocap_flat] = quat_d
-            controls[:] = control_vec[:, None, :]
-            rollout_args = (models, self._datas, state, controls)
-            rollout_kw = dict(control_spec=self.control_spec, skip_checks=True, nstep=sec.chunk_steps,
-                              state=out_buf, chunk_size=task_size)
-            if sec.prefetch_wind:
-                # the rollout releases the GIL: while it runs, the wind of the next chunk is sampled at the
-                # positions predicted for the end of this one, p + v dt (the vehicle moves < 0.5 m per
-                # chunk, the prediction is off by 0.5 a dt^2 < 1 cm, and the wind field varies over
-                # metres; README.md). The controller itself always uses the true state.
-                job = self._worker.submit(self._pool.rollout, *rollout_args, **rollout_kw)
-                try:
-                    wind_next = _wind_at(wind, p_b + v_b * dt, start_time_s + t + dt, batch)
-                finally:
-                    job.result()
-            else:
-                self._pool.rollout(*rollout_args, **rollout_kw)
-            state = np.ascontiguousarray(out_buf[:, -1])
-            flat_state = state.reshape(-1)
-            phase_time = phase_time + np.where(held, 0.0, dt)
-
-        captures = tuple(
-            CaptureSet(cap_pos[i, taken[i]], cap_yaw[i, taken[i]], cap_pitch[i, taken[i]],
-                       np.flatnonzero(taken[i]), path.camera) for i in range(batch))
-        traj = Trajectory(np.asarray(rec["time"]), *(np.stack(rec[k], axis=1) for k in
-                                                     ("position", "reference", "yaw", "tilt", "thrust",
-                                                      "wind", "drag")))
-        failed = np.array([bool(r) for r in reasons])
-        return FlightResult(captures, offsets, taken, cap_time, cap_pitch, resid_roll, saturated, failed,
-                            tuple(reasons), flight_time, traj, sec.timestep_s, sec.chunk_steps)
+        cap = state.captures
+        return FlightResult(cap.capture_sets(path.camera), cap.offsets, cap.taken, cap.time, cap.pitch,
+                            cap.residual_roll, cap.saturated, state.failure != NO_FAILURE,
+                            failure_reasons(state, sec), state.flight_time, log.trajectory(), sec.timestep_s,
+                            sec.chunk_steps)
 
     def hover(self, wind, position, yaw: float, duration_s: float, batch: int = 1) -> FlightResult:
         """Hold a hover at ``position`` (3,) m (camera position) with heading ``yaw`` rad for ``duration_s``:

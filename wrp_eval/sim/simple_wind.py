@@ -8,19 +8,21 @@ from __future__ import annotations
 
 import numpy as np
 
-
-def mean_wind_vector(speed_m_s: float, direction_from_deg: float) -> np.ndarray:
-    """(3,) wind velocity for a wind blowing FROM ``direction_from_deg`` (meteorological style, measured
-    CCW from +x like every yaw in this project: 0 = wind from the bow, blowing towards -x)."""
-    a = np.radians(direction_from_deg)
-    return -speed_m_s * np.array([np.cos(a), np.sin(a), 0.0])
+from wrp_eval.frames import wind_velocity
 
 
 class ConstantWind:
-    """The same wind vector everywhere, always."""
+    """The same wind vector (3,) m/s, ship frame, everywhere, always."""
 
     def __init__(self, velocity_m_s):
         self.vector = np.asarray(velocity_m_s, dtype=float).reshape(3)
+
+    @classmethod
+    def blowing_from(cls, speed_m_s: float, direction_from_deg: float, ship_heading_deg: float) -> "ConstantWind":
+        """A wind of ``speed_m_s`` blowing FROM the compass bearing ``direction_from_deg`` (degrees clockwise
+        from true north, the project's one convention: :mod:`wrp_eval.frames`), in the frame of a ship with
+        true heading ``ship_heading_deg``."""
+        return cls(wind_velocity(speed_m_s, np.radians(direction_from_deg), np.radians(ship_heading_deg)))
 
     def velocity(self, points: np.ndarray, t: float) -> np.ndarray:
         return np.broadcast_to(self.vector, (len(points), 3)).copy()

@@ -1,6 +1,8 @@
 """The quadrotor: its parameters (one place, cited), its MJCF and the scene holding a batch of copies.
 
-The airframe is a DJI Phantom 4 class quadrotor, the paper's vehicle class (DESIGN.md "Quadrotor").
+The airframe is a DJI Phantom 4 class quadrotor. The paper (Sec. 4.1) takes its vehicle's parameters from "a
+certain type of UAV" (Shi et al. 2017) among "common commercial UAVs" with a pan-tilt camera and names none;
+the Phantom 4 is our choice of such a camera quadrotor, its numbers cited in :class:`QuadrotorParams`.
 ``models/quadrotor/quadrotor.xml`` is the visual/structural MJCF; :func:`load_quadrotor` reads it with
 PyMJCF (dm_control) and writes the numbers of :class:`QuadrotorParams` into it, so the XML and the
 controller can never disagree. :func:`build_scene` attaches N copies to a scene root (our own sea plane,
@@ -18,13 +20,13 @@ physics rate (200 Hz at 5 ms), while the position loop runs in numpy at a lower 
 from __future__ import annotations
 
 from dataclasses import dataclass, field
-from pathlib import Path
 
 import mujoco
 import numpy as np
 from dm_control import mjcf
 
-MODEL_FILE = Path(__file__).resolve().parents[2] / "models" / "quadrotor" / "quadrotor.xml"
+from wrp_eval.resources import model_file
+
 GRAVITY_M_S2 = 9.81
 ROTOR_NAMES = ("fl", "fr", "rl", "rr")
 
@@ -39,7 +41,8 @@ class QuadrotorParams:
       - rotor_radius_m 0.1195: 9450 propellers, 9.4 in diameter;
       - max_tilt_rad 35 deg: "Max tilt angle 35deg (A-mode)" (S-mode 42deg);
       - gimbal pitch -90..+30 deg: "Controllable range: pitch -90deg to +30deg";
-      - rated wind ~10 m/s (DESIGN.md; DJI quotes level-5 wind resistance for the class).
+      - rated wind ~10 m/s: DJI Phantom 4 Pro specification sheet (dji.com/phantom-4-pro/info, same
+        airframe), "Max Wind Speed Resistance 10 m/s".
     Estimates (not on the spec sheet, documented in README.md):
       - max thrust per motor: thrust-to-weight ratio 2.0 (typical of the class) -> 6.77 N per motor;
       - yaw torque per newton 0.016 m: C_Q/C_T * D for a 9-10 in propeller (C_Q/C_T ~ 0.067 at D 0.24 m);
@@ -112,7 +115,7 @@ PHANTOM4 = QuadrotorParams()
 
 def load_quadrotor(params: QuadrotorParams = PHANTOM4, name: str = "quad") -> mjcf.RootElement:
     """PyMJCF root of one quadrotor, with ``params`` written into mass, inertia, thrust limits and gears."""
-    root = mjcf.from_path(str(MODEL_FILE))
+    root = mjcf.from_path(str(model_file("quadrotor", "quadrotor.xml")))
     root.model = name
     airframe = root.find("body", "airframe")
     airframe.inertial.mass = params.mass_kg

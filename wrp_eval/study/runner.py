@@ -26,7 +26,19 @@ from pathlib import Path
 import numpy as np
 
 from wrp_eval.atomic import write_json_atomic
+from wrp_eval.campaign.runner import run_campaign
+from wrp_eval.config import ExperimentConfig
+from wrp_eval.experiment import ExperimentContext
 from wrp_eval.planning.path import KIND_TRANSITION
+from wrp_eval.planning.path import Path as FlightPath
+from wrp_eval.planning.rerun_log import save_plan_recording
+from wrp_eval.recording import merge_recordings
+from wrp_eval.ship.rerun_log import save_ship_recording
+from wrp_eval.study.report import write_study_report
+from wrp_eval.surrogate.train import CHECKPOINT_NAME, train_from_campaign
+from wrp_eval.validation import parse_model
+from wrp_eval.wrp.config import WrpSection
+from wrp_eval.wrp.jobs import oracle_error, resolve_inputs, run_optimize
 from wrp_eval.wrp.optimize import apply_offsets, offset_totals
 
 # the offsets stream of the study's random viewpoint offsets (SeedSequence([seed, STREAM, crc(name), rep]))
@@ -50,7 +62,7 @@ def slug(name: str) -> str:
     return re.sub(r"[^A-Za-z0-9._-]+", "_", name).strip("_") or "variant"
 
 
-def base_document(config, smallest: bool) -> dict:
+def base_document(config: ExperimentConfig, smallest: bool) -> dict:
     """The base config as a document (only the keys the file set, so that section defaults keep their meaning,
     e.g. ``ship.type`` given or not), without the study, with the study's ``smallest`` overrides if asked."""
     doc = config.model_dump(mode="json", exclude_unset=True)
@@ -62,10 +74,8 @@ def base_document(config, smallest: bool) -> dict:
     return doc
 
 
-def variant_configs(config, source: str, smallest: bool = False) -> list:
+def variant_configs(config: ExperimentConfig, source: str, smallest: bool = False) -> list:
     """[(variant, ExperimentConfig)] for the variants to run; every one validated before anything runs."""
-    from wrp_eval.config import ExperimentConfig
-    from wrp_eval.validation import parse_model
     base = base_document(config, smallest)
     variants = list(config.study.variants)
     if smallest and config.study.smallest_variants:
@@ -81,23 +91,23 @@ def random_offsets(n_views: int, position_half_width_m: float, yaw_half_width_ra
     return rng.uniform(-1.0, 1.0, size=(n_views, 4)) * half
 
 
-def training_key(config) -> str:
+def training_key(config: ExperimentConfig) -> str:
     """Variants with the same key share one campaign and one surrogate."""
     doc = {k: config.model_dump(mode="json")[k] for k in TRAINING_SECTIONS}
     doc["seed"] = config.run.seed
     return hashlib.sha256(json.dumps(doc, sort_keys=True).encode()).hexdigest()[:10]
 
 
-def _train(config, path, config_dir: Path, folder: Path, quiet: bool) -> dict:
+def _train(ctx: ExperimentContext, path: FlightPath, folder: Path, quiet: bool) -> dict:
     """Campaign of ``path`` + surrogate; returns {campaign, checkpoint, trials, failed, surrogate test metrics}."""
-    from wrp_eval.campaign.runner import run_campaign
-    from wrp_eval.surrogate.train import train_from_campaign
     campaign_dir, surrogate_dir = folder / "campaign", folder / "surrogate"
     start = time.perf_counter()
-    camp = run_campaign(config, out_dir=campaign_dir, config_dir=config_dir, path=path, progress=not quiet)
+    trial = ctx.trial_config
+    camp = run_campaign(trial, path, campaign_dir, root_seed=ctx.campaign_seed, config_dir=ctx.config_dir,
+                        progress=not quiet, ship_mesh=ctx.ship.mesh if trial.campaign.outputs.rerun else None)
     campaign_s = time.perf_counter() - start
-    trained, _, _ = train_from_campaign(config, campaign_dir, surrogate_dir, progress=not quiet)
-    return {"campaign": str(campaign_dir), "checkpoint": str(surrogate_dir / "surrogate.pt"), "trials": camp.done,
+    trained, _, _ = train_from_campaign(ctx, campaign_dir, surrogate_dir, progress=not quiet)
+    return {"campaign": str(campaign_dir), "checkpoint": str(surrogate_dir / CHECKPOINT_NAME), "trials": camp.done,
             "failed": camp.failed, "campaign_s": campaign_s,
             "surrogate_s": time.perf_counter() - start - campaign_s, "surrogate_test": trained.metrics["test"]}
 
@@ -124,39 +134,26 @@ def _path_columns(path, verdict: dict) -> dict:
             "completeness": verdict.get("completeness"), "fscore": verdict.get("fscore")}
 
 
-def run_study(config, config_path: Path, *, smallest: bool = False, quiet: bool = True) -> dict:
-    """Every variant of ``config.study``; writes study.json and report.md under logs/<run.name>/ and returns
+def run_study(ctx: ExperimentContext, *, smallest: bool = False, quiet: bool = True) -> dict:
+    """Every variant of ``ctx.config.study``; writes study.json and report.md under logs/<run.name>/ and returns
     the study document."""
-    from wrp_eval.planning.commands import planning_rng
-    from wrp_eval.planning.path import Path as FlightPath
-    from wrp_eval.planning.planner import plan
-    from wrp_eval.report import write_study_report
-    from wrp_eval.ship.resolve import resolve_ship_full
-    from wrp_eval.pipeline import RUN_RECORDING, merge_recordings
-    from wrp_eval.planning.rerun_log import save_plan_recording
-    from wrp_eval.recon.scene import scored_ship
-    from wrp_eval.ship.rerun_log import save_ship_recording
-    from wrp_eval.wrp.commands import oracle_error, run_optimize
-    from wrp_eval.wrp.config import WrpSection
-
+    config = ctx.config
     study = config.study
-    config_dir = config_path.parent
-    built = variant_configs(config, str(config_path), smallest)
-    run_name = built[0][1].run.name
-    out = Path("logs") / run_name
-    (out / "study").mkdir(parents=True, exist_ok=True)
+    built = [(v, ctx.with_config(cfg)) for v, cfg in variant_configs(config, ctx.source, smallest)]
+    run_name = built[0][1].config.run.name
+    out = built[0][1].folders.root
+    built[0][1].folders.study.mkdir(parents=True, exist_ok=True)
     job_start = time.perf_counter()
     shared: dict[str, dict] = {}
     optimised: dict[tuple, tuple] = {}
     rows, figures, timings, recordings = [], [], {}, []
-    for number, (variant, cfg) in enumerate(built, 1):
+    for number, (variant, vctx) in enumerate(built, 1):
+        cfg = vctx.config
         start = time.perf_counter()
         print(f"[wrp-eval run] study {number}/{len(built)}: {variant.name} ...", flush=True)
-        folder = out / "study" / slug(variant.name)
-        ship = resolve_ship_full(cfg.ship, config_dir, str(config_path))
-        result = plan(ship.proxy, ship.complexity.complexity, cfg.planning, planning_rng(cfg.run.seed))
-        path = dataclasses.replace(result.path, metadata={**result.path.metadata, "config": str(config_path),
-                                                          "variant": variant.name, "seed": cfg.run.seed})
+        folder = vctx.folders.study / slug(variant.name)
+        ship, result = vctx.ship, vctx.planned
+        path = dataclasses.replace(result.path, metadata={**result.path.metadata, "variant": variant.name})
         path.save(folder / "plan" / "path.json")
         write_json_atomic(folder / "plan" / "plan_metrics.json", result.metrics)
         base_cols = _plan_columns(ship, result, path, cfg.planning)
@@ -166,14 +163,14 @@ def run_study(config, config_path: Path, *, smallest: bool = False, quiet: bool 
         if variant.path != "plan":
             key = training_key(cfg)
             if key not in shared:
-                shared[key] = _train(cfg, path, config_dir, out / "study" / f"shared-{key}", quiet)
+                shared[key] = _train(vctx, path, vctx.folders.study / f"shared-{key}", quiet)
             training = shared[key]
             section = WrpSection.model_validate({**cfg.wrp.model_dump(), "kind": variant.path})
             wrp_key = (key, json.dumps(section.model_dump(mode="json"), sort_keys=True))
             if wrp_key not in optimised:   # e.g. Table 5's SWRP row and its offset rows: one optimisation
                 wrp_dir = folder / f"wrp-{variant.path}"
-                optimised[wrp_key] = (run_optimize(cfg, section, config_dir, wrp_dir, checkpoint=training["checkpoint"],
-                                                   campaign=training["campaign"], quiet=quiet), wrp_dir)
+                inputs = resolve_inputs(vctx, section, training["checkpoint"], training["campaign"])
+                optimised[wrp_key] = (run_optimize(vctx, section, wrp_dir, inputs, quiet=quiet), wrp_dir)
             doc, wrp_dir = optimised[wrp_key]
             table = doc["table3"]
             measured = FlightPath.load(wrp_dir / "path.json")
@@ -186,7 +183,6 @@ def run_study(config, config_path: Path, *, smallest: bool = False, quiet: bool 
         pert = cfg.campaign.perturbation
         half_m = box.position_half_width_m if box.position_half_width_m is not None else pert.position_half_width_m
         half_deg = box.yaw_half_width_deg if box.yaw_half_width_deg is not None else pert.yaw_half_width_deg
-        scorer = None    # the variant's ship + oracle, built at the first row that needs a verdict
         shown = {variant.path: measured} if variant.path != "plan" else {}   # paths drawn beside the plan
         for rep in range(variant.repetitions):
             row_path, row_verdict, cols = measured, verdict, dict(wrp_cols)
@@ -204,8 +200,7 @@ def run_study(config, config_path: Path, *, smallest: bool = False, quiet: bool 
                 cols["offsets_half_width"] = {"position_m": half_m, "yaw_deg": half_deg}
                 row_verdict = None
             if row_verdict is None:
-                scorer = scorer if scorer is not None else scored_ship(cfg, config_dir)
-                row_verdict = oracle_error(cfg, row_path, config_dir, scorer)
+                row_verdict = oracle_error(vctx.scored_ship, row_path)   # built at the first row that needs it
             ours = {**base_cols, **_path_columns(row_path, row_verdict), **cols}
             rows.append({"variant": variant.name, "repetition": rep + 1 if variant.random_offsets else None,
                          "path": variant.path, "random_offsets": variant.random_offsets,
@@ -222,13 +217,13 @@ def run_study(config, config_path: Path, *, smallest: bool = False, quiet: bool 
         print(f"[wrp-eval run] study {number}/{len(built)}: {variant.name}: done in {timings[variant.name]:.1f} s",
               flush=True)
     timings["total"] = time.perf_counter() - job_start
-    doc = {"config": str(config_path), "run": run_name, "seed": config.run.seed, "smallest": smallest,
+    doc = {"config": ctx.source, "run": run_name, "seed": config.run.seed, "smallest": smallest,
            "table": study.table, "title": study.title, "columns": study.columns, "rows": rows,
            "random_offsets": {"position_half_width_m": box.position_half_width_m,
                               "yaw_half_width_deg": box.yaw_half_width_deg},
            "shared_training": shared, "timings_s": timings}
     write_json_atomic(out / "study.json", doc)
-    merge_recordings(recordings, out / RUN_RECORDING)
+    merge_recordings(recordings, built[0][1].folders.recording)
     report = write_study_report(out, doc, figures)
     doc["timings_s"]["total"] = time.perf_counter() - job_start
     write_json_atomic(out / "study.json", doc)

@@ -26,8 +26,15 @@ import os
 import time
 
 import numpy as np
+import torch
 
-from wrp_eval.bench import BenchRecord
+from wrp_eval.bench_record import BenchRecord
+from wrp_eval.campaign.backends import default_workers
+from wrp_eval.surrogate.config import SurrogateSection
+from wrp_eval.surrogate.data import known_function_trials, load_campaign_trials
+from wrp_eval.surrogate.diagnostics import oracle_roughness, single_view_agreement
+from wrp_eval.surrogate.model import ViewQuery
+from wrp_eval.surrogate.train import train_with_folds
 
 BENCH_ENV = "WRP_EVAL_BENCH_SURROGATE_CAMPAIGN"
 
@@ -40,11 +47,6 @@ def bench_surrogate(cv: bool = False):
 
     With ``cv`` the model (default split) and the 5 folds train together, one process per core; without it only
     the model trains (``--only wrp``). Cached for the process."""
-    import torch
-    from wrp_eval.campaign.backends import default_workers
-    from wrp_eval.surrogate.config import SurrogateSection
-    from wrp_eval.surrogate.data import known_function_trials, load_campaign_trials
-    from wrp_eval.surrogate.train import train_with_folds
     if "model" in _TRAINED and (_TRAINED["cv"] is not None or not cv):
         return _TRAINED["model"], _TRAINED["data"], _TRAINED["what"], _TRAINED["cv"]
     torch.set_num_threads(1)
@@ -71,7 +73,6 @@ def _rate(fn, queries: int, min_s: float = 1.0) -> float:
 
 
 def run_bench() -> list[BenchRecord]:
-    from wrp_eval.surrogate.model import ViewQuery
     result, data, what, cv = bench_surrogate(cv=True)
     s = result.surrogate
     test = result.metrics["test"]
@@ -100,7 +101,6 @@ def run_bench() -> list[BenchRecord]:
     ]
     folder = os.environ.get(BENCH_ENV)
     if folder:
-        from wrp_eval.surrogate.diagnostics import oracle_roughness, single_view_agreement
         start = time.perf_counter()
         ceiling = oracle_roughness(folder)
         records.append(BenchRecord(

@@ -12,7 +12,10 @@ from pathlib import Path
 
 import numpy as np
 
+from wrp_eval.campaign.records import column_array
+from wrp_eval.campaign.store import TrialStore
 from wrp_eval.errors import InputError
+from wrp_eval.planning.path import Path as FlightPath
 
 OFFSET_NAMES = ("dx_m", "dy_m", "dz_m", "dyaw_rad")
 POSE_NAMES = ("x_m", "y_m", "z_m", "cos_yaw", "sin_yaw", "pitch_rad", "index")
@@ -77,9 +80,6 @@ def load_campaign_trials(campaign_dir: str | Path) -> TrialData:
     the network can take: they are dropped here and counted in ``source``. The planned pose comes from the
     folder's path.json; trials are returned in trial-id order.
     """
-    from wrp_eval.campaign.records import column_array
-    from wrp_eval.campaign.store import TrialStore
-    from wrp_eval.planning.path import Path as FlightPath
 
     folder = Path(campaign_dir)
     store = TrialStore(folder)

@@ -29,8 +29,15 @@ from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
+from scipy.stats import spearmanr
 
+from wrp_eval.campaign.config import TrialConfig
+from wrp_eval.campaign.records import column_array
+from wrp_eval.campaign.store import TrialStore
 from wrp_eval.errors import InputError
+from wrp_eval.planning.path import Path as FlightPath
+from wrp_eval.recon.capture_io import captures_from_path
+from wrp_eval.recon.scene import scored_ship
 
 
 @dataclass(frozen=True)
@@ -44,25 +51,21 @@ class CampaignOracle:
     def error(self, offsets: np.ndarray, seed: int, pitch: np.ndarray | None = None) -> float:
         """Oracle error_m (m) of the path flown at planned + ``offsets`` (n, 4), every view taken, the gimbal at
         ``pitch`` (n,) rad where finite (a trial's achieved pitch), else at the planned pitch."""
-        from wrp_eval.recon.capture_io import captures_from_path
         return float(self.ship.score(captures_from_path(self.path, offsets, pitch), seed).error_m)
 
 
 def campaign_oracle(campaign_dir: str | Path, config_dir: str | Path = ".") -> tuple[CampaignOracle, object]:
     """(:class:`CampaignOracle`, the campaign's TrialStore) from a campaign folder's campaign.json and path.json."""
-    from wrp_eval.campaign.store import TrialStore
-    from wrp_eval.config import ExperimentConfig
-    from wrp_eval.planning.path import Path as FlightPath
-    from wrp_eval.recon.scene import scored_ship
     folder = Path(campaign_dir)
     store = TrialStore(folder)
     meta = store.read_meta()
     if meta is None or "config" not in meta:
         raise InputError(folder, "not a campaign folder (no campaign.json with its config)")
-    config = ExperimentConfig.model_validate(meta["config"])
+    trial = TrialConfig.from_stored(meta["config"])
     path = FlightPath.load(folder / "path.json")
     planned = np.concatenate([np.asarray(path.positions, float), np.asarray(path.yaw, float)[:, None]], axis=1)
-    return CampaignOracle(path, scored_ship(config, config_dir), planned), store
+    ship = scored_ship(trial.ship, trial.oracle, trial.campaign.oracle, config_dir)
+    return CampaignOracle(path, ship, planned), store
 
 
 def oracle_roughness(campaign_dir: str | Path, *, n_trials: int = 60, repeats: int = 5,
@@ -75,7 +78,6 @@ def oracle_roughness(campaign_dir: str | Path, *, n_trials: int = 60, repeats: i
     noise_var_m2 (mean within-trial variance), noise_std_m, total_var_m2 (variance of error_m over every trial
     that did not fail), r2_ceiling, and the settings.
     """
-    from wrp_eval.campaign.records import column_array
     if repeats < 2:
         raise InputError("oracle_roughness", f"repeats must be >= 2 to measure a variance, got {repeats}")
     scorer, store = campaign_oracle(campaign_dir, config_dir)
@@ -118,7 +120,6 @@ def single_view_agreement(surrogate, campaign_dir: str | Path, *, n_moves: int =
     oracle_change_std_m, surrogate_change_std_m, mean_abs_diff_m, the largest oracle changes with the
     surrogate's answer (view, oracle, surrogate; m), n_moves, seed.
     """
-    from scipy.stats import spearmanr
     scorer, _ = campaign_oracle(campaign_dir, config_dir)
     n = len(scorer.planned)
     if surrogate.n_views != n:

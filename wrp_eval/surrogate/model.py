@@ -12,7 +12,6 @@ candidate offsets of one viewpoint at a fraction of a full forward pass, exactly
 
 from __future__ import annotations
 
-import hashlib
 import io
 import json
 from dataclasses import asdict, dataclass, field
@@ -23,6 +22,7 @@ import torch
 from torch import nn
 from torch.nn import functional as F
 
+from wrp_eval.atomic import write_bytes_atomic
 from wrp_eval.errors import InputError
 
 CHECKPOINT_FORMAT = "wrp-eval-surrogate"
@@ -148,16 +148,12 @@ class Surrogate:
     def save(self, file: str | Path) -> None:
         """state_dict + metadata (as a JSON string: plain data for ``torch.load(weights_only=True)``), written
         atomically."""
-        file = Path(file)
-        file.parent.mkdir(parents=True, exist_ok=True)
         doc = {"format": CHECKPOINT_FORMAT, "version": CHECKPOINT_VERSION,
                "metadata_json": json.dumps(asdict(self.meta)),
                "state_dict": {k: v.detach().clone() for k, v in self.net.state_dict().items()}}
         buf = io.BytesIO()
         torch.save(doc, buf)
-        tmp = file.with_name(file.name + ".tmp")
-        tmp.write_bytes(buf.getvalue())
-        tmp.replace(file)
+        write_bytes_atomic(file, buf.getvalue())
 
     @classmethod
     def load(cls, file: str | Path, *, n_views: int | None = None,
@@ -201,11 +197,6 @@ class Surrogate:
         if digests and self.meta.path_digest is not None and self.meta.path_digest not in digests:
             raise InputError(source, f"checkpoint was trained for path {self.meta.path_digest}, "
                                      f"not this path ({', '.join(sorted(digests))})")
-
-
-def file_digest(file: str | Path) -> str:
-    """sha256 (16 hex) of a file's bytes."""
-    return hashlib.sha256(Path(file).read_bytes()).hexdigest()[:16]
 
 
 class ViewQuery:

@@ -9,19 +9,30 @@ deterministic for these layers).
 from __future__ import annotations
 
 import copy
+import multiprocessing
 import sys
 import time
+from concurrent.futures import ProcessPoolExecutor
 from dataclasses import dataclass, field
 from pathlib import Path
 
 import numpy as np
 import torch
+from matplotlib.figure import Figure
+from rich.progress import (
+    BarColumn,
+    MofNCompleteColumn,
+    Progress,
+    TextColumn,
+    TimeElapsedColumn,
+)
 from torch.nn import functional as F
 
+from wrp_eval.atomic import atomic_path, write_json_atomic
 from wrp_eval.errors import InputError
+from wrp_eval.experiment import ExperimentContext
 from wrp_eval.surrogate.config import SurrogateSection
-from wrp_eval.atomic import write_json_atomic
-from wrp_eval.surrogate.data import TrialData, split_indices
+from wrp_eval.surrogate.data import TrialData, load_campaign_trials, split_indices
 from wrp_eval.surrogate.model import Surrogate, SurrogateMeta, ViewSequenceCNN
 
 CHECKPOINT_NAME = "surrogate.pt"
@@ -63,7 +74,6 @@ class _Progress:
         self.tty = enabled and sys.stderr.isatty()
         self.bar = None
         if self.tty:
-            from rich.progress import BarColumn, MofNCompleteColumn, Progress, TextColumn, TimeElapsedColumn
             self.bar = Progress(TextColumn("train"), BarColumn(), MofNCompleteColumn(), TimeElapsedColumn(),
                                 TextColumn("{task.fields[info]}"), transient=False)
             self.bar.start()
@@ -259,8 +269,6 @@ def train_in_parallel(data: TrialData, section: SurrogateSection, seed: int, spl
         raise InputError("surrogate training", f"workers must be >= 1, got {workers}")
     if workers == 1 or len(splits) == 1:
         return [train_surrogate(data, section, seed=seed, progress=progress, split=split) for split in splits]
-    import multiprocessing
-    from concurrent.futures import ProcessPoolExecutor
     # spawn, not fork: no forked copy of torch's thread pool; the data travel to each process once per job
     with ProcessPoolExecutor(max_workers=min(workers, len(splits)),
                              mp_context=multiprocessing.get_context("spawn")) as pool:
@@ -311,28 +319,28 @@ def train_with_folds(data: TrialData, section: SurrogateSection, seed: int, fold
     return results[0], cv
 
 
-def train_from_campaign(config, campaign_dir: str | Path, out_dir: str | Path, progress: bool = False,
-                        folds: int = 0, workers: int = 1) -> tuple[TrainResult, TrialData, dict | None]:
-    """The training job of an ExperimentConfig: its ``surrogate:`` section fitted on a campaign folder's trials
-    (seed: ``surrogate.seed``, else ``run.seed``), outputs written to ``out_dir`` (:func:`write_outputs`), with
-    ``folds``-fold cross-validation trained beside it when ``folds`` >= 2 (:func:`train_with_folds`).
-    Returns (result, the trials, the cross-validation document or None) -- what ``wrp-eval train``,
-    ``wrp-eval run`` and the studies all do."""
-    from wrp_eval.surrogate.data import load_campaign_trials
-    data = load_campaign_trials(campaign_dir)
-    result, cv = train_with_folds(data, config.surrogate, config.surrogate.seed_or(config.run.seed), folds,
-                                  workers, progress=progress)
-    write_outputs(result, out_dir)
+def train_from_campaign(ctx: ExperimentContext, campaign_dir: str | Path | None = None,
+                        out_dir: str | Path | None = None, progress: bool = False, folds: int = 0,
+                        workers: int = 1) -> tuple[TrainResult, TrialData, dict | None]:
+    """The training job of an experiment: its ``surrogate:`` section fitted on a campaign folder's trials
+    (default ``surrogate.campaign_dir`` or the run's campaign; seed ``surrogate.seed``, else ``run.seed``),
+    outputs written to ``out_dir`` (default ``surrogate.out_dir`` or the run's surrogate folder,
+    :func:`write_outputs`), with ``folds``-fold cross-validation trained beside it when ``folds`` >= 2
+    (:func:`train_with_folds`). Returns (result, the trials, the cross-validation document or None) -- what
+    ``wrp-eval train``, ``wrp-eval run`` and the studies all do; the trials are returned so that the caller
+    does not read the campaign again."""
+    section = ctx.config.surrogate
+    data = load_campaign_trials(campaign_dir if campaign_dir is not None else ctx.training_campaign_dir)
+    result, cv = train_with_folds(data, section, section.seed_or(ctx.run_seed), folds, workers, progress=progress)
+    write_outputs(result, out_dir if out_dir is not None else ctx.folders.surrogate)
     return result, data, cv
 
 
 def parity_plot(result: TrainResult, file: str | Path, title: str = "surrogate: held-out test trials") -> None:
     """Predicted vs oracle error of the test split, with the y = x line (PNG, written atomically)."""
-    import matplotlib
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
     file = Path(file)
-    fig, ax = plt.subplots(figsize=(4.5, 4.5), dpi=120)
+    fig = Figure(figsize=(4.5, 4.5), dpi=120)
+    ax = fig.subplots()
     t, p = result.test_true, result.test_pred
     ax.scatter(t, p, s=10, alpha=0.7)
     if t.size:
@@ -343,10 +351,8 @@ def parity_plot(result: TrainResult, file: str | Path, title: str = "surrogate: 
     ax.set_ylabel("surrogate error (m)")
     ax.set_title(f"{title}\nR$^2$ {m['r2']:.3f}  RMSE {m['rmse']:.4f} m  n={m['n']}", fontsize=9)
     fig.tight_layout()
-    tmp = file.with_name(file.name + ".tmp.png")
-    fig.savefig(tmp)
-    plt.close(fig)
-    tmp.replace(file)
+    with atomic_path(file) as tmp:
+        fig.savefig(tmp, format="png")
 
 
 def write_outputs(result: TrainResult, out_dir: str | Path) -> dict:

@@ -10,7 +10,7 @@ import time
 import numpy as np
 from scipy.signal import welch
 
-from wrp_eval.bench import BenchRecord
+from wrp_eval.bench_record import BenchRecord
 from wrp_eval.wind.config import WindSection
 from wrp_eval.wind.dryden import DrydenTurbulence, dryden_parameters, dryden_psd
 from wrp_eval.wind.field import build_wind_field
@@ -36,7 +36,7 @@ def psd_check(altitude_m: float, w20_mps: float, n_flights: int = 64, n_steps: i
 
 def points_per_s(n_points: int = 1024, n_steps: int = 200, dt_s: float = 0.01) -> float:
     """Velocity queries per second of the full default field (synthetic mean + Dryden), 1024 flights."""
-    field = build_wind_field(WindSection(), (0.0, 0.0, 0.0), n_points, 0, dt_s)
+    field = build_wind_field([WindSection()] * n_points, (0.0, 0.0, 0.0), 0, dt_s)
     rng = np.random.default_rng(1)
     points = np.c_[rng.uniform(-250, 250, (n_points, 2)), rng.uniform(5, 150, n_points)]
     field.velocity(points, 0.0)

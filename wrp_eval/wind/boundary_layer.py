@@ -1,14 +1,15 @@
 """Marine surface layer: Charnock roughness, log-law profiles, and the synthetic mean field.
 
-Conventions: the wind *direction* is meteorological, the compass bearing the wind blows FROM, degrees
-clockwise from true north (a "270 deg" wind blows from the west toward the east). The ship heading is the
-compass bearing of the bow. The ship frame is x = bow, y = port, z = up.
+Frames and the wind-direction convention are :mod:`wrp_eval.frames`'s: the direction is the compass bearing
+the wind blows FROM (a "270 deg" wind blows from the west toward the east), the ship heading the compass
+bearing of the bow, the ship frame x = bow, y = port, z = up.
 """
 
 from __future__ import annotations
 
 import numpy as np
 
+from wrp_eval.frames import ship_to_enu, wind_velocity
 from wrp_eval.wind.grid import WindGrid
 
 GRAVITY_MPS2 = 9.81
@@ -43,23 +44,6 @@ def log_law_factor(height_m: np.ndarray | float, z0_m: np.ndarray | float,
     return np.where(z > z0, f, 0.0)
 
 
-def earth_to_ship(east: np.ndarray, north: np.ndarray, heading_rad: float) -> tuple[np.ndarray, np.ndarray]:
-    """Rotate east/north components into the ship frame (x = bow, y = port) for a compass heading."""
-    s, c = np.sin(heading_rad), np.cos(heading_rad)
-    return east * s + north * c, -east * c + north * s
-
-
-def ship_to_earth(x: np.ndarray, y: np.ndarray, heading_rad: float) -> tuple[np.ndarray, np.ndarray]:
-    """Inverse of :func:`earth_to_ship`."""
-    s, c = np.sin(heading_rad), np.cos(heading_rad)
-    return x * s - y * c, x * c + y * s
-
-
-def wind_from_direction(speed_mps: np.ndarray | float, direction_from_rad: np.ndarray | float):
-    """East/north components of a wind of ``speed`` blowing FROM the compass bearing ``direction_from``."""
-    return -speed_mps * np.sin(direction_from_rad), -speed_mps * np.cos(direction_from_rad)
-
-
 def synthetic_marine_grid(speed_10m_mps: float, direction_deg: float, heading_deg: float,
                           x_m: np.ndarray, y_m: np.ndarray, z_m: np.ndarray, charnock_alpha: float = 0.011,
                           veer_deg_per_100m: float = 0.0, gradient_per_km: float = 0.0) -> WindGrid:
@@ -76,15 +60,13 @@ def synthetic_marine_grid(speed_10m_mps: float, direction_deg: float, heading_de
     heading = np.deg2rad(heading_deg)
     direction = np.deg2rad(direction_deg)
     gx, gy = np.meshgrid(x_m, y_m, indexing="ij")                     # (nx, ny)
-    east, north = ship_to_earth(gx, gy, heading)
-    de, dn = wind_from_direction(1.0, direction)                       # unit downwind vector (east, north)
+    east, north = ship_to_enu(gx, gy, heading)
+    de, dn, _ = wind_velocity(1.0, direction)                          # unit downwind vector (east, north)
     downwind_m = east * de + north * dn
     u10 = np.maximum(speed_10m_mps * (1.0 + gradient_per_km * downwind_m / 1000.0), 0.0)
     z0, _ = charnock_roughness(u10, charnock_alpha)
     speed = u10[..., None] * log_law_factor(z_m[None, None, :], z0[..., None])       # (nx, ny, nz)
     from_dir = direction + np.deg2rad(veer_deg_per_100m) * (z_m - 10.0) / 100.0        # (nz,)
-    ve, vn = wind_from_direction(speed, from_dir[None, None, :])
-    vx, vy = earth_to_ship(ve, vn, heading)
-    velocity = np.stack([vx, vy, np.zeros_like(vx)], axis=-1)
+    velocity = wind_velocity(speed, from_dir[None, None, :], heading)                # (nx, ny, nz, 3)
     heights = np.broadcast_to(z_m, speed.shape).copy()
     return WindGrid(x_m, y_m, heights, velocity, 0.0, source="synthetic marine boundary layer")

@@ -31,11 +31,15 @@ from collections.abc import Sequence
 import numpy as np
 from scipy.signal import lfilter
 
+from wrp_eval.wind.boundary_layer import log_law_factor
+
 FT_M = 0.3048
 KNOT_MPS = 1852.0 / 3600.0
 MIN_ALTITUDE_FT, MAX_ALTITUDE_FT = 10.0, 1000.0
 SQRT3 = np.sqrt(3.0)
 
+# MIL-F-8785C mean-wind shear: W(h) = W20 ln(h/z0)/ln(20 ft/z0) with z0 = 0.15 ft (Sec. 3.7.2.3)
+MIL_SHEAR_Z0_M = 0.15 * FT_M
 # W20 of the MIL-F-8785C / MIL-HDBK-1797 low-altitude severity levels (knots)
 SEVERITY_W20_KT = {"light": 15.0, "moderate": 30.0, "severe": 45.0}
 
@@ -291,3 +295,22 @@ def rotate_to_world(uvw: np.ndarray, mean_wind: np.ndarray, horizontal_speed: np
     cx = np.where(calm, 1.0, mean_wind[:, 0] / safe)
     cy = np.where(calm, 0.0, mean_wind[:, 1] / safe)
     return np.stack([cx * uvw[:, 0] - cy * uvw[:, 1], cy * uvw[:, 0] + cx * uvw[:, 1], uvw[:, 2]], axis=1)
+
+
+def turbulence_series(altitude_m: float, w20_mps: float, dt_s: float, duration_s: float, seed: int,
+                      airspeed_mps: float | None = None, airspeed_floor_mps: float = 2.0) -> dict:
+    """One Dryden series at fixed altitude (m) for W20 (m/s), time step and duration (s), seed: t (n,) s,
+    uvw (n, 3) m/s along/across/vertical, sigma_uvw (3,) m/s, length_uvw (3,) m, airspeed (m/s). Default
+    airspeed: the MIL-F-8785C mean wind at that altitude, W20 ln(h/z0)/ln(20 ft/z0) with z0 = 0.15 ft
+    (h >= 10 ft), floored at ``airspeed_floor_mps`` (hover)."""
+    if airspeed_mps is None:
+        shear = float(log_law_factor(max(altitude_m, 10 * FT_M), MIL_SHEAR_Z0_M, 20 * FT_M))
+        airspeed_mps = w20_mps * shear
+    airspeed = max(airspeed_mps, airspeed_floor_mps)
+    n_steps = int(round(duration_s / dt_s))
+    turb = DrydenTurbulence(1, dt_s, np.random.default_rng(seed).spawn(1), w20_mps,
+                            airspeed_floor_mps=airspeed_floor_mps)
+    uvw = turb.generate(n_steps, altitude_m, airspeed)[0]
+    sigma, length = dryden_parameters(altitude_m, w20_mps)
+    return {"t": dt_s * np.arange(n_steps), "uvw": uvw, "sigma_uvw": sigma, "length_uvw": length,
+            "airspeed": np.float64(airspeed)}

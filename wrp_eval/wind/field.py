@@ -1,22 +1,31 @@
-"""The wind the simulator flies through: mean field + Dryden turbulence + optional gusts.
+"""The wind the simulator flies through: mean field + Dryden turbulence + optional gusts, batch-first.
 
-``build_wind_field(section, ship, n_flights, rng, dt_s)`` turns the ``wind:`` config section into a
-:class:`WindField` for a batch of flights; ``WindField.velocity(points, t)`` is the one call the
-simulator makes at every step (row i of ``points`` = flight i).
+``build_wind_field(sections, ship, flight_rngs, dt_s, base_dir)`` turns one ``wind:`` section per flight into
+ONE :class:`WindField` for the whole batch (a single flight is a batch of one); ``WindField.velocity(points,
+t)`` is the one call the simulator makes at every step (row i of ``points`` = flight i). Flight i's wind
+depends only on its own section and its own generator, never on the batch it is in: row i is bit-identical to
+the field built for flight i alone (tests/wind/test_field.py), which is what lets a campaign fly trials of
+different drawn winds together.
 """
 
 from __future__ import annotations
 
+from collections.abc import Sequence
 from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
 
-from wrp_eval.errors import InputError
+from wrp_eval.frames import ship_pose
 from wrp_eval.wind.base import WindModel
 from wrp_eval.wind.boundary_layer import synthetic_marine_grid
 from wrp_eval.wind.config import WindGridSection, WindSection
-from wrp_eval.wind.dryden import FT_M, DrydenTurbulence, severity_w20_mps
+from wrp_eval.wind.dryden import (
+    FT_M,
+    DrydenTurbulence,
+    flight_generators,
+    severity_w20_mps,
+)
 from wrp_eval.wind.grid import GriddedMeanWind, WindGrid
 from wrp_eval.wind.gusts import OneMinusCosineGusts
 from wrp_eval.wind.netcdf import MM5_LAYOUT, WRF_LAYOUT, read_mean_wind
@@ -28,8 +37,8 @@ TWENTY_FT_M = 20.0 * FT_M
 class WindField:
     """``velocity(points, t) -> (n, 3)`` m/s, world (ship) frame = mean + turbulence + gusts.
 
-    With turbulence or gusts, ``points`` must have one row per flight (n_flights, 3) and t must not
-    decrease between calls; the mean field alone takes any (n, 3).
+    With turbulence, gusts or flights in different mean fields, ``points`` must have one row per flight
+    (n_flights, 3) and t must not decrease between calls; a mean field shared by every flight takes any (n, 3).
     """
 
     mean: WindModel
@@ -54,58 +63,116 @@ def grid_axes(grid: WindGridSection) -> tuple[np.ndarray, np.ndarray, np.ndarray
     return axis(*grid.x_range_m), axis(*grid.y_range_m), np.asarray(grid.z_levels_m, dtype=float)
 
 
-def _ship_pose(ship) -> tuple[float, float, float]:
-    if hasattr(ship, "lat_deg"):
-        return float(ship.lat_deg), float(ship.lon_deg), float(ship.heading_deg)
-    try:
-        lat, lon, heading = (float(v) for v in ship)
-    except (TypeError, ValueError):
-        raise InputError("ship", "expected ShipParticulars or (lat_deg, lon_deg, heading_deg)") from None
-    return lat, lon, heading
-
-
 def build_mean_grid(section: WindSection, ship, base_dir: str | Path | None = None) -> WindGrid:
-    """The configured mean field as a :class:`WindGrid` around the ship."""
-    lat, lon, heading = _ship_pose(ship)
+    """The configured mean field as a :class:`WindGrid` around the ship.
+
+    ship: anything :func:`wrp_eval.frames.ship_pose` takes (ShipParticulars, ShipPose, (lat, lon, heading))."""
+    pose = ship_pose(ship)
     if section.source == "synthetic":
         x, y, z = grid_axes(section.grid)
-        return synthetic_marine_grid(section.speed_10m_mps, section.direction_deg, heading, x, y, z,
+        return synthetic_marine_grid(section.speed_10m_mps, section.direction_deg, pose.heading_deg, x, y, z,
                                      section.charnock_alpha, section.veer_deg_per_100m, section.gradient_per_km)
     path = Path(section.file)
     if not path.is_absolute() and base_dir is not None:
         path = Path(base_dir) / path
     layout = WRF_LAYOUT if section.source == "wrf" else MM5_LAYOUT
-    return read_mean_wind(path, lat, lon, heading, section.time, section.time_interpolation, layout,
-                          section.fill_heights_m, section.charnock_alpha)
+    return read_mean_wind(path, pose.lat_deg, pose.lon_deg, pose.heading_deg, section.time,
+                          section.time_interpolation, layout, section.fill_heights_m, section.charnock_alpha)
 
 
-def build_wind_field(section: WindSection, ship, n_flights: int = 1, rng=0, dt_s: float = 0.01,
+def _shared(sections: Sequence[WindSection], name: str, value) -> object:
+    """``value(section)`` of the first flight, checked to be the same for every flight of the batch (settings
+    one batched model holds once)."""
+    first = value(sections[0])
+    if any(value(s) != first for s in sections[1:]):
+        raise ValueError(f"the flights of one wind field must share wind.{name}")
+    return first
+
+
+def build_mean_wind(sections: Sequence[WindSection], ship, base_dir: str | Path | None = None) -> GriddedMeanWind:
+    """The mean wind of a batch, one ``wind:`` section per flight: one grid per distinct mean field (flights
+    whose sections give the same field share one grid, built once), interpolated as the sections say (which
+    the flights must share)."""
+    method = _shared(sections, "interpolation", lambda s: s.interpolation)
+    power = _shared(sections, "idw_power", lambda s: s.idw_power)
+    clamp = _shared(sections, "clamp", lambda s: s.clamp)
+    # what the grid depends on (not turbulence, gusts or interpolation)
+    dumped: dict[int, str] = {}   # a batch often repeats one section object: dump each object once
+    for s in sections:
+        if id(s) not in dumped:
+            dumped[id(s)] = s.model_dump_json(exclude={"turbulence", "gusts", "interpolation", "idw_power", "clamp"})
+    keys = [dumped[id(s)] for s in sections]
+    first: dict[str, int] = {}                                   # distinct field -> its first flight
+    for i, k in enumerate(keys):
+        first.setdefault(k, i)
+    grids = [build_mean_grid(sections[i], ship, base_dir) for i in first.values()]
+    field_of = {k: j for j, k in enumerate(first)}
+    flight_field = np.array([field_of[k] for k in keys]) if len(grids) > 1 else None
+    return GriddedMeanWind(grids, method, power, clamp, flight_field)
+
+
+def flight_w20_mps(sections: Sequence[WindSection], at_20ft: np.ndarray) -> np.ndarray | None:
+    """Dryden W20 (F,) m/s per flight, or None when no flight has turbulence. at_20ft (F, 3): each flight's
+    mean wind 20 ft over the ship (``severity: from_mean``). ``sigma_w_mps`` overrides the severity
+    (W20 = 10 sigma_w); a flight without turbulence in a batch with some gets W20 = 0, for which the shared
+    Dryden filter outputs exactly zero."""
+    turbulent = [s.turbulence.severity != "none" or s.turbulence.sigma_w_mps is not None for s in sections]
+    if not any(turbulent):
+        return None
+    w20 = np.zeros(len(sections))
+    for i, (s, on) in enumerate(zip(sections, turbulent)):   # per flight, once at construction
+        t = s.turbulence
+        if not on:
+            continue
+        if t.sigma_w_mps is not None:
+            w20[i] = 10.0 * t.sigma_w_mps
+        elif t.severity in ("light", "moderate", "severe"):
+            w20[i] = severity_w20_mps(t.severity)
+        else:  # from_mean, or none with an explicit intensity (overridden above)
+            w20[i] = float(np.hypot(at_20ft[i, 0], at_20ft[i, 1]))
+    return w20
+
+
+def build_wind_field(sections: Sequence[WindSection], ship, flight_rngs, dt_s: float = 0.01,
                      base_dir: str | Path | None = None) -> WindField:
-    """A :class:`WindField` for ``n_flights`` flights stepping by ``dt_s`` seconds.
+    """ONE :class:`WindField` for a batch of F = len(sections) flights stepping by ``dt_s`` seconds.
 
-    ship: ShipParticulars (lat_deg, lon_deg, heading_deg are used) or a (lat, lon, heading) tuple.
-    rng: Generator, SeedSequence or int; flight i's turbulence and gusts use the i-th spawned child
-    (each split in two), so adding flights never changes the earlier flights' wind.
+    sections: flight i's ``wind:`` section (e.g. the config's for every flight, or each campaign trial's
+    drawn one); flights must share the interpolation, the airspeed floor and the gust settings.
+    ship: ShipParticulars, ShipPose or (lat, lon, heading) (:func:`wrp_eval.frames.ship_pose`).
+    flight_rngs: one Generator per flight, or a seed / SeedSequence / Generator the F are spawned from
+    (:func:`wrp_eval.wind.dryden.flight_generators`). Flight i's generator is split in two, turbulence then
+    gusts, so flight i's wind depends only on its section and its generator.
+    base_dir: the folder relative netCDF files are resolved against.
     """
-    mean = GriddedMeanWind(build_mean_grid(section, ship, base_dir), section.interpolation,
-                           section.idw_power, section.clamp)
-    parent = rng if isinstance(rng, np.random.Generator) else np.random.default_rng(rng)
-    flight_rngs = parent.spawn(n_flights)
-    streams = [g.spawn(2) for g in flight_rngs]
-    at_20ft = mean.velocity(np.array([[0.0, 0.0, TWENTY_FT_M]]), 0.0)[0]
-    turb_cfg = section.turbulence
+    sections = list(sections)
+    n = len(sections)
+    if n < 1:
+        raise ValueError("a wind field needs at least one flight")
+    streams = [g.spawn(2) for g in flight_generators(flight_rngs, n)]
+    mean = build_mean_wind(sections, ship, base_dir)
+    at_20ft = mean.velocity(np.tile([0.0, 0.0, TWENTY_FT_M], (n, 1)), 0.0)          # (F, 3) over the ship
+    w20 = flight_w20_mps(sections, at_20ft)
     turbulence = None
-    if turb_cfg.severity != "none" or turb_cfg.sigma_w_mps is not None:
-        if turb_cfg.severity in ("light", "moderate", "severe"):
-            w20 = severity_w20_mps(turb_cfg.severity)
-        else:  # from_mean (W20 at the ship, from the mean field), or none + an explicit intensity
-            w20 = float(np.hypot(at_20ft[0], at_20ft[1]))
-        turbulence = DrydenTurbulence(n_flights, dt_s, [s[0] for s in streams], w20, turb_cfg.sigma_w_mps,
-                                      turb_cfg.airspeed_floor_mps)
+    if w20 is not None:
+        floor = _shared(sections, "turbulence.airspeed_floor_mps", lambda s: s.turbulence.airspeed_floor_mps)
+        turbulence = DrydenTurbulence(n, dt_s, [s[0] for s in streams], w20, None, floor)
     gusts = None
-    if section.gusts.enabled:
-        g = section.gusts
-        azimuth = float(np.arctan2(at_20ft[1], at_20ft[0]))
-        gusts = OneMinusCosineGusts(n_flights, [s[1] for s in streams], g.horizon_s, g.rate_per_min,
-                                    g.amplitude_mps, g.duration_s, azimuth, g.direction_spread_deg)
+    g = _shared(sections, "gusts", lambda s: s.gusts)
+    if g.enabled:
+        azimuth = np.arctan2(at_20ft[:, 1], at_20ft[:, 0])                         # (F,) mean-wind azimuth
+        gusts = OneMinusCosineGusts(n, [s[1] for s in streams], g.horizon_s, g.rate_per_min, g.amplitude_mps,
+                                    g.duration_s, azimuth, g.direction_spread_deg)
     return WindField(mean, turbulence, gusts)
+
+
+def sample_mean_field(section: WindSection, ship, base_dir: str | Path | None = None):
+    """The configured mean field on its grid nodes above the sea: x (nx,), y (ny,), z (nz,) m and velocity
+    (nx, ny, nz, 3) m/s in the ship frame (z: the ``wind.grid`` levels above 0, or all when none is).
+    ship: anything :func:`wrp_eval.frames.ship_pose` takes."""
+    mean = build_mean_wind([section], ship, base_dir)
+    x, y, z = grid_axes(section.grid)
+    z = z[z > 0] if np.any(z > 0) else z
+    gx, gy, gz = np.meshgrid(x, y, z, indexing="ij")
+    points = np.stack([gx, gy, gz], -1).reshape(-1, 3)
+    return x, y, z, mean.velocity(points, 0.0).reshape(gx.shape + (3,))

@@ -27,6 +27,7 @@ is clipped to the grid's range).
 
 from __future__ import annotations
 
+from collections.abc import Sequence
 from dataclasses import dataclass
 
 import numpy as np
@@ -115,11 +116,15 @@ def _cell(axis: np.ndarray, coord: np.ndarray, clamp: bool, name: str, source: s
 
 
 def interpolate(grid: WindGrid, points: np.ndarray, method: str = "idw", idw_power: float = 2.0,
-                clamp: bool = False, values: np.ndarray | None = None) -> np.ndarray:
+                clamp: bool = False, values: np.ndarray | None = None,
+                value_index: np.ndarray | None = None) -> np.ndarray:
     """Mean wind (n, 3) m/s, ship frame, at ship-frame ``points`` (n, 3) m.
 
-    values: optional per-row node velocities (n, nx, ny, nz, 3) on ``grid``'s geometry (row i of ``points``
-    is interpolated in ``values[i]``: a batch of flights, each in its own mean field); default the grid's."""
+    values: optional node velocities of k fields (k, nx, ny, nz, 3) on ``grid``'s geometry, and value_index
+    (n,) int: row i of ``points`` is interpolated in ``values[value_index[i]]`` (a batch of flights, each in
+    its own mean field; the index lets flights share a field without copying it). Default: the grid's own
+    values. Every row is computed independently of the others, so a row's result does not depend on the
+    batch it is in."""
     if method not in INTERPOLATION_METHODS:
         raise InputError("wind.interpolation", f"unknown method {method!r}; choose from {INTERPOLATION_METHODS}")
     points = np.asarray(points, dtype=float)
@@ -154,9 +159,9 @@ def interpolate(grid: WindGrid, points: np.ndarray, method: str = "idw", idw_pow
         v_lo = grid.velocity_mps[ci, cj, k]                # (n, 4, 3)
         v_hi = grid.velocity_mps[ci, cj, k + 1]
     else:
-        row = np.arange(points.shape[0])[:, None]
-        v_lo = values[row, ci, cj, k]                      # (n, 4, 3): each row's own nodes
-        v_hi = values[row, ci, cj, k + 1]
+        field = np.asarray(value_index)[:, None]
+        v_lo = values[field, ci, cj, k]                    # (n, 4, 3): each row's own field's nodes
+        v_hi = values[field, ci, cj, k + 1]
 
     fxc = np.stack([fx, 1 - fx, fx, 1 - fx], axis=1)       # cell-unit distance to each column along x
     fyc = np.stack([fy, fy, 1 - fy, 1 - fy], axis=1)
@@ -180,20 +185,72 @@ def interpolate(grid: WindGrid, points: np.ndarray, method: str = "idw", idw_pow
     return np.einsum("nc,ncd->nd", w, values)
 
 
-@dataclass(frozen=True)
+def _same_geometry(a: WindGrid, b: WindGrid) -> bool:
+    """True when two grids share axes, level heights and orientation (their values may differ)."""
+    return (a.grid_yaw_rad == b.grid_yaw_rad and np.array_equal(a.x_m, b.x_m) and np.array_equal(a.y_m, b.y_m)
+            and np.array_equal(a.heights_m, b.heights_m))
+
+
 class GriddedMeanWind:
-    """A :class:`~wrp_eval.wind.base.WindModel` over a :class:`WindGrid` (steady: ``t`` is ignored)."""
+    """The mean wind of a batch of flights over :class:`WindGrid` s, a :class:`~wrp_eval.wind.base.WindModel`
+    (steady: ``t`` is ignored).
 
-    grid: WindGrid
-    method: str = "idw"
-    idw_power: float = 2.0
-    clamp: bool = False
+    grids: one WindGrid (every flight in the same field: ``velocity`` then takes any (n, 3) points) or a
+    sequence of the distinct fields; flight_field (F,) int: the index into ``grids`` of flight i's field
+    (needed with more than one field: ``velocity`` then takes (F, 3) points, row i = flight i).
+    Fields of one geometry (always the synthetic source's; one netCDF file at one time) are interpolated in
+    one vectorised call against their stacked node values; fields of different geometries (other files or
+    times) in one call per geometry. Each row equals :func:`interpolate` of that flight's field alone, bit for
+    bit (tests/wind/test_field.py).
+    """
 
-    def __post_init__(self) -> None:
-        if self.method not in INTERPOLATION_METHODS:
-            raise InputError("wind.interpolation", f"unknown method {self.method!r}; "
-                                                   f"choose from {INTERPOLATION_METHODS}")
+    def __init__(self, grids: WindGrid | Sequence[WindGrid], method: str = "idw", idw_power: float = 2.0,
+                 clamp: bool = False, flight_field: np.ndarray | None = None):
+        if method not in INTERPOLATION_METHODS:
+            raise InputError("wind.interpolation", f"unknown method {method!r}; choose from {INTERPOLATION_METHODS}")
+        self.grids = (grids,) if isinstance(grids, WindGrid) else tuple(grids)
+        self.method, self.idw_power, self.clamp = method, float(idw_power), bool(clamp)
+        if not self.grids:
+            raise ValueError("GriddedMeanWind needs at least one grid")
+        if len(self.grids) > 1 and flight_field is None:
+            raise ValueError("flight_field is required with more than one field")
+        self.flight_field = None if flight_field is None else np.asarray(flight_field, dtype=int)
+        if self.flight_field is not None and (self.flight_field.ndim != 1 or self.flight_field.size == 0
+                                              or self.flight_field.min() < 0
+                                              or self.flight_field.max() >= len(self.grids)):
+            raise ValueError(f"flight_field must be (F,) indices into the {len(self.grids)} grids")
+        # fields grouped by geometry -> per group: geometry, stacked values (k, nx, ny, nz, 3), the flights
+        # (rows) in it and each row's index into the stack; built once, used at every step
+        self._groups: list[tuple[WindGrid, np.ndarray, np.ndarray, np.ndarray]] = []
+        if len(self.grids) > 1:
+            geometries: list[list[int]] = []
+            for f, g in enumerate(self.grids):
+                same = [m for m in geometries if _same_geometry(self.grids[m[0]], g)]
+                if same:
+                    same[0].append(f)
+                else:
+                    geometries.append([f])
+            for fields in geometries:
+                stack_index = np.full(len(self.grids), -1)
+                stack_index[fields] = np.arange(len(fields))
+                rows = np.flatnonzero(np.isin(self.flight_field, fields))
+                values = np.stack([self.grids[f].velocity_mps for f in fields])
+                self._groups.append((self.grids[fields[0]], values, rows, stack_index[self.flight_field[rows]]))
 
     def velocity(self, points: np.ndarray, t: float = 0.0) -> np.ndarray:
-        """Mean wind (n, 3) m/s at ship-frame points (n, 3) m."""
-        return interpolate(self.grid, points, self.method, self.idw_power, self.clamp)
+        """Mean wind (n, 3) m/s at ship-frame points (n, 3) m (row i = flight i with several fields)."""
+        if not self._groups:
+            return interpolate(self.grids[0], points, self.method, self.idw_power, self.clamp)
+        points = np.asarray(points, dtype=float)
+        if points.shape != (self.flight_field.size, 3):
+            raise ValueError(f"points must have shape ({self.flight_field.size}, 3), one row per flight, "
+                             f"got {points.shape}")
+        if len(self._groups) == 1:
+            geometry, values, _, index = self._groups[0]
+            return interpolate(geometry, points, self.method, self.idw_power, self.clamp, values, index)
+        out = np.empty_like(points)
+        for geometry, values, rows, index in self._groups:   # one call per geometry (a few at most)
+            if rows.size:
+                out[rows] = interpolate(geometry, points[rows], self.method, self.idw_power, self.clamp,
+                                        values, index)
+        return out

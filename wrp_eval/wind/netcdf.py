@@ -31,13 +31,22 @@ from datetime import datetime
 from pathlib import Path
 
 import numpy as np
+import xarray as xr
 
 from wrp_eval.errors import InputError
-from wrp_eval.wind.boundary_layer import (GRAVITY_MPS2, charnock_roughness, earth_to_ship,
-                                          log_law_factor)
+from wrp_eval.frames import (
+    ShipPose,
+    enu_to_ship,
+    geographic_to_enu_equirectangular,
+    wrap_180,
+)
+from wrp_eval.wind.boundary_layer import (
+    GRAVITY_MPS2,
+    charnock_roughness,
+    log_law_factor,
+)
 from wrp_eval.wind.grid import WindGrid
 
-EARTH_RADIUS_M = 6_371_000.0
 DEFAULT_FILL_HEIGHTS_M = (0.0, 2.0, 5.0, 10.0, 20.0)
 TIME_FORMATS = ("%Y-%m-%d_%H:%M:%S", "%Y-%m-%dT%H:%M:%S", "%Y-%m-%d %H:%M:%S", "%Y-%m-%dT%H:%M", "%Y-%m-%d")
 
@@ -96,7 +105,6 @@ MM5_LAYOUT = NetcdfLayout(
 
 
 def _open(path: Path):
-    import xarray as xr
     if not path.is_file():
         raise InputError(path, "no such file")
     try:
@@ -180,10 +188,6 @@ def _checked(ds, name: str, dims: tuple[str, ...], sizes: dict[str, int], path: 
     return values
 
 
-def _wrap_deg(d: np.ndarray) -> np.ndarray:
-    return (d + 180.0) % 360.0 - 180.0
-
-
 def read_mean_wind(path: str | Path, lat_deg: float, lon_deg: float, heading_deg: float,
                    time: str | None = None, time_interpolation: str = "nearest",
                    layout: NetcdfLayout = WRF_LAYOUT, fill_heights_m=DEFAULT_FILL_HEIGHTS_M,
@@ -255,10 +259,8 @@ def read_mean_wind(path: str | Path, lat_deg: float, lon_deg: float, heading_deg
     if np.any(heights[..., 0] <= 0):
         raise InputError(path, "the lowest model level is at or below the ground in some column")
 
-    # Ship placement in a local tangent plane (equirectangular about the ship: fine over a few cells).
-    lat0 = np.deg2rad(lat_deg)
-    east = EARTH_RADIUS_M * np.cos(lat0) * np.deg2rad(_wrap_deg(lon - lon_deg))
-    north = EARTH_RADIUS_M * np.deg2rad(lat - lat_deg)
+    # Ship placement in a local plane (equirectangular about the ship: fine over a few cells; see frames).
+    east, north = geographic_to_enu_equirectangular(lat, lon, ShipPose(lat_deg, lon_deg, heading_deg))
     de_di, de_dj = np.gradient(east, axis=0), np.gradient(east, axis=1)
     dn_di, dn_dj = np.gradient(north, axis=0), np.gradient(north, axis=1)
     nx, ny = east.shape
@@ -285,14 +287,14 @@ def read_mean_wind(path: str | Path, lat_deg: float, lon_deg: float, heading_deg
         cos_a, sin_a = cos_a.T, sin_a.T
     else:
         dlat = np.gradient(lat, axis=0)
-        dlon = _wrap_deg(np.gradient(lon, axis=0)) * np.cos(np.deg2rad(lat))
+        dlon = wrap_180(np.gradient(lon, axis=0)) * np.cos(np.deg2rad(lat))
         alpha = np.arctan2(dlat, dlon)
         cos_a, sin_a = np.cos(alpha), np.sin(alpha)
 
     def to_ship(gu, gv):
         e = gu * cos_a[..., None] - gv * sin_a[..., None] if gu.ndim == 4 else gu * cos_a - gv * sin_a
         n = gu * sin_a[..., None] + gv * cos_a[..., None] if gu.ndim == 4 else gu * sin_a + gv * cos_a
-        return earth_to_ship(e, n, heading)
+        return enu_to_ship(e, n, heading)
 
     hgt_list, vel_list, weights = [], [], []
     fill = np.asarray([h for h in fill_heights_m if h < heights[..., 0].min() - 1.0], dtype=float)

@@ -16,14 +16,14 @@ Targets (issue 8): ISWRP <= 1 s, SWRP <= 2 s on this 2-core CPU.
 from __future__ import annotations
 
 import numpy as np
+import torch
 
-from wrp_eval.bench import BenchRecord
+from wrp_eval.bench_record import BenchRecord
+from wrp_eval.surrogate.bench import bench_surrogate
+from wrp_eval.wrp.optimize import WrpParams, interval_optimise, sample_radii
 
 
 def run_bench() -> list[BenchRecord]:
-    import torch
-    from wrp_eval.surrogate.bench import bench_surrogate
-    from wrp_eval.wrp.optimize import WrpParams, interval_optimise, sample_radii
     torch.set_num_threads(1)
     result, data, what, _ = bench_surrogate()
     s = result.surrogate

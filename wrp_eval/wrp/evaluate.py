@@ -18,8 +18,11 @@ from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
+from matplotlib.figure import Figure
 from scipy import stats
 
+from wrp_eval.atomic import atomic_path
+from wrp_eval.campaign.store import TrialStore
 from wrp_eval.errors import InputError
 
 
@@ -35,7 +38,6 @@ class PathTrials:
 
 def read_trials(name: str, folder: str | Path) -> PathTrials:
     """The error and failure of every stored trial of a campaign folder, in trial-id order."""
-    from wrp_eval.campaign.store import TrialStore
     table = TrialStore(folder).read_table(["trial_id", "error_m", "failed"])
     order = np.argsort(table.column("trial_id").to_numpy())
     return PathTrials(name, table.column("trial_id").to_numpy()[order],
@@ -89,10 +91,8 @@ def paired_difference(base: PathTrials, other: PathTrials, rng: np.random.Genera
 
 def box_plot(paths: list[PathTrials], file: Path) -> None:
     """Errors of the trials that did not fail, one box per path (PNG, written atomically)."""
-    import matplotlib
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
-    fig, ax = plt.subplots(figsize=(5.5, 4), dpi=120)
+    fig = Figure(figsize=(5.5, 4), dpi=120)
+    ax = fig.subplots()
     data = [p.error_m[~p.failed & np.isfinite(p.error_m)] for p in paths]
     ax.boxplot(data, showmeans=True)
     ax.set_xticks(range(1, len(paths) + 1),
@@ -100,10 +100,8 @@ def box_plot(paths: list[PathTrials], file: Path) -> None:
     ax.set_ylabel("reconstruction error (m)")
     ax.set_title("same wind realisations (common random numbers)", fontsize=9)
     fig.tight_layout()
-    tmp = file.with_name(file.name + ".tmp.png")
-    fig.savefig(tmp)
-    plt.close(fig)
-    tmp.replace(file)
+    with atomic_path(file) as tmp:
+        fig.savefig(tmp, format="png")
 
 
 def summarise(paths: list[PathTrials], seed: int, resamples: int, confidence: float) -> dict:

@@ -32,6 +32,7 @@ from dataclasses import dataclass, field, replace
 
 import numpy as np
 
+from wrp_eval.ship.nofly import flyable
 from wrp_eval.surrogate.model import Surrogate, ViewQuery
 
 
@@ -68,16 +69,11 @@ class WrpParams:
     no_fly_bounds: np.ndarray | None = None
 
     def feasible(self, view: int, offsets: np.ndarray) -> np.ndarray:
-        """(B,) bool: position offsets (B, 3) of ``view`` that keep it above the minimum altitude and out of
-        the no-fly box."""
+        """(B,) bool: position offsets (B, 3) of ``view`` that keep it flyable (the ship stage's one predicate,
+        :func:`wrp_eval.ship.nofly.flyable`: above the minimum altitude and out of the no-fly box)."""
         if self.base_positions is None:
             return np.ones(len(offsets), bool)
-        p = np.asarray(self.base_positions)[view] + offsets
-        ok = p[:, 2] >= self.min_altitude_m
-        if self.no_fly_bounds is not None:
-            lo, hi = np.asarray(self.no_fly_bounds)
-            ok &= ~np.all((p >= lo) & (p <= hi), axis=1)
-        return ok
+        return flyable(np.asarray(self.base_positions)[view] + offsets, self.no_fly_bounds, self.min_altitude_m)
 
     def __post_init__(self) -> None:
         if self.kind not in ("iswrp", "swrp"):

@@ -15,37 +15,25 @@ from __future__ import annotations
 import argparse
 from pathlib import Path
 
-
-def default_campaign_dir(config) -> Path:
-    """The campaign folder the surrogate learns from: ``surrogate.campaign_dir``, else the campaign stage's
-    default ``campaign.outputs.dir`` or logs/<run.name>/campaign."""
-    if config.surrogate.campaign_dir is not None:
-        return Path(config.surrogate.campaign_dir)
-    return Path(config.campaign.outputs.dir or Path("logs") / config.run.name / "campaign")
-
-
-def default_out_dir(config) -> Path:
-    return Path(config.surrogate.out_dir or Path("logs") / config.run.name / "surrogate")
+from wrp_eval.atomic import write_json_atomic
+from wrp_eval.campaign.backends import default_workers
+from wrp_eval.errors import InputError
+from wrp_eval.experiment import ExperimentContext
+from wrp_eval.surrogate.train import CHECKPOINT_NAME, train_from_campaign
 
 
 def _train(args: argparse.Namespace) -> int:
-    from wrp_eval.atomic import write_json_atomic
-    from wrp_eval.campaign.backends import default_workers
-    from wrp_eval.config import load_experiment
-    from wrp_eval.errors import InputError
-    from wrp_eval.surrogate.train import CHECKPOINT_NAME, train_from_campaign
     workers = args.workers if args.workers is not None else default_workers()
     if workers < 1:                     # refused before an hour of training, not after
         raise InputError("--workers", f"must be >= 1, got {workers}")
     if args.cv == 1 or args.cv < 0:
         raise InputError("--cv", f"needs K >= 2 folds (or 0: none), got {args.cv}")
-    config = load_experiment(args.config)
-    campaign = Path(args.campaign) if args.campaign else default_campaign_dir(config)
-    out = Path(args.out) if args.out else default_out_dir(config)
+    ctx = ExperimentContext.load(args.config)
+    out = Path(args.out) if args.out else ctx.folders.surrogate
     if args.cv and not args.quiet:
         print(f"training the surrogate and {args.cv} cross-validation folds, {min(workers, args.cv + 1)} at a "
               f"time ...", flush=True)
-    result, data, cv = train_from_campaign(config, campaign, out, progress=not args.quiet, folds=args.cv,
+    result, data, cv = train_from_campaign(ctx, args.campaign, out, progress=not args.quiet, folds=args.cv,
                                            workers=workers)
     m = result.metrics["test"]
     print(f"surrogate {out / CHECKPOINT_NAME}: test R^2 {m['r2']:.4f}, RMSE {m['rmse']:.4g} m, MAE {m['mae']:.4g} m "

@@ -13,17 +13,16 @@ from __future__ import annotations
 
 import argparse
 import json
-from pathlib import Path
 
+from wrp_eval.campaign.jobs import campaign_job
+from wrp_eval.campaign.runner import campaign_status
 from wrp_eval.errors import InputError
+from wrp_eval.experiment import ExperimentContext
 
 
 def _run(args: argparse.Namespace, config_file: str) -> int:
-    from wrp_eval.campaign.runner import resolve_config, run_campaign
-    from wrp_eval.config import load_experiment
-    config = resolve_config(load_experiment(config_file), n_trials=args.trials, backend=args.backend,
-                            workers=args.workers, rerun=False if args.no_rerun else None)
-    summary = run_campaign(config, out_dir=args.out, config_dir=Path(config_file).parent,
+    summary = campaign_job(ExperimentContext.load(config_file), out_dir=args.out, n_trials=args.trials,
+                           backend=args.backend, workers=args.workers, rerun=False if args.no_rerun else None,
                            progress=not args.quiet)
     print(f"campaign {summary.out_dir}: {summary.done}/{summary.n_trials} trials stored "
           f"({summary.ran} run now in {summary.wall_s:.1f} s, {summary.trials_per_min:.1f} trials/min), "
@@ -32,7 +31,6 @@ def _run(args: argparse.Namespace, config_file: str) -> int:
 
 
 def _status(args: argparse.Namespace, out_dir: str) -> int:
-    from wrp_eval.campaign.runner import campaign_status
     status = campaign_status(out_dir)
     if args.json:
         print(json.dumps(status, indent=1))

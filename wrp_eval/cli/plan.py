@@ -7,43 +7,27 @@ import argparse
 import dataclasses
 from pathlib import Path
 
-import numpy as np
-
 from wrp_eval.atomic import write_json_atomic
-
-# Stream id of the planning stage inside the run seed (other stages spawn their own).
-PLANNING_SEED_STREAM = 3
-
-
-def planning_rng(seed: int) -> np.random.Generator:
-    """The planning stage's generator for run seed ``seed``."""
-    return np.random.default_rng(np.random.SeedSequence([seed, PLANNING_SEED_STREAM]))
+from wrp_eval.experiment import ExperimentContext
+from wrp_eval.planning.rerun_log import save_plan_recording
 
 
-def _run_plan(args: argparse.Namespace) -> int:
-    from wrp_eval.config import load_experiment
-    from wrp_eval.planning.planner import plan
-    from wrp_eval.ship.resolve import resolve_ship_full
-
-    config_path = Path(args.config)
-    config = load_experiment(config_path)
-    section = config.planning
+def _plan(args: argparse.Namespace) -> int:
+    ctx = ExperimentContext.load(args.config)
     if args.method:
-        section = section.model_copy(update={"method": args.method})
-    ship = resolve_ship_full(config.ship, config_path.parent, str(config_path))
-    result = plan(ship.proxy, ship.complexity.complexity, section, planning_rng(config.run.seed))
+        ctx = ctx.with_config(ctx.config.model_copy(
+            update={"planning": ctx.config.planning.model_copy(update={"method": args.method})}))
+    ship, result = ctx.ship, ctx.planned
     out = Path(args.out)
-    meta = dict(result.path.metadata)
-    meta.update({"config": str(config_path), "ship_type": ship.particulars.ship_type.value, "seed": config.run.seed})
-    path = dataclasses.replace(result.path, metadata=meta)
+    path = dataclasses.replace(result.path, metadata={**result.path.metadata,
+                                                      "ship_type": ship.particulars.ship_type.value})
     path.save(out / "path.json")
-    metrics = {**result.metrics, "config": str(config_path), "seed": config.run.seed,
+    metrics = {**result.metrics, "config": ctx.source, "seed": ctx.run_seed,
                "ship": {"type": ship.particulars.ship_type.value, "mesh_source": ship.mesh_source,
                         "proxy_m": [ship.proxy.length_m, ship.proxy.breadth_m, ship.proxy.height_m],
                         "no_fly_margin_m": ship.proxy.no_fly_margin_m}}
     write_json_atomic(out / "plan_metrics.json", metrics)
     if args.rerun:
-        from wrp_eval.planning.rerun_log import save_plan_recording
         save_plan_recording(result, ship.proxy, args.rerun)
     m = result.metrics
     print(f"{m['method']}: {len(path)} viewpoints ({m.get('n_transition_views', 0)} transition), "
@@ -62,4 +46,4 @@ def register(subparsers) -> None:
     parser.add_argument("--method", choices=("ours", "zhou2020", "oblique"), default=None,
                         help="override planning.method")
     parser.add_argument("--rerun", default=None, metavar="FILE", help="also write a rerun recording (.rrd)")
-    parser.set_defaults(func=_run_plan)
+    parser.set_defaults(func=_plan)

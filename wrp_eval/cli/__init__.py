@@ -1,32 +1,36 @@
-"""The ``wrp-eval`` command: one entry point, one sub-command family per stage.
+"""The ``wrp-eval`` command: one module per sub-command, each only parse -> call -> print.
 
-Each stage module listed in ``COMMAND_MODULES`` has ``register(subparsers)`` adding its sub-commands,
-each with ``set_defaults(func=handler)``; ``handler(args) -> int`` returns the exit status.
+Every module in :data:`COMMANDS` has ``register(subparsers)`` adding its sub-command with
+``set_defaults(func=handler)``; ``handler(args) -> int`` returns the exit status. The work is done by the
+stages' jobs (``wrp_eval/<stage>/...``, :mod:`wrp_eval.pipeline`); nothing outside this package imports it.
 A bad input raises :class:`InputError`: one line on stderr, exit status 2.
 """
 
 from __future__ import annotations
 
 import argparse
-import importlib
 import sys
 
 from wrp_eval import __version__
+from wrp_eval.cli import (
+    bench,
+    campaign,
+    evaluate,
+    export,
+    fly,
+    optimize,
+    plan,
+    reconstruct,
+    run,
+    ship,
+    train,
+    validate_oracle,
+    wind,
+)
 from wrp_eval.errors import InputError
 
-COMMAND_MODULES = (   # in pipeline order; `wrp-eval --help` lists them so
-    "wrp_eval.pipeline",
-    "wrp_eval.ship.commands",
-    "wrp_eval.planning.commands",
-    "wrp_eval.wind.commands",
-    "wrp_eval.sim.commands",
-    "wrp_eval.recon.commands",
-    "wrp_eval.campaign.commands",
-    "wrp_eval.surrogate.commands",
-    "wrp_eval.wrp.commands",
-    "wrp_eval.export.commands",
-    "wrp_eval.bench",
-)
+COMMANDS = (run, ship, plan, wind, fly, reconstruct, validate_oracle, campaign, train, optimize, evaluate, export,
+            bench)   # in pipeline order; `wrp-eval --help` lists them so
 
 
 def build_parser() -> argparse.ArgumentParser:
@@ -36,8 +40,8 @@ def build_parser() -> argparse.ArgumentParser:
                     "by Monte Carlo flights in MuJoCo.")
     parser.add_argument("--version", action="version", version=f"wrp-eval {__version__}")
     sub = parser.add_subparsers(dest="command", metavar="COMMAND", required=True)
-    for name in COMMAND_MODULES:
-        importlib.import_module(name).register(sub)
+    for module in COMMANDS:
+        module.register(sub)
     return parser
 
 
@@ -52,7 +56,3 @@ def main(argv: list[str] | None = None) -> int:
     except KeyboardInterrupt:
         print("wrp-eval: interrupted", file=sys.stderr)
         return 130
-
-
-if __name__ == "__main__":
-    sys.exit(main())

@@ -3,34 +3,32 @@
 from __future__ import annotations
 
 import argparse
-from pathlib import Path as FsPath
+from pathlib import Path
 
-from wrp_eval.export.formats import FORMATS
+from wrp_eval.config import ExperimentConfig
+from wrp_eval.experiment import ExperimentContext
+from wrp_eval.export.formats import FORMATS, export_path
+from wrp_eval.planning.path import Path as FlightPath
+from wrp_eval.ship.proxy import build_proxy
+from wrp_eval.ship.resolve import resolve_particulars
+
+POSITION_FIELDS = ("lat_deg", "lon_deg", "heading_deg")
 
 
-def _run_export(args: argparse.Namespace) -> int:
-    from wrp_eval.config import ExperimentConfig, load_experiment
-    from wrp_eval.export.formats import export_path
-    from wrp_eval.planning.path import Path
-    from wrp_eval.ship.proxy import build_proxy
-    from wrp_eval.ship.resolve import resolve_particulars
-
-    if args.config:
-        config_path = FsPath(args.config)
-        config, config_dir, source = load_experiment(config_path), config_path.parent, str(config_path)
-    else:
-        config, config_dir, source = ExperimentConfig(), FsPath("."), "embedded defaults"
-    path = Path.load(args.path)
+def _export(args: argparse.Namespace) -> int:
+    ctx = (ExperimentContext.load(args.config) if args.config
+           else ExperimentContext(ExperimentConfig(), Path("."), "embedded defaults"))
+    path = FlightPath.load(args.path)
     # Only the particulars (position, heading, dimensions) and the proxy are needed: no mesh is built.
-    particulars, provenance = resolve_particulars(config.ship, config_dir, source)
-    unknown = [k for k in ("lat_deg", "lon_deg", "heading_deg") if provenance.get(k, "").startswith("default")]
-    proxy = build_proxy(particulars, config.ship.no_fly_margin_m)
-    written = export_path(path, particulars, proxy, args.format, args.out, config.export, str(args.path))
+    particulars, provenance = resolve_particulars(ctx.config.ship, ctx.config_dir, ctx.source)
+    unknown = [k for k in POSITION_FIELDS if provenance.get(k, "").startswith("default")]
+    proxy = build_proxy(particulars, ctx.config.ship.no_fly_margin_m)
+    written = export_path(path, particulars, proxy, args.format, args.out, ctx.config.export, str(args.path))
     print(f"ship at {particulars.lat_deg:.6f}, {particulars.lon_deg:.6f}, heading {particulars.heading_deg:.1f} deg; "
           f"altitudes relative to the take-off point ({written[0][1].home_alt_m:.2f} m above the sea)")
     if unknown:
         print(f"warning: ship {', '.join(unknown)} not given (ship.particulars or an AIS position report in "
-              f"{source}): the default 0 was used, so these waypoints are not where the ship is")
+              f"{ctx.source}): the default 0 was used, so these waypoints are not where the ship is")
     for file, mission in written:
         print(f"sortie {mission.sortie}: {len(mission)} waypoints -> {file}")
     return 0
@@ -48,4 +46,4 @@ def register(subparsers) -> None:
     parser.add_argument("--out", required=True, help="output file (sorties add _sortie<k> before the extension)")
     parser.add_argument("--config", help="experiment YAML giving the ship and the export section "
                                          "(default: the embedded defaults)")
-    parser.set_defaults(func=_run_export)
+    parser.set_defaults(func=_export)

@@ -1,0 +1,29 @@
+"""The campaign job of an experiment: its trial config, path, seed and folder taken from the context.
+
+``wrp-eval campaign`` and ``wrp-eval run`` call :func:`campaign_job`; callers that fly another path or another
+campaign section (``evaluate``, the studies) call :func:`wrp_eval.campaign.runner.run_campaign` directly.
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+from wrp_eval.campaign.evaluators import DEFAULT_EVALUATOR
+from wrp_eval.campaign.runner import CampaignSummary, run_campaign, with_overrides
+from wrp_eval.experiment import ExperimentContext
+from wrp_eval.planning.path import Path as FlightPath
+
+
+def campaign_job(ctx: ExperimentContext, *, out_dir: str | Path | None = None, n_trials: int | None = None,
+                 backend: str | None = None, workers: int | None = None, rerun: bool | None = None,
+                 evaluator: str = DEFAULT_EVALUATOR, evaluator_options: dict | None = None,
+                 progress: bool = True, path: FlightPath | None = None) -> CampaignSummary:
+    """Run (or resume) the experiment's campaign: ``campaign.path`` or the plan, flown ``campaign.n_trials``
+    times from root seed ``campaign.seed`` (else ``run.seed``) into ``out_dir`` (default the run's campaign
+    folder); the keyword overrides are the command line's. ``path``: fly this path instead (``wrp-eval run``
+    flies the plan it has just written)."""
+    trial = with_overrides(ctx.trial_config, n_trials=n_trials, backend=backend, workers=workers, rerun=rerun)
+    mesh = ctx.ship.mesh if trial.campaign.outputs.rerun else None
+    return run_campaign(trial, path if path is not None else ctx.campaign_path, Path(out_dir) if out_dir is not None else ctx.folders.campaign,
+                        root_seed=ctx.campaign_seed, config_dir=ctx.config_dir, evaluator=evaluator,
+                        evaluator_options=evaluator_options, progress=progress, ship_mesh=mesh)

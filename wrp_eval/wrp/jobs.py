@@ -1,0 +1,257 @@
+"""The WRP jobs of an experiment: optimise a wind-resistance path (ISWRP / SWRP, paper Alg. 3/4) from a trained
+surrogate, and evaluate the initial path and both WRPs under the same winds.
+
+``optimize`` writes <out>/path.json (the WRP) and <out>/wrp_metrics.json (the paper's Table 3 columns: offset
+rate, total position / rotation offset, time, and the WRP's error from the ORACLE; plus the surrogate's figures,
+per-viewpoint offsets and where E_original and r_s came from). ``evaluate`` optimises both kinds, then flies the
+three paths as campaigns with the same seed (common random numbers, viewpoints as planned) into
+<out>/evaluate.json and <out>/boxplot.png.
+
+The inputs (path, surrogate, campaign trials for r_s) are resolved once per job (:func:`resolve_inputs`) and
+shared by both optimisations of ``evaluate``; a caller that holds them already (``wrp-eval run``) passes them.
+"""
+
+from __future__ import annotations
+
+import json
+from dataclasses import dataclass
+from pathlib import Path
+
+import numpy as np
+import torch
+
+from wrp_eval.atomic import write_json_atomic
+from wrp_eval.campaign.evaluators import DEFAULT_EVALUATOR
+from wrp_eval.campaign.runner import run_campaign
+from wrp_eval.errors import InputError
+from wrp_eval.experiment import ExperimentContext
+from wrp_eval.planning.path import Path as FlightPath
+from wrp_eval.planning.path import digest_of_document
+from wrp_eval.recon.capture_io import captures_from_path
+from wrp_eval.recon.scene import ScoredShip
+from wrp_eval.ship.proxy import build_proxy
+from wrp_eval.surrogate.data import TrialData, load_campaign_trials
+from wrp_eval.surrogate.model import Surrogate
+from wrp_eval.wrp.config import WrpSection
+from wrp_eval.wrp.evaluate import box_plot, read_trials, summarise
+from wrp_eval.wrp.optimize import (
+    WrpParams,
+    apply_offsets,
+    interval_optimise,
+    sample_radii,
+)
+
+EVALUATED_PATHS = ("initial", "iswrp", "swrp")
+
+
+@dataclass(frozen=True)
+class WrpInputs:
+    """What an optimisation starts from: the path, its surrogate, the campaign folder it was trained on, and the
+    per-viewpoint neighbourhood radii r_s (n,) m with a line saying where they came from."""
+
+    path: FlightPath
+    surrogate: Surrogate
+    campaign_dir: Path
+    radius_m: np.ndarray
+    radius_source: str
+
+
+def oracle_error(ship: ScoredShip, path: FlightPath) -> dict:
+    """The oracle's verdict (JSON dict) on the path flown exactly as planned (no wind): capture poses =
+    viewpoints, oracle seed 0."""
+    return ship.score(captures_from_path(path), seed=0).to_json_dict()
+
+
+def resolve_inputs(ctx: ExperimentContext, section: WrpSection, checkpoint: str | Path | None = None,
+                   campaign: str | Path | None = None, *, surrogate: Surrogate | None = None,
+                   trials: TrialData | None = None) -> WrpInputs:
+    """The :class:`WrpInputs` of ``section``: the path of the campaign folder (or ``wrp.path``), the checkpoint
+    (or the ``surrogate`` already loaded), r_s from the campaign's trials (or the ``trials`` already read)."""
+    camp = Path(campaign or section.campaign_dir or ctx.training_campaign_dir)
+    path_file = Path(section.path) if section.path else camp / "path.json"
+    path = FlightPath.load(path_file)
+    digests = {path.digest()}
+    try:   # the campaign hashes the document it stored; hash the file's own document too
+        digests.add(digest_of_document(json.loads(path_file.read_text())))
+    except (KeyError, TypeError, ValueError):
+        pass
+    if surrogate is None:
+        ckpt = Path(checkpoint or section.checkpoint or ctx.folders.surrogate / "surrogate.pt")
+        surrogate = Surrogate.load(ckpt, n_views=len(path), path_digest=digests)
+    else:
+        surrogate.check_path(len(path), digests, source="surrogate")
+    radius = np.full(len(path), section.sample_radius_m)
+    source = f"fixed {section.sample_radius_m} m"
+    if section.sample_radius == "campaign":
+        if trials is None and (camp / "campaign.json").is_file():
+            trials = load_campaign_trials(camp)
+        if trials is not None:
+            if trials.n_views != len(path):
+                raise InputError(camp, f"campaign has {trials.n_views} viewpoints, the path {len(path)}")
+            measured = sample_radii(trials.deviation, section.sample_radius_quantile)
+            ok = np.isfinite(measured) & (measured > 0)
+            radius = np.where(ok, measured, section.sample_radius_m)
+            source = (f"campaign {camp}: {section.sample_radius_quantile:g} quantile of |flown - commanded| over "
+                      f"{trials.n_trials} trials ({int((~ok).sum())} viewpoints fell back to "
+                      f"{section.sample_radius_m} m)")
+        else:
+            source = f"fixed {section.sample_radius_m} m (no campaign at {camp})"
+    return WrpInputs(path, surrogate, camp, radius, source)
+
+
+def safety_constraints(ctx: ExperimentContext, path: FlightPath) -> dict:
+    """The planner's flight-safety constraints for moved viewpoints: minimum altitude and the no-fly box."""
+    proxy = build_proxy(ctx.particulars, ctx.config.ship.no_fly_margin_m)
+    return {"base_positions": np.asarray(path.positions, dtype=float),
+            "min_altitude_m": float(ctx.config.planning.min_altitude_m), "no_fly_bounds": proxy.no_fly_bounds()}
+
+
+def step_from_surrogate(surrogate: Surrogate, section: WrpSection) -> float:
+    """The position move bound: ``step_m``, else the training offsets' smallest position half-range."""
+    if section.step_m is not None:
+        return float(section.step_m)
+    low, high = surrogate.meta.offset_low, surrogate.meta.offset_high
+    if low is None or high is None:
+        return float(section.step_fallback_m)
+    return float(min(min(-low[k], high[k]) for k in range(3)))
+
+
+def wind_free_error(ctx: ExperimentContext, inputs: WrpInputs, section: WrpSection,
+                    e_original: float | None) -> tuple[float, str]:
+    """E_original (m) and where it came from: given, the surrogate at zero offsets, or the oracle."""
+    if e_original is not None:
+        return float(e_original), "given"
+    if section.e_original_m is not None:
+        return float(section.e_original_m), "given"
+    if section.e_original_source == "surrogate":
+        return float(inputs.surrogate.predict(np.zeros((1, len(inputs.path), 4)))[0]), "surrogate at zero offsets"
+    verdict = oracle_error(ctx.scored_ship, inputs.path)
+    if verdict["error_m"] is None:
+        raise InputError("wrp", f"the oracle could not score the wind-free path ({verdict['reason']}); "
+                                "give wrp.e_original_m")
+    return float(verdict["error_m"]), f"oracle ({verdict['oracle']}) on the wind-free path"
+
+
+def run_optimize(ctx: ExperimentContext, section: WrpSection, out: Path, inputs: WrpInputs, *,
+                 e_original: float | None = None, use_oracle: bool = True, quiet: bool = False) -> dict:
+    """One ISWRP / SWRP optimisation of ``inputs`` by ``section`` into ``out``; returns wrp_metrics.json."""
+    torch.set_num_threads(section.threads)
+    path, surrogate, radius = inputs.path, inputs.surrogate, inputs.radius_m
+    e0, e0_source = wind_free_error(ctx, inputs, section, e_original)
+    threshold = section.threshold_m if section.threshold_m is not None else section.threshold_fraction * e0
+    params = WrpParams(kind=section.kind, threshold_m=float(threshold), e_original_m=float(e0),
+                       sample_radius_m=radius, iterations=section.iterations,
+                       attitude_samples=section.attitude_samples, yaw_range_rad=float(np.radians(section.yaw_range_deg)),
+                       neighbourhood_samples=section.neighbourhood_samples,
+                       step_m=step_from_surrogate(surrogate, section), swrp_spread=section.swrp_spread,
+                       block_iterations=section.block_iterations, stage2_batch=section.stage2_batch,
+                       acceptance=section.acceptance, min_improvement_fraction=section.min_improvement_fraction,
+                       improve_candidates=section.improve_candidates,
+                       **safety_constraints(ctx, path))
+    seed = section.seed if section.seed is not None else ctx.run_seed
+    result = interval_optimise(surrogate, params, seed=seed)
+    table = result.table3()
+    wrp_path = apply_offsets(path, result.offsets, {"wrp": {"kind": section.kind, "threshold_m": threshold,
+                                                            "seed": seed}})
+    if use_oracle and section.oracle_error:
+        verdict = oracle_error(ctx.scored_ship, wrp_path)
+        table["oracle_error_m"] = verdict["error_m"]
+        table["oracle"] = verdict
+    else:
+        table["oracle_error_m"] = None
+    out.mkdir(parents=True, exist_ok=True)
+    wrp_path.save(out / "path.json")
+    doc = {"table3": table, "e_original_source": e0_source, "sample_radius_source": inputs.radius_source,
+           "sample_radius_m": radius.tolist(), "step_m": params.step_m, "seed": seed,
+           "yaw_range_deg": section.yaw_range_deg, "iterations": params.iterations,
+           "attitude_samples": params.attitude_samples, "neighbourhood_samples": params.neighbourhood_samples,
+           "swrp_spread": params.swrp_spread, "acceptance": params.acceptance,
+           "min_improvement_fraction": params.min_improvement_fraction,
+           "surrogate": {"path_digest": surrogate.meta.path_digest, "metrics": surrogate.meta.metrics.get("test")},
+           "viewpoints": [{"index": i, "moved": bool(result.moved[i]), "dx_m": float(o[0]), "dy_m": float(o[1]),
+                           "dz_m": float(o[2]), "dyaw_deg": float(np.degrees(o[3])),
+                           "accepted_iteration": int(result.accepted_iteration[i])}
+                          for i, o in enumerate(result.offsets)]}
+    write_json_atomic(out / "wrp_metrics.json", doc)
+    if not quiet:
+        err = table["oracle_error_m"]
+        print(f"{section.kind} t={threshold:.4g} m: {table['offset_rate_pct']:.1f} % viewpoints moved, position "
+              f"offset {table['position_offset_m']:.2f} m, rotation offset {table['rotation_offset_deg']:.1f} deg, "
+              f"{table['time_s']:.2f} s; error: oracle "
+              + (f"{err:.4f} m" if err is not None else "n/a") + f", surrogate {table['surrogate_error_m']:.4f} m "
+              f"(E_original {e0:.4f} m) -> {out}")
+    return doc
+
+
+def with_kind(section: WrpSection, kind: str | None = None, threshold_m: float | None = None) -> WrpSection:
+    """``section`` with another kind and / or threshold (validated for the new values)."""
+    update = {}
+    if kind is not None:
+        update["kind"] = kind
+    if threshold_m is not None:
+        update["threshold_m"] = threshold_m
+    return WrpSection.model_validate({**section.model_dump(), **update}) if update else section
+
+
+def optimize_job(ctx: ExperimentContext, *, kind: str | None = None, threshold_m: float | None = None,
+                 out: Path | None = None, checkpoint=None, campaign=None, e_original: float | None = None,
+                 use_oracle: bool = True, quiet: bool = False) -> dict:
+    """``wrp-eval optimize``: the config's ``wrp:`` section with the command line's kind and threshold."""
+    section = with_kind(ctx.config.wrp, kind, threshold_m)
+    inputs = resolve_inputs(ctx, section, checkpoint, campaign)
+    return run_optimize(ctx, section, Path(out) if out else ctx.folders.wrp(section.kind), inputs,
+                        e_original=e_original, use_oracle=use_oracle, quiet=quiet)
+
+
+def evaluate_job(ctx: ExperimentContext, out: Path | None = None, *, n_trials: int | None = None, checkpoint=None,
+                 campaign=None, e_original: float | None = None, quiet: bool = False,
+                 evaluator: str | None = None, surrogate: Surrogate | None = None,
+                 trials: TrialData | None = None) -> dict:
+    """``wrp-eval evaluate``: ISWRP and SWRP optimised from one set of inputs, then the initial path and both
+    WRPs flown as campaigns with the same seed (common random numbers); returns the evaluate.json document.
+    ``evaluator``: the campaign's trial evaluator ("module:function"; default the MuJoCo flight + oracle);
+    ``surrogate`` / ``trials``: already loaded by the caller (the checkpoint and campaign are then not read)."""
+    section, ev = ctx.config.wrp, ctx.config.wrp.evaluate
+    out = Path(out) if out is not None else ctx.folders.evaluate
+    if ev.thresholds_m is not None and len(ev.thresholds_m) != 2:
+        raise InputError("wrp.evaluate.thresholds_m", "give two thresholds: [iswrp, swrp]")
+    inputs = resolve_inputs(ctx, section, checkpoint, campaign, surrogate=surrogate, trials=trials)
+    paths = {"initial": inputs.path}
+    optimised = {}
+    for i, kind in enumerate(("iswrp", "swrp")):
+        kind_section = with_kind(section, kind, ev.thresholds_m[i] if ev.thresholds_m is not None else None)
+        folder = out / f"wrp-{kind}"
+        optimised[kind] = run_optimize(ctx, kind_section, folder, inputs, e_original=e_original, quiet=quiet)
+        paths[kind] = FlightPath.load(folder / "path.json")
+    trial = ctx.trial_config
+    campaign_doc = trial.campaign.model_dump()
+    campaign_doc.update({"n_trials": n_trials or ev.n_trials, "path": None})
+    campaign_doc["perturbation"]["design"] = "none"
+    campaign_doc["outputs"].update({"dir": None, "rerun": False})
+    flown = trial.model_copy(update={"campaign": type(trial.campaign).model_validate(campaign_doc)})
+    flown_trials = []
+    for name, path in paths.items():
+        folder = out / f"campaign-{name}"
+        summary = run_campaign(flown, path, folder, root_seed=ctx.campaign_seed, config_dir=ctx.config_dir,
+                               progress=not quiet, evaluator=evaluator or DEFAULT_EVALUATOR)
+        if not quiet:
+            print(f"{name}: {summary.done} trials in {folder} ({summary.failed} failed)")
+        flown_trials.append(read_trials(name, folder))
+    seed = ctx.campaign_seed
+    result = summarise(flown_trials, seed, ev.bootstrap, ev.confidence)
+    result["wrp"] = {kind: d["table3"] for kind, d in optimised.items()}
+    result["common_random_numbers"] = (f"every path flown with campaign seed {seed}: trial k of every path "
+                                       "draws the same wind")
+    out.mkdir(parents=True, exist_ok=True)
+    write_json_atomic(out / "evaluate.json", result)
+    box_plot(flown_trials, out / "boxplot.png")
+    if not quiet:
+        for row in result["paths"]:
+            print(f"{row['path']:8s} mean {row['mean_error_m']:.4f} m  std {row['std_error_m']:.4f}  "
+                  f"p95 {row['p95_error_m']:.4f}  failed {100 * row['failure_rate']:.1f} %")
+        for row in result["paired"]:
+            ci = row["mean_error_diff_ci"]
+            print(f"{row['path']} - initial: mean error {row['mean_error_diff_m']:+.4f} m "
+                  + (f"[{ci[0]:+.4f}, {ci[1]:+.4f}]" if ci else "") + f" over {row['both_succeeded']} pairs, "
+                  f"failure rate {100 * row['failure_rate_diff']:+.1f} points")
+    return result
