@@ -18,6 +18,7 @@ from pathlib import Path as FsPath
 
 import numpy as np
 
+from wrp_eval.config import ExperimentConfig
 from wrp_eval.errors import InputError
 from wrp_eval.experiment import ExperimentContext
 from wrp_eval.planning.path import Path
@@ -25,10 +26,11 @@ from wrp_eval.sim.flight import FlightSimulator
 from wrp_eval.sim.hover import analytic_hover_balance, hover_statistics
 from wrp_eval.sim.outputs import write_flight_tables, write_rerun
 from wrp_eval.sim.simple_wind import ConstantWind
+from wrp_eval.wind.config import WindSection
 from wrp_eval.wind.field import build_wind_field
 
 
-def _wind_section(args, config):
+def _wind_section(args: argparse.Namespace, config: ExperimentConfig) -> WindSection:
     """The ``wind:`` section with the --wind-speed / --wind-dir overrides (synthetic source only)."""
     overrides = {}
     if args.wind_speed is not None:

@@ -56,6 +56,7 @@ from wrp_eval.sim.flight_state import (
 )
 from wrp_eval.sim.phases import (
     Profile,
+    Reference,
     apply_failures,
     apply_transitions,
     check_failures,
@@ -85,7 +86,9 @@ def _wind_at(wind, points, t, batch):
 
 
 def _pad(rows: np.ndarray, padded: int) -> np.ndarray:
-    """``rows`` (batch, ...) followed by zero (False) rows up to ``padded``."""
+    """``rows`` (batch, ...) followed by zero (False) rows up to ``padded`` (``rows`` itself when full)."""
+    if len(rows) == padded:
+        return rows
     return np.concatenate([rows, np.zeros((padded - len(rows),) + rows.shape[1:], dtype=rows.dtype)])
 
 
@@ -137,6 +140,7 @@ class _Batch:
     task_size: int
 
     def body(self) -> Body:
+        """The drones' state as the last rollout left it."""
         flat = self.state.reshape(-1)
         qpos, qvel = flat[self.qpos_flat], flat[self.qvel_flat]
         rot = quat_to_matrix(qpos[:, 3:])
@@ -248,8 +252,8 @@ class FlightSimulator:
         run.state = np.ascontiguousarray(run.out[:, -1])
         return wind
 
-    def _commands(self, run: _Batch, controller: PositionController, body: Body, ref, state: FlightState,
-                  wind_b: np.ndarray, dt: float, sec: SimSection):
+    def _commands(self, run: _Batch, controller: PositionController, body: Body, ref: Reference,
+                  state: FlightState, wind_b: np.ndarray, dt: float, sec: SimSection):
         """Motor thrusts (padded, 4) N, attitude targets (padded, 4) and drag (padded, 3) N for the next
         chunk, from the wind ``wind_b`` (batch, 3) m/s at the flights (calm at the fillers). Failed flights
         are parked (held still, no forces): they take no further photos."""
@@ -277,6 +281,8 @@ class FlightSimulator:
         return self._fly(path, wind, batch, view_offsets, start_time_s, self.section)
 
     def _fly(self, path, wind, batch, view_offsets, start_time_s, sec: SimSection) -> FlightResult:
+        """:meth:`fly` under the settings ``sec``: per chunk the phase steps (phases.py) on the flight state,
+        then the commands, the record and the rollout."""
         par = self.params
         dt = sec.timestep_s * sec.chunk_steps
         dwell = path.dwell_s if sec.dwell_s is None else sec.dwell_s

@@ -23,7 +23,7 @@ def charnock_roughness(speed_10m_mps: np.ndarray | float, alpha: float = 0.011,
 
     Charnock (1955): z0 = alpha u*^2 / g, with the neutral log law u* = kappa U10 / ln(10 / z0);
     solved by fixed-point iteration (it contracts: d z0/d z0 ~ 2 u*/(kappa U10) * ... << 1 at sea).
-    alpha ~ 0.011 (open ocean) .. 0.018 (coastal / young sea), per DESIGN.md.
+    alpha ~ 0.011 (open ocean, Smith 1988, JGR 93(C12)) .. 0.018 (coastal / young sea, Wu 1980, JPO 10).
     """
     u10 = np.maximum(np.asarray(speed_10m_mps, dtype=float), 0.0)
     z0 = np.full_like(u10, 1e-4)

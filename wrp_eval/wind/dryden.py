@@ -1,6 +1,6 @@
 """Dryden turbulence, MIL-F-8785C low-altitude model, batched over flights.
 
-Formulas (MIL-F-8785C Sec. 3.7.2.3 / MIL-HDBK-1797, reproduced in DESIGN.md), h in feet, 10 <= h <= 1000:
+Formulas (MIL-F-8785C Sec. 3.7.2.3 / MIL-HDBK-1797), h in feet, 10 <= h <= 1000:
     L_w = h,  L_u = L_v = h / (0.177 + 0.000823 h)^1.2
     sigma_w = 0.1 W20,  sigma_u = sigma_v = sigma_w / (0.177 + 0.000823 h)^0.4      (W20: wind at 20 ft)
 One-sided PSDs over temporal frequency omega (rad/s), each integrating over [0, inf) to sigma^2:
@@ -21,7 +21,8 @@ it), with r = dt / tau, a = exp(-r):
 
 Axes: u along the mean horizontal wind, v across it (horizontal, to the left), w vertical (up).
 Airspeed V (frozen-field "Taylor" speed): the mean wind speed at the vehicle with a floor, since a hovering
-multirotor has no airspeed of its own (DESIGN.md).
+multirotor has no airspeed of its own (Taylor's frozen-turbulence hypothesis needs a convection speed:
+the mean wind carries the field past the vehicle).
 """
 
 from __future__ import annotations

@@ -1,6 +1,7 @@
 """Mesoscale mean wind from WRF output, or MM5 output converted to netCDF, as a :class:`WindGrid`.
 
-What the reader does (facts in DESIGN.md, "WRF output"):
+What the reader does (the WRF-ARW conventions: Skamarock et al. 2019, "A Description of the Advanced Research
+WRF Model Version 4", NCAR/TN-556+STR, Sec. 3 (staggered Arakawa-C grid, geopotential PH + PHB)):
 
 1. checks that every variable it needs is there, with the expected dimensions (a staggered dimension is one
    longer than its mass-grid twin) and finite values;
@@ -303,7 +304,7 @@ def read_mean_wind(path: str | Path, lat_deg: float, lon_deg: float, heading_deg
         vel = np.stack([vx[0], vy[0], w[index]], axis=-1)                   # (nx, ny, nz, 3)
         hgt = heights[index]
         if fill.size:
-            # log law matched to the 10 m wind (DESIGN.md): U(z) = U10 ln(z/z0)/ln(10/z0), Charnock z0
+            # neutral log law matched to the 10 m wind (Charnock 1955 roughness): U(z) = U10 ln(z/z0)/ln(10/z0), Charnock z0
             sx, sy = to_ship(u10[index], v10[index])
             z0, _ = charnock_roughness(np.hypot(sx, sy), charnock_alpha)
             factor = log_law_factor(fill[None, None, :], z0[..., None])      # (nx, ny, nf)
