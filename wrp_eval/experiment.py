@@ -10,7 +10,7 @@ A job (``wrp-eval run``, ``campaign``, ``train``, ``optimize``, ``evaluate``, a 
 * the resolved ship, the scored ship (mesh + oracle) and the planned path, each built on first use and kept.
 
 The context sits above the stages it resolves (ship, planning, recon) and below the jobs that take it
-(campaign, surrogate, wrp, study, pipeline): see the import contract in pyproject.toml.
+(campaign, surrogate, wrp, study, pipeline): see the import contract in .importlinter.
 """
 
 from __future__ import annotations
@@ -27,6 +27,7 @@ from wrp_eval.planning.path import Path as FlightPath
 from wrp_eval.planning.planner import PlanResult, plan, planning_rng
 from wrp_eval.recon.scene import ScoredShip, make_oracle
 from wrp_eval.ship.particulars import ShipParticulars
+from wrp_eval.ship.proxy import Proxy, build_proxy
 from wrp_eval.ship.resolve import ResolvedShip, resolve_particulars, resolve_ship_full
 
 LOGS_DIR = Path("logs")
@@ -77,17 +78,18 @@ class RunFolders:
         return self.wrp_out or self.root / f"wrp-{kind}"
 
     def evaluated_wrp(self, kind: str) -> Path:
-        """The WRP ``evaluate`` optimises (inside the evaluate folder)."""
-        return self.evaluate / f"wrp-{kind}"
+        """The WRP ``evaluate`` optimises (inside the run's evaluate folder)."""
+        return evaluated_wrp_dir(self.evaluate, kind)
 
-    def evaluated_campaign(self, name: str) -> Path:
-        """The campaign ``evaluate`` flies path ``name`` ("initial" | "iswrp" | "swrp") in."""
-        return self.evaluate / f"campaign-{name}"
 
-    @property
-    def training_campaign(self) -> Path:
-        """The campaign the surrogate learns from (``surrogate.campaign_dir`` is applied by the context)."""
-        return self.campaign
+def evaluated_wrp_dir(evaluate_dir: Path, kind: str) -> Path:
+    """The folder of the ``kind`` ("iswrp" | "swrp") WRP inside an ``evaluate`` folder."""
+    return Path(evaluate_dir) / f"wrp-{kind}"
+
+
+def evaluated_campaign_dir(evaluate_dir: Path, name: str) -> Path:
+    """The campaign folder of path ``name`` ("initial" | "iswrp" | "swrp") inside an ``evaluate`` folder."""
+    return Path(evaluate_dir) / f"campaign-{name}"
 
 
 @dataclass
@@ -148,11 +150,21 @@ class ExperimentContext:
         return resolve_ship_full(self.config.ship, self.config_dir, self.source)
 
     @cached_property
-    def particulars(self) -> ShipParticulars:
-        """The ship's particulars alone (no mesh): from the resolved ship when it is built already."""
+    def particulars_with_provenance(self) -> tuple[ShipParticulars, dict[str, str]]:
+        """The ship's particulars alone (no mesh is built) and where each field came from."""
         if "ship" in self.__dict__:
-            return self.ship.particulars
-        return resolve_particulars(self.config.ship, self.config_dir, self.source)[0]
+            return self.ship.particulars, self.ship.provenance
+        return resolve_particulars(self.config.ship, self.config_dir, self.source)
+
+    @property
+    def particulars(self) -> ShipParticulars:
+        return self.particulars_with_provenance[0]
+
+    @cached_property
+    def flight_proxy(self) -> Proxy:
+        """The proxy whose no-fly box flights must respect (``ship.no_fly_margin_m``, no height error): the box
+        the WRP's moved viewpoints and the exported missions are checked against."""
+        return build_proxy(self.particulars, self.config.ship.no_fly_margin_m)
 
     @cached_property
     def scored_ship(self) -> ScoredShip:

@@ -24,6 +24,7 @@ def campaign_job(ctx: ExperimentContext, *, out_dir: str | Path | None = None, n
     flies the plan it has just written)."""
     trial = with_overrides(ctx.trial_config, n_trials=n_trials, backend=backend, workers=workers, rerun=rerun)
     mesh = ctx.ship.mesh if trial.campaign.outputs.rerun else None
-    return run_campaign(trial, path if path is not None else ctx.campaign_path, Path(out_dir) if out_dir is not None else ctx.folders.campaign,
-                        root_seed=ctx.campaign_seed, config_dir=ctx.config_dir, evaluator=evaluator,
-                        evaluator_options=evaluator_options, progress=progress, ship_mesh=mesh)
+    out = Path(out_dir) if out_dir is not None else ctx.folders.campaign
+    return run_campaign(trial, path if path is not None else ctx.campaign_path, out, root_seed=ctx.campaign_seed,
+                        config_dir=ctx.config_dir, evaluator=evaluator, evaluator_options=evaluator_options,
+                        progress=progress, ship_mesh=mesh)

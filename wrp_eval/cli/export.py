@@ -9,8 +9,6 @@ from wrp_eval.config import ExperimentConfig
 from wrp_eval.experiment import ExperimentContext
 from wrp_eval.export.formats import FORMATS, export_path
 from wrp_eval.planning.path import Path as FlightPath
-from wrp_eval.ship.proxy import build_proxy
-from wrp_eval.ship.resolve import resolve_particulars
 
 POSITION_FIELDS = ("lat_deg", "lon_deg", "heading_deg")
 
@@ -20,10 +18,9 @@ def _export(args: argparse.Namespace) -> int:
            else ExperimentContext(ExperimentConfig(), Path("."), "embedded defaults"))
     path = FlightPath.load(args.path)
     # Only the particulars (position, heading, dimensions) and the proxy are needed: no mesh is built.
-    particulars, provenance = resolve_particulars(ctx.config.ship, ctx.config_dir, ctx.source)
+    particulars, provenance = ctx.particulars_with_provenance
     unknown = [k for k in POSITION_FIELDS if provenance.get(k, "").startswith("default")]
-    proxy = build_proxy(particulars, ctx.config.ship.no_fly_margin_m)
-    written = export_path(path, particulars, proxy, args.format, args.out, ctx.config.export, str(args.path))
+    written = export_path(path, particulars, ctx.flight_proxy, args.format, args.out, ctx.config.export, str(args.path))
     print(f"ship at {particulars.lat_deg:.6f}, {particulars.lon_deg:.6f}, heading {particulars.heading_deg:.1f} deg; "
           f"altitudes relative to the take-off point ({written[0][1].home_alt_m:.2f} m above the sea)")
     if unknown:

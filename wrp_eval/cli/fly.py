@@ -1,4 +1,5 @@
-"""``wrp-eval fly CONFIG --path P --trials N --out DIR`` / ``--hover``: fly a path N times (Parquet capture poses and offsets), or hold a hover in wind.
+"""``wrp-eval fly CONFIG --path P --trials N --out DIR`` / ``--hover``: fly a path N times (Parquet capture
+poses and offsets), or hold a hover in wind.
 
 Wind: a path flight flies through the config's ``wind:`` section (mean field + Dryden turbulence + gusts,
 built by :func:`wrp_eval.wind.field.build_wind_field`, one turbulence stream per trial from the seed);

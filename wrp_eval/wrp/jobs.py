@@ -24,12 +24,11 @@ from wrp_eval.atomic import write_json_atomic
 from wrp_eval.campaign.evaluators import DEFAULT_EVALUATOR
 from wrp_eval.campaign.runner import run_campaign
 from wrp_eval.errors import InputError
-from wrp_eval.experiment import ExperimentContext
+from wrp_eval.experiment import ExperimentContext, evaluated_campaign_dir, evaluated_wrp_dir
 from wrp_eval.planning.path import Path as FlightPath
 from wrp_eval.planning.path import digest_of_document
 from wrp_eval.recon.capture_io import captures_from_path
 from wrp_eval.recon.scene import ScoredShip
-from wrp_eval.ship.proxy import build_proxy
 from wrp_eval.surrogate.data import TrialData, load_campaign_trials
 from wrp_eval.surrogate.model import Surrogate
 from wrp_eval.wrp.config import WrpSection
@@ -101,9 +100,9 @@ def resolve_inputs(ctx: ExperimentContext, section: WrpSection, checkpoint: str 
 
 def safety_constraints(ctx: ExperimentContext, path: FlightPath) -> dict:
     """The planner's flight-safety constraints for moved viewpoints: minimum altitude and the no-fly box."""
-    proxy = build_proxy(ctx.particulars, ctx.config.ship.no_fly_margin_m)
     return {"base_positions": np.asarray(path.positions, dtype=float),
-            "min_altitude_m": float(ctx.config.planning.min_altitude_m), "no_fly_bounds": proxy.no_fly_bounds()}
+            "min_altitude_m": float(ctx.config.planning.min_altitude_m),
+            "no_fly_bounds": ctx.flight_proxy.no_fly_bounds()}
 
 
 def step_from_surrogate(surrogate: Surrogate, section: WrpSection) -> float:
@@ -141,7 +140,8 @@ def run_optimize(ctx: ExperimentContext, section: WrpSection, out: Path, inputs:
     threshold = section.threshold_m if section.threshold_m is not None else section.threshold_fraction * e0
     params = WrpParams(kind=section.kind, threshold_m=float(threshold), e_original_m=float(e0),
                        sample_radius_m=radius, iterations=section.iterations,
-                       attitude_samples=section.attitude_samples, yaw_range_rad=float(np.radians(section.yaw_range_deg)),
+                       attitude_samples=section.attitude_samples,
+                       yaw_range_rad=float(np.radians(section.yaw_range_deg)),
                        neighbourhood_samples=section.neighbourhood_samples,
                        step_m=step_from_surrogate(surrogate, section), swrp_spread=section.swrp_spread,
                        block_iterations=section.block_iterations, stage2_batch=section.stage2_batch,
@@ -220,7 +220,7 @@ def evaluate_job(ctx: ExperimentContext, out: Path | None = None, *, n_trials: i
     optimised = {}
     for i, kind in enumerate(("iswrp", "swrp")):
         kind_section = with_kind(section, kind, ev.thresholds_m[i] if ev.thresholds_m is not None else None)
-        folder = out / f"wrp-{kind}"
+        folder = evaluated_wrp_dir(out, kind)
         optimised[kind] = run_optimize(ctx, kind_section, folder, inputs, e_original=e_original, quiet=quiet)
         paths[kind] = FlightPath.load(folder / "path.json")
     trial = ctx.trial_config
@@ -231,7 +231,7 @@ def evaluate_job(ctx: ExperimentContext, out: Path | None = None, *, n_trials: i
     flown = trial.model_copy(update={"campaign": type(trial.campaign).model_validate(campaign_doc)})
     flown_trials = []
     for name, path in paths.items():
-        folder = out / f"campaign-{name}"
+        folder = evaluated_campaign_dir(out, name)
         summary = run_campaign(flown, path, folder, root_seed=ctx.campaign_seed, config_dir=ctx.config_dir,
                                progress=not quiet, evaluator=evaluator or DEFAULT_EVALUATOR)
         if not quiet:
