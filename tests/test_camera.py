@@ -2,8 +2,15 @@
 
 import numpy as np
 
-from wrp_eval.camera import (Camera, camera_rotations, in_image, optical_axes, project,
-                             yaw_pitch_towards)
+from wrp_eval.camera import (
+    Camera,
+    camera_angles,
+    camera_rotations,
+    in_image,
+    optical_axes,
+    project,
+    yaw_pitch_towards,
+)
 
 
 def test_gsd_formula_paper_camera():
@@ -41,3 +48,78 @@ def test_projection_of_a_point_on_the_axis_lands_at_the_centre():
     assert in_image(uv2, _, cam)[0, 0]
     behind_uv, behind_d = project(np.array([[-10.0, 0, 0]]), pos2, camera_rotations([0.0], [0.0]), cam)
     assert not in_image(behind_uv, behind_d, cam)[0, 0]
+
+
+def _level_rotations(yaw, pitch):
+    """The roll-free matrices as the camera model built them before roll existed (same operations)."""
+    yaw, pitch = np.asarray(yaw, dtype=float), np.asarray(pitch, dtype=float)
+    z = optical_axes(yaw, pitch)
+    x = np.stack([np.sin(yaw), -np.cos(yaw), np.zeros_like(yaw)], axis=-1)
+    return np.stack([x, np.cross(z, x), z], axis=-1)
+
+
+def _rz(a):
+    return np.array([[np.cos(a), -np.sin(a), 0], [np.sin(a), np.cos(a), 0], [0, 0, 1]])
+
+
+def _ry(a):
+    return np.array([[np.cos(a), 0, np.sin(a)], [0, 1, 0], [-np.sin(a), 0, np.cos(a)]])
+
+
+def _rx(a):
+    return np.array([[1, 0, 0], [0, np.cos(a), -np.sin(a)], [0, np.sin(a), np.cos(a)]])
+
+
+def test_no_roll_is_bit_identical_to_the_level_camera():
+    rng = np.random.default_rng(1)
+    yaw, pitch = rng.uniform(-np.pi, np.pi, 50), rng.uniform(-np.pi / 2, np.pi / 2, 50)
+    level = _level_rotations(yaw, pitch)
+    assert np.array_equal(camera_rotations(yaw, pitch), level)
+    assert np.array_equal(camera_rotations(yaw, pitch, None), level)
+    assert np.array_equal(camera_rotations(yaw, pitch, np.zeros(50)), level)
+    mixed = np.where(np.arange(50) % 2 == 0, 0.0, 0.3)  # zero-roll rows untouched in a mixed batch
+    assert np.array_equal(camera_rotations(yaw, pitch, mixed)[::2], level[::2])
+
+
+def test_roll_is_the_zyx_composition_yaw_pitch_roll():
+    # level camera at yaw = pitch = 0 (columns right = -y, down = -z, axis = +x), turned by Rx(roll) about the
+    # forward axis (right-handed: positive lowers the right side), then Ry(-pitch), then Rz(yaw)
+    c0 = np.array([[0, 0, 1], [-1, 0, 0], [0, -1, 0]], dtype=float)
+    yaw, pitch, roll = 0.8, -0.5, 0.3
+    expected = _rz(yaw) @ _ry(-pitch) @ _rx(roll) @ c0
+    np.testing.assert_allclose(camera_rotations([yaw], [pitch], [roll])[0], expected, atol=1e-14)
+    # positive roll: the camera's right axis points below the horizon, by sin(roll) for a level optical axis
+    right = camera_rotations([0.0], [0.0], [roll])[0, :, 0]
+    assert np.isclose(right[2], -np.sin(roll))
+
+
+def test_rolled_camera_turns_the_image_about_the_principal_point():
+    cam = Camera()
+    pos = np.zeros((1, 3))
+    point = np.array([[30.0, -4.0, 2.5]])  # ahead, to the right, above the optical axis
+    uv0, d0 = project(point, pos, camera_rotations([0.0], [0.0]), cam)
+    roll = np.radians(10.0)
+    uv1, d1 = project(point, pos, camera_rotations([0.0], [0.0], [roll]), cam)
+    centre = np.array([cam.image_width_px / 2, cam.image_height_px / 2])
+    r0, r1 = uv0[0, 0] - centre, uv1[0, 0] - centre
+    assert np.isclose(d0[0, 0], d1[0, 0])  # roll does not change the depth along the optical axis
+    assert np.isclose(np.hypot(*r0), np.hypot(*r1))  # nor the distance from the principal point
+    # turning the camera clockwise (seen from behind) turns the image of the world anticlockwise on screen
+    # (v down): the image angle atan2(dv, du) drops by the roll
+    assert np.isclose(np.arctan2(r1[1], r1[0]), np.arctan2(r0[1], r0[0]) - roll)
+
+
+def test_camera_angles_round_trip():
+    rng = np.random.default_rng(2)
+    yaw = rng.uniform(-np.pi, np.pi, 200)
+    pitch = rng.uniform(-np.pi / 2 + 1e-3, np.pi / 2 - 1e-3, 200)
+    roll = rng.uniform(-np.pi, np.pi, 200)
+    y2, p2, r2 = camera_angles(camera_rotations(yaw, pitch, roll))
+    np.testing.assert_allclose(y2, yaw, atol=1e-9)
+    np.testing.assert_allclose(p2, pitch, atol=1e-12)
+    np.testing.assert_allclose(r2, roll, atol=1e-9)
+    # nadir (gimbal lock): yaw and roll turn about the same axis; the matrix is still reproduced
+    nadir = camera_rotations(yaw[:5], np.full(5, -np.pi / 2), roll[:5])
+    y3, p3, r3 = camera_angles(nadir)
+    np.testing.assert_allclose(p3, -np.pi / 2)
+    np.testing.assert_allclose(camera_rotations(y3, p3, r3), nadir, atol=1e-12)

@@ -27,11 +27,19 @@ def test_flights_are_batch_independent_and_recorded(tmp_path, tiny_path, make_co
     flown, commanded = column_array(a, "flown_offsets"), column_array(a, "commanded_offsets")
     deviation = flown - commanded
     assert np.all(np.isfinite(flown))
-    assert np.all(np.abs(deviation[..., :3]) < 1.0) and np.abs(deviation[..., :3]).max() > 1e-3
+    # the flight's own errors: the wind's and (issue 16) the consumer GNSS's, sigma 0.61 m per axis
+    assert np.all(np.abs(deviation[..., :3]) < 5.0) and np.abs(deviation[..., :3]).max() > 1e-3
     assert np.abs(commanded[..., :3]).max() > 0.1    # the commanded offsets were flown
     for row in a.to_pylist():   # 3 views may not reconstruct: then it is a recorded failure, not a NaN
         assert np.isfinite(row["error_m"]) or (row["failed"] and "reconstruction" in row["failure_reason"])
         assert len(row["trajectory"]) > 10
+    # the capture realism is recorded per view: the navigation's record differs from the truth, blur, battery
+    estimated = column_array(a, "estimated_offsets")
+    assert np.all(np.isfinite(estimated)) and np.abs(estimated - flown).max() > 0.01
+    assert np.all(np.isfinite(column_array(a, "blur_px"))) and np.all(np.isfinite(column_array(a, "camera_roll")))
+    charge = column_array(a, "battery_charge")
+    assert np.all((charge > 0.5) & (charge <= 1.0)) and np.all(np.diff(charge, axis=1) < 0)
+    assert a.column("flight_outcome").to_pylist() == ["completed"] * 3
     wind = column_array(a, "wind_at_views")
     speed = np.linalg.norm(wind[..., :2], axis=-1).mean(axis=1)
     assert np.all((speed > 2) & (speed < 15))

@@ -5,7 +5,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from wrp_eval.recon.colmap import _similarity_from_centres, sparse_surfels
+from wrp_eval.recon.colmap import _similarity_from_centres, rotation_errors_deg, sparse_surfels
 
 
 def test_similarity_from_camera_centres_recovers_a_known_transform():
@@ -24,3 +24,19 @@ def test_sparse_surfels_of_a_plane_have_plane_normals_and_neighbour_radii():
     np.testing.assert_allclose(np.abs(surfels.normals[:, 2]), 1.0, atol=1e-6)
     inner = (xy[:, 0] > 0) & (xy[:, 0] < 9) & (xy[:, 1] > 0) & (xy[:, 1] < 9)
     assert surfels.radii[inner] == pytest.approx(1.0)  # the 4th neighbour of a grid point is 1 m away
+
+
+def test_rotation_errors_measure_the_angle_after_the_similarity():
+    from wrp_eval.camera import camera_rotations
+
+    truth = camera_rotations([0.3, -1.0], [-0.4, -0.2], [0.05, 0.0])
+    spin = np.radians(40.0)
+    q = np.array([[np.cos(spin), -np.sin(spin), 0], [np.sin(spin), np.cos(spin), 0], [0, 0, 1]])
+    model = np.einsum("ij,kjl->kil", q.T, truth)  # the same cameras in a model frame turned by -40 deg
+    sim = np.eye(4)
+    sim[:3, :3] = 3.0 * q  # the similarity back, with a scale
+    np.testing.assert_allclose(rotation_errors_deg(model, sim, truth), 0.0, atol=1e-6)
+    # one camera rolled 5 deg more in the model: 5 deg off
+    extra = camera_rotations([0.3], [-0.4], [0.05 + np.radians(5.0)])
+    off = rotation_errors_deg(np.einsum("ij,kjl->kil", q.T, extra), sim, truth[:1])
+    np.testing.assert_allclose(off, 5.0, atol=1e-6)

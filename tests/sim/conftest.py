@@ -9,10 +9,27 @@ from wrp_eval.planning.path import Path
 from wrp_eval.sim.config import SimSection
 from wrp_eval.sim.flight import FlightSimulator
 
+# the airframe, controller and flight logic alone: the truth as navigation, photos at rest with no trigger delay,
+# no battery or wind-limit return: the simulator before the capture realism of issue 16, bit for bit
+CONTROLLER_ONLY = dict(navigation={"preset": "ideal"}, capture={"mode": "stop", "trigger_latency_s": 0.0},
+                       battery={"enabled": False}, wind_limit_m_s=None)
+
 
 @pytest.fixture(scope="session")
 def section() -> SimSection:
     return SimSection(drones_per_model=4, threads=1)
+
+
+@pytest.fixture(scope="session")
+def controller_section() -> SimSection:
+    return SimSection.model_validate(dict(drones_per_model=4, threads=1, **CONTROLLER_ONLY))
+
+
+@pytest.fixture(scope="session")
+def controller_simulator(controller_section):
+    sim = FlightSimulator(controller_section)
+    yield sim
+    sim.close()
 
 
 @pytest.fixture(scope="session")

@@ -14,7 +14,8 @@ from .conftest import make_path
 @pytest.fixture
 def config_file(tmp_path):
     f = tmp_path / "exp.yaml"
-    f.write_text("run: {seed: 3}\nsim: {drones_per_model: 4, threads: 1}\n")
+    # the hover balance is the airframe's: the truth as navigation (a GNSS error's velocity noise tilts it)
+    f.write_text("run: {seed: 3}\nsim: {drones_per_model: 4, threads: 1, navigation: {preset: ideal}}\n")
     return f
 
 

@@ -3,41 +3,87 @@
 import numpy as np
 import pytest
 
+from wrp_eval.sim.capture_mode import through_profile
 from wrp_eval.sim.config import SimSection
 from wrp_eval.sim.controller import GAIN_PRESETS, PositionController
-from wrp_eval.sim.flight_state import (DITCHED, DONE, DWELL, FAILED, LOST, NO_FAILURE, NON_FINITE, SETTLE,
-                                       STALLED, TIMED_OUT, TRANSIT, FlightState, FlightTargets)
-from wrp_eval.sim.phases import (YAW_RATE_REF_RAD_S, Profile, apply_failures, apply_transitions,
-                                 capture_pose, check_failures, control, failure_reasons, parked_pose,
-                                 plan_segments, reference, setpoints, take_photos, tick, transitions)
+from wrp_eval.sim.flight_state import (
+    COMPLETED,
+    DITCHED,
+    DONE,
+    DWELL,
+    ENDED,
+    NON_FINITE,
+    RETURNED_BATTERY,
+    RETURNED_WIND,
+    SETTLE,
+    TIMED_OUT,
+    TRANSIT,
+    FlightState,
+    FlightTargets,
+    Shot,
+)
+from wrp_eval.sim.phases import (
+    YAW_RATE_REF_RAD_S,
+    Profile,
+    advance,
+    apply_endings,
+    apply_transitions,
+    check_failures,
+    check_returns,
+    control,
+    outcome_reasons,
+    parked_pose,
+    passing_views,
+    plan_segments,
+    reference,
+    setpoints,
+    take_photos,
+    tick,
+    transitions,
+)
 from wrp_eval.sim.vehicle import PHANTOM4
 
 from .conftest import make_path
 
 SEC = SimSection()
+THROUGH_SEC = SimSection(capture={"mode": "fly-through"})
+STOP_SEC = SimSection(capture={"mode": "stop"})
 DT = SEC.timestep_s * SEC.chunk_steps
-PROFILE = Profile.of(5.0, SEC)
+PROFILE = Profile.of(5.0, STOP_SEC)
+THROUGH = Profile.of(5.0, THROUGH_SEC)
 # three viewpoints at 20 m: 10 m east, then 10 m north, turning a quarter each time
 VIEWS = np.array([[0.0, 0.0, 20.0], [10.0, 0.0, 20.0], [10.0, 10.0, 20.0]])
 YAWS = np.array([0.0, np.pi / 2, np.pi])
 
 
-def _targets(batch: int) -> FlightTargets:
-    """Targets of ``batch`` flights of VIEWS, the body targets on the viewpoints (a camera at the centre)."""
-    return FlightTargets(VIEWS, YAWS, np.full(3, -0.3), np.tile(YAWS, (batch, 1)), np.tile(VIEWS, (batch, 1, 1)))
+def _targets(batch: int, through: bool = False) -> FlightTargets:
+    """Targets of ``batch`` flights of VIEWS, the body targets on the viewpoints (a camera at the centre); in
+    fly-through at rest at the ends, 2 m/s at the corner, legs at most 5 m/s."""
+    targets = FlightTargets(VIEWS, YAWS, np.full(3, -0.3), np.tile(YAWS, (batch, 1)), np.tile(VIEWS, (batch, 1, 1)),
+                            np.full(3, np.nan))
+    if through:
+        targets = targets.with_speeds(np.tile([0.0, 2.0, 0.0], (batch, 1)), np.full((batch, 2), 5.0))
+    return targets
 
 
-def _in_transit(batch: int, phase_time: float = 0.0):
-    """``batch`` flights on the first segment (view 0 -> view 1), ``phase_time`` s into it."""
-    targets = _targets(batch)
+def _in_transit(batch: int, phase_time: float = 0.0, through: bool = False):
+    """``batch`` flights on the first segment (view 0 -> view 1), ``phase_time`` s into it; photo 0 taken."""
+    targets = _targets(batch, through)
     state = FlightState.start(targets)
-    rows = np.arange(batch)
-    state.segment.assign(rows, plan_segments(targets.body[:, 0], targets.body[:, 1], targets.yaw[:, 0],
-                                             targets.yaw[:, 1], PROFILE))
-    state.index[:] = 1
-    state.phase[:] = TRANSIT
+    state.phase[:] = DWELL
+    advance(state, targets, np.arange(batch), THROUGH if through else PROFILE)
+    state.photo[:] = 1
     state.phase_time[:] = phase_time
     return targets, state
+
+
+def _shot(position, yaw, time: float) -> Shot:
+    """m photos at ``position`` (m, 3), ``yaw`` (m,) at ``time`` s, recorded as true (a perfect navigation)."""
+    position = np.asarray(position, dtype=float)
+    m = len(position)
+    yaw = np.asarray(yaw, dtype=float)
+    return Shot(np.full(m, time), position, yaw, np.full(m, -0.3), np.zeros(m), np.zeros(m, dtype=bool), position,
+                yaw, np.zeros(m), np.ones(m), np.zeros((m, 4)))
 
 
 # -- reference ----------------------------------------------------------------------------------------------
@@ -94,62 +140,92 @@ def test_segment_duration_covers_a_pure_rotation_at_the_reference_yaw_rate():
     assert seg.duration[1] == pytest.approx(PROFILE.at(np.array([5.0]), np.zeros(1))[3][0])
 
 
-# -- failures -----------------------------------------------------------------------------------------------
-def _far(state, distance_m):
-    """Vehicle positions ``distance_m`` (batch,) m east of their references, and the reference there."""
-    at = reference(state, np.zeros((len(state.phase), 3)), PROFILE, SEC.leash_m).position
-    pos = at + np.asarray(distance_m)[:, None] * [1.0, 0.0, 0.0]
-    return pos, reference(state, pos, PROFILE, SEC.leash_m)
+# -- fly-through profile ------------------------------------------------------------------------------------
+def test_the_profile_follows_the_capture_mode():
+    assert THROUGH.through and not PROFILE.through
+    assert PROFILE.jerk_window_s == pytest.approx(SEC.acceleration_m_s2 / SEC.jerk_m_s3)     # T = a / j
+    assert Profile.of(5.0, STOP_SEC.model_copy(update={"jerk_m_s3": None})).jerk_window_s == 0.0
+    assert SEC.capture.mode == "fly-through"                      # the default
 
 
-def test_beyond_fail_distance_for_longer_than_fail_time_is_lost():
-    state = FlightState.start(_targets(3))
-    state.lost_time[:] = [SEC.fail_time_s, SEC.fail_time_s - 2 * DT, SEC.fail_time_s]
-    # flights 0 and 1 are beyond the fail distance, 1 not yet for long enough; 2 is back within it
-    d = SEC.fail_distance_m
-    pos, ref = _far(state, [d + 0.5, d + 0.5, d - 0.5])
-    fails = check_failures(state, pos, np.zeros((3, 3)), ref, DT, SEC, out_of_time=False)
-    assert fails.cause.tolist() == [LOST, NO_FAILURE, NO_FAILURE]
-    assert fails.lost_time == pytest.approx([SEC.fail_time_s + DT, SEC.fail_time_s - DT, 0.0])
-    apply_failures(state, fails, 4.5)
-    assert state.phase.tolist() == [FAILED, SETTLE, SETTLE]
-    assert state.failure.tolist() == [LOST, NO_FAILURE, NO_FAILURE]
-    assert state.flight_time.tolist() == [4.5, 0.0, 0.0]
-    assert failure_reasons(state, SEC) == (
-        "lost position: > 5 m from the reference for > 3 s at t=4.50s (before view 0)", "", "")
+def test_fly_through_segments_run_from_v0_to_v1():
+    start, end = np.zeros((2, 3)), np.array([[12.0, 0.0, 0.0], [0.0, 0.0, 3.0]])
+    v0, v1, v_max = np.array([2.0, 0.0]), np.array([4.0, 1.0]), np.array([5.0, 5.0])
+    seg = plan_segments(start, end, np.zeros(2), np.zeros(2), THROUGH, v0, v1, v_max)
+    assert seg.v0.tolist() == [2.0, 0.0] and seg.v1.tolist() == [4.0, 1.0] and seg.v_max.tolist() == [5.0, 5.0]
+    expected = through_profile(seg.length, np.zeros(2), v0, v1, v_max, SEC.acceleration_m_s2)[3]
+    assert seg.duration == pytest.approx(expected)
+    # the reference starts at v0 along the segment (no rest at the start) and arrives at v1
+    state = FlightState.start(_targets(2, through=True))
+    state.segment.assign(np.arange(2), seg)
+    state.phase[:] = TRANSIT
+    ref = reference(state, start, THROUGH, leash_m=100.0)
+    assert ref.velocity == pytest.approx(np.array([[2.0, 0.0, 0.0], [0.0, 0.0, 0.0]]))
+    state.phase_time[:] = seg.duration - 1e-9
+    ref = reference(state, end, THROUGH, leash_m=100.0)
+    assert ref.position == pytest.approx(end, abs=1e-6)
+    assert ref.velocity == pytest.approx(np.array([[4.0, 0.0, 0.0], [0.0, 0.0, 1.0]]), abs=1e-6)
 
 
+# -- how flights end ------------------------------------------------------------------------------------------
 def test_failure_causes_and_their_precedence():
     state = FlightState.start(_targets(5))
     state.phase[4] = DONE
-    state.held_time[:] = SEC.stall_time_s
-    state.lost_time[:] = SEC.fail_time_s
-    pos, ref = _far(state, np.full(5, SEC.fail_distance_m + 1.0))    # every flight lost ...
-    pos[:2, 2] = -0.1                                                # ... 0 and 1 also under water
-    pos[0, 1] = np.nan                                               # ... 0 also non-finite
-    ref = ref._replace(held=np.array([True, True, True, False, True]))   # ... all but 3 stalled
-    fails = check_failures(state, pos, np.zeros((5, 3)), ref, DT, SEC, out_of_time=False)
-    # a finished flight does not fail; otherwise non-finite > ditched > stalled > lost
-    assert fails.cause.tolist() == [NON_FINITE, DITCHED, STALLED, LOST, NO_FAILURE]
-    assert fails.held_time.tolist() == [SEC.stall_time_s + DT] * 3 + [0.0, SEC.stall_time_s + DT]
-    apply_failures(state, fails, 2.0)
-    reasons = failure_reasons(state, SEC)
-    assert reasons[0] == "non-finite state at t=2.00s"
-    assert reasons[2] == "no headway: > 2 m behind the reference for > 20 s at t=2.00s (before view 0)"
-    assert reasons[4] == "" and state.phase[4] == DONE
+    pos = np.tile(VIEWS[0], (5, 1))
+    vel = np.zeros((5, 3))
+    pos[:2, 2] = -0.1                   # 0 and 1 under water ...
+    pos[0, 1] = np.nan                  # ... 0 also non-finite
+    vel[2, 0] = np.inf                  # 2: a non-finite velocity
+    pos[4, 2] = -1.0                    # 4 is done: it no longer fails
+    cause = check_failures(state, pos, vel, out_of_time=False)
+    assert cause.tolist() == [NON_FINITE, DITCHED, NON_FINITE, COMPLETED, COMPLETED]
+    apply_endings(state, cause, 2.0)
+    assert state.phase.tolist() == [ENDED, ENDED, ENDED, SETTLE, DONE]
+    assert state.failed.tolist() == [True, True, True, False, False]
+    reasons = outcome_reasons(state, SEC)
+    assert reasons[:2] == ("non-finite state at t=2.00s", "ditched (below sea level) at t=2.00s")
+    assert reasons[3:] == ("", "")
 
 
 def test_flights_still_flying_at_the_time_limit_fail():
-    targets = _targets(3)
-    state = FlightState.start(targets)
+    state = FlightState.start(_targets(3))
     state.phase[1] = DONE
-    pos, ref = _far(state, np.zeros(3))
+    pos = np.tile(VIEWS[0], (3, 1))
     pos[2, 2] = -1.0
-    fails = check_failures(state, pos, np.zeros((3, 3)), ref, DT, SEC, out_of_time=True)
-    assert fails.cause.tolist() == [TIMED_OUT, NO_FAILURE, DITCHED]
-    apply_failures(state, fails, 12.0)
-    assert failure_reasons(state, SEC) == (f"not finished within max_flight_time_s={SEC.max_flight_time_s:g}",
+    cause = check_failures(state, pos, np.zeros((3, 3)), out_of_time=True)
+    assert cause.tolist() == [TIMED_OUT, COMPLETED, DITCHED]
+    apply_endings(state, cause, 12.0)
+    assert outcome_reasons(state, SEC) == (f"not finished within max_flight_time_s={SEC.max_flight_time_s:g}",
                                            "", "ditched (below sea level) at t=12.00s")
+    assert state.flight_time.tolist() == [12.0, 0.0, 12.0]
+
+
+def test_the_autopilot_returns_home_on_its_battery_or_wind_limit_without_failing():
+    state = FlightState.start(_targets(5))
+    state.photo[:] = [1, 1, 2, 0, 0]
+    state.phase[4] = ENDED                      # already ended: no new outcome
+    state.outcome[4] = DITCHED
+    battery = np.array([True, False, True, False, True])
+    wind = np.array([False, True, True, False, True])
+    cause = check_returns(state, battery, wind)
+    assert cause.tolist() == [RETURNED_BATTERY, RETURNED_WIND, RETURNED_BATTERY, COMPLETED, COMPLETED]
+    apply_endings(state, cause, 4.5)
+    assert state.outcome.tolist() == [RETURNED_BATTERY, RETURNED_WIND, RETURNED_BATTERY, COMPLETED, DITCHED]
+    assert state.phase.tolist() == [ENDED, ENDED, ENDED, SETTLE, ENDED]
+    assert state.flight_time.tolist() == [4.5, 4.5, 4.5, 0.0, 0.0]
+    assert state.failed.tolist() == [False, False, False, False, True]
+    reasons = outcome_reasons(state, SEC)
+    assert "battery" in reasons[0] and f"({SEC.battery.reserve:g})" in reasons[0]
+    assert "t=4.50s" in reasons[0] and reasons[0].endswith("(before view 1)")
+    assert "wind" in reasons[1] and f"{SEC.wind_limit_m_s:g} m/s" in reasons[1] and "before view 1" in reasons[1]
+    assert reasons[2].endswith("(before view 2)") and reasons[3] == ""
+
+
+def test_no_cause_changes_nothing():
+    state = FlightState.start(_targets(2))
+    apply_endings(state, np.full(2, COMPLETED), 3.0)
+    assert state.phase.tolist() == [SETTLE, SETTLE] and state.flight_time.tolist() == [0.0, 0.0]
+    assert state.outcome.tolist() == [COMPLETED, COMPLETED]
 
 
 # -- transitions and the trigger ----------------------------------------------------------------------------
@@ -166,9 +242,9 @@ def test_within_the_tolerances_settle_turns_to_dwell():
     pos[4, 0] += SEC.settle_position_m * 0.9    # within every tolerance
     vel[4, 0] = SEC.settle_speed_m_s * 0.9
     yaw[4] = -np.radians(SEC.settle_yaw_deg) * 0.9
-    moves = transitions(state, pos, vel, yaw, targets, SEC, dwell_s=1.0)
+    moves = transitions(state, pos, vel, yaw, targets, SEC, dwell_s=1.0, through=False)
     assert moves.to_dwell.tolist() == [True, False, False, False, True]
-    assert not moves.to_settle.any() and not moves.trigger.any()
+    assert not moves.to_settle.any() and not moves.trigger.any() and not moves.chain.any()
     apply_transitions(state, moves)
     assert state.phase.tolist() == [DWELL, SETTLE, SETTLE, SETTLE, DWELL]
     assert state.phase_time.tolist() == [0.0, 1.0, 1.0, 1.0, 0.0]
@@ -179,12 +255,29 @@ def test_settle_times_out_and_transit_ends_with_its_reference():
     state = FlightState.start(targets)
     state.phase_time[:] = SEC.settle_timeout_s
     far = np.tile(VIEWS[0] + [3.0, 0.0, 0.0], (2, 1))
-    moves = transitions(state, far, np.zeros((2, 3)), np.zeros(2), targets, SEC, dwell_s=1.0)
+    moves = transitions(state, far, np.zeros((2, 3)), np.zeros(2), targets, SEC, dwell_s=1.0, through=False)
     assert moves.to_dwell.all()                 # the photo is taken anyway
     _, state = _in_transit(2)
     state.phase_time[:] = state.segment.duration - [DT, 0.0]
-    moves = transitions(state, far, np.zeros((2, 3)), np.zeros(2), targets, SEC, dwell_s=1.0)
-    assert moves.to_settle.tolist() == [False, True] and not moves.to_dwell.any()
+    moves = transitions(state, far, np.zeros((2, 3)), np.zeros(2), targets, SEC, dwell_s=1.0, through=False)
+    assert moves.to_settle.tolist() == [False, True] and not moves.to_dwell.any() and not moves.chain.any()
+
+
+def test_fly_through_chains_through_interior_views_and_stops_at_the_last():
+    targets, state = _in_transit(3, through=True)
+    state.index[2] = 2                          # flight 2 flies the last segment
+    state.phase_time[:] = state.segment.duration - [DT, 0.0, 0.0]
+    far = np.tile(VIEWS[0], (3, 1))             # wherever the vehicles are: the reference does not wait
+    moves = transitions(state, far, np.zeros((3, 3)), np.zeros(3), targets, SEC, dwell_s=0.0, through=True)
+    assert moves.chain.tolist() == [False, True, False] and moves.to_settle.tolist() == [False, False, True]
+    advance(state, targets, np.flatnonzero(moves.trigger | moves.chain), THROUGH)
+    apply_transitions(state, moves)
+    assert state.phase.tolist() == [TRANSIT, TRANSIT, SETTLE] and state.index.tolist() == [1, 2, 2]
+    assert state.phase_time[1:].tolist() == [0.0, 0.0] and state.phase_time[0] > 0.0
+    # flight 1's new segment leaves the corner at its planned 2 m/s and stops at the last view
+    assert (state.segment.v0[1], state.segment.v1[1], state.segment.v_max[1]) == (2.0, 0.0, 5.0)
+    assert np.array_equal(state.segment.start[1], VIEWS[1]) and np.array_equal(state.segment.end[1], VIEWS[2])
+    assert state.photo.tolist() == [1, 1, 1]    # chaining takes no photo
 
 
 def test_the_trigger_fires_after_the_dwell():
@@ -192,71 +285,97 @@ def test_the_trigger_fires_after_the_dwell():
     state = FlightState.start(targets)
     state.phase[:] = [DWELL, DWELL, SETTLE]
     state.phase_time[:] = [1.0 - 1e-12, 1.0 - 0.05, 1.0]
-    moves = transitions(state, VIEWS[[0, 0, 0]], np.zeros((3, 3)), np.zeros(3), targets, SEC, dwell_s=1.0)
+    moves = transitions(state, VIEWS[[0, 0, 0]], np.zeros((3, 3)), np.zeros(3), targets, SEC, dwell_s=1.0,
+                        through=False)
     assert moves.trigger.tolist() == [True, False, False]
 
 
-def _tilted(pitch_rad: float, roll_rad: float, yaw_rad: float) -> np.ndarray:
-    """(3, 3) world-from-body rotation Rz(yaw) Ry(pitch) Rx(roll)."""
-    cz, sz, cy, sy, cx, sx = (np.cos(yaw_rad), np.sin(yaw_rad), np.cos(pitch_rad), np.sin(pitch_rad),
-                              np.cos(roll_rad), np.sin(roll_rad))
-    rz = np.array([[cz, -sz, 0.0], [sz, cz, 0.0], [0.0, 0.0, 1.0]])
-    ry = np.array([[cy, 0.0, sy], [0.0, 1.0, 0.0], [-sy, 0.0, cy]])
-    rx = np.array([[1.0, 0.0, 0.0], [0.0, cx, -sx], [0.0, sx, cx]])
-    return rz @ ry @ rx
+def test_a_view_is_passed_when_the_estimate_crosses_its_mitre_plane():
+    targets, state = _in_transit(6, through=True)
+    # view 1 (10, 0, 20) is a right-angle corner (east, then north): its plane is normal to the bisector of the
+    # two legs, (1, 1, 0) / sqrt(2), so a vehicle cutting the corner crosses it too
+    pos = np.array([[10.3, 0.2, 21.0], [9.9, 0.0, 20.0], [9.0, 2.0, 20.0], [10.5, 0.0, 20.0],
+                    [10.5, 0.0, 20.0], [10.5, 0.0, 20.0]])
+    state.photo[3] = 0                          # view 0 is photographed hovering, never on the move
+    state.photo[4] = 2                          # already photographed view 1; its reference not yet at view 2
+    state.phase[5] = ENDED
+    rows, past, normal, skipped = passing_views(state, pos, targets)
+    assert rows.tolist() == [0, 2] and past == pytest.approx(np.array([0.5, 1.0]) / np.sqrt(2.0))
+    assert normal == pytest.approx(np.tile([1.0, 1.0, 0.0], (2, 1)) / np.sqrt(2.0))
+    assert skipped.size == 0
+    # the last view (10, 10, 20), reached from the south: the plane y = 10, normal to the arriving leg
+    state.index[:] = 2
+    state.photo[:] = 2
+    pos[:, 1] = [10.0, 9.0, 11.0, 10.0, 10.0, 10.0]
+    rows, past, normal, skipped = passing_views(state, pos, targets)
+    assert rows.tolist() == [0, 2, 3, 4] and past == pytest.approx([0.0, 1.0, 0.0, 0.0])
+    assert normal == pytest.approx(np.tile([0.0, 1.0, 0.0], (4, 1)))
+    state.photo[:] = 3                          # every view taken
+    assert passing_views(state, pos, targets)[0].size == 0
 
 
-def test_capture_pose_is_the_true_camera_and_the_gimbal_compensates_within_its_range():
-    # flight 0: nose down 10 deg, so the gimbal joint lifts by 10 deg; flight 1: rolled 40 deg, 5 beyond the
-    # gimbal; flight 2 asks for +45 deg pitch, 15 above the gimbal's reach
-    rot = np.stack([_tilted(np.radians(10.0), 0.0, 0.3), _tilted(0.0, np.radians(40.0), 0.0), np.eye(3)])
-    pos = np.array([[1.0, 2.0, 20.0], [0.0, 0.0, 20.0], [5.0, 5.0, 5.0]])
-    wanted = np.radians([-30.0, -30.0, 45.0])
-    pose = capture_pose(pos, rot, np.array([0.3, 0.0, 0.0]), wanted, PHANTOM4)
-    cam = np.asarray(PHANTOM4.camera_offset_m)
-    assert np.allclose(pose.position, pos + np.einsum("nij,j->ni", rot, cam))
-    assert pose.position[0, 2] < pos[0, 2] + cam[2]        # the tilted nose lowers the camera
-    assert np.degrees(pose.pitch) == pytest.approx([-30.0, -30.0, 30.0])
-    assert np.degrees(pose.residual_roll) == pytest.approx([0.0, 5.0, 0.0])
-    assert pose.saturated.tolist() == [False, True, True]
-    assert np.array_equal(pose.yaw, [0.3, 0.0, 0.0])
+def test_a_view_not_passed_before_the_reference_is_two_views_on_is_skipped():
+    views = np.stack([10.0 * np.arange(4), np.zeros(4), np.full(4, 20.0)], axis=1)
+    targets = FlightTargets(views, np.zeros(4), np.full(4, -0.3), np.zeros((3, 4)), np.tile(views, (3, 1, 1)),
+                            np.full(4, np.nan))
+    state = FlightState.start(targets)
+    state.phase[:] = TRANSIT
+    state.photo[:] = 1
+    state.index[:] = [2, 3, 3]
+    pos = np.array([[5.0, 0.0, 20.0], [5.0, 0.0, 20.0], [10.0, 0.0, 20.0]])    # short of view 1 but the last
+    rows, _, _, skipped = passing_views(state, pos, targets)
+    assert rows.tolist() == [2] and skipped.tolist() == [1]
 
 
-def test_take_photos_records_the_true_pose_and_starts_the_next_segment():
+def test_take_photos_records_the_next_view_and_moves_the_photo_on():
     targets = _targets(3)
     state = FlightState.start(targets)
     state.phase[:] = DWELL
-    state.index[2] = 2                              # flight 2 is at the last view
-    pos = np.array([[0.1, -0.2, 20.3], [9.0, 9.0, 9.0], [10.0, 10.0, 20.0]])
-    rot = np.stack([_tilted(0.05, 0.0, 0.02), np.eye(3), np.eye(3)])
-    yaw = np.array([0.02, 0.0, np.pi])
-    take_photos(state, targets, np.array([0, 2]), pos, rot, yaw, 7.5, PROFILE, PHANTOM4)
+    state.index[2] = state.photo[2] = 2         # flight 2 is at the last view
+    pos = np.array([[0.1, -0.2, 20.3], [10.0, 10.0, 20.0]])
+    take_photos(state, targets, np.array([0, 2]), _shot(pos, [0.02, np.pi], 7.5))
     cap = state.captures
-    expected = capture_pose(pos[[0]], rot[[0]], yaw[[0]], targets.plan_pitch[[0]], PHANTOM4)
-    assert np.array_equal(cap.position[0, 0], expected.position[0])
-    assert np.allclose(cap.offsets[0, 0], [*(expected.position[0] - VIEWS[0]), 0.02])
+    assert cap.offsets[0, 0] == pytest.approx([0.1, -0.2, 0.3, 0.02])
+    assert cap.offsets[2, 2] == pytest.approx([0.0, 0.0, 0.0, 0.0], abs=1e-12)
     assert cap.taken.tolist() == [[True, False, False], [False, False, False], [False, False, True]]
     assert cap.time[0, 0] == 7.5 and np.isnan(cap.time[1]).all()
     assert np.isnan(cap.offsets[1]).all()            # flight 1 took nothing
+    assert state.flight_time.tolist() == [7.5, 0.0, 7.5] and state.photo.tolist() == [1, 0, 3]
+    assert state.phase.tolist() == [DWELL] * 3       # the phase is advance()'s business
+    take_photos(state, targets, np.array([], dtype=int), _shot(np.zeros((0, 3)), [], 9.0))
     assert state.flight_time.tolist() == [7.5, 0.0, 7.5]
-    # flight 0 now flies from view 0's body target to view 1's; flight 2 is done; flight 1 untouched
-    assert state.phase.tolist() == [TRANSIT, DWELL, DONE] and state.index.tolist() == [1, 0, 2]
-    assert np.array_equal(state.segment.start[0], VIEWS[0]) and np.array_equal(state.segment.end[0], VIEWS[1])
-    assert state.segment.length[0] == 10.0 and state.segment.dyaw[0] == pytest.approx(np.pi / 2)
-    assert np.array_equal(state.segment.end[1], VIEWS[0]) and state.segment.length[1] == 0.0
     sets = cap.capture_sets(None)
     assert [len(s) for s in sets] == [1, 0, 1] and sets[2].planned_index.tolist() == [2]
 
 
+def test_advance_starts_the_next_segment_or_ends_at_the_last_view():
+    targets = _targets(3)
+    state = FlightState.start(targets)
+    state.phase[:] = DWELL
+    state.index[2] = 2
+    advance(state, targets, np.array([0, 2]), PROFILE)
+    # flight 0 now flies from view 0's body target to view 1's; flight 2 is done; flight 1 untouched
+    assert state.phase.tolist() == [TRANSIT, DWELL, DONE] and state.index.tolist() == [1, 0, 2]
+    assert np.array_equal(state.segment.start[0], VIEWS[0]) and np.array_equal(state.segment.end[0], VIEWS[1])
+    assert state.segment.length[0] == 10.0 and state.segment.dyaw[0] == pytest.approx(np.pi / 2)
+    assert state.segment.v0[0] == state.segment.v1[0] == 0.0               # stop mode: rest to rest
+    assert np.array_equal(state.segment.end[1], VIEWS[0]) and state.segment.length[1] == 0.0
+    assert state.flying.tolist() == [True, True, False]
+
+
 # -- control ------------------------------------------------------------------------------------------------
-def test_setpoints_pad_the_fillers_and_integrate_only_at_rest():
+def test_setpoints_pad_the_fillers_integrate_only_at_rest_and_correct_the_heading():
     _, state = _in_transit(2)
     state.phase[1] = DWELL
     ref = reference(state, VIEWS[[0, 1]], PROFILE, SEC.leash_m)
-    sp = setpoints(ref, state.phase, np.array([[0.0, 0.0, 70.0], [1.0, 0.0, 70.0]]))
+    sp = setpoints(ref, state.phase, np.array([[0.0, 0.0, 70.0], [1.0, 0.0, 70.0]]), np.array([0.1, -0.2]))
     assert sp.position.shape == (4, 3) and np.array_equal(sp.position[2:, 2], [70.0, 70.0])
     assert np.array_equal(sp.velocity[2:], np.zeros((2, 3))) and np.array_equal(sp.yaw[2:], [0.0, 0.0])
     assert sp.integrate.tolist() == [False, True, True, True]
+    # a compass reading 0.1 rad too far left: the airframe is turned 0.1 rad right of the reference
+    assert sp.yaw[:2] == pytest.approx(ref.yaw - [0.1, -0.2])
+    unpadded = setpoints(ref, state.phase, np.zeros((0, 3)), np.zeros(2))
+    assert unpadded.position is ref.position and np.array_equal(unpadded.yaw, ref.yaw)
 
 
 def test_control_holds_a_level_hover_at_the_reference_with_the_weight():
@@ -265,19 +384,17 @@ def test_control_holds_a_level_hover_at_the_reference_with_the_weight():
     state.phase[:] = DWELL
     ref = reference(state, VIEWS[[1, 1]], PROFILE, SEC.leash_m)
     rot = np.tile(np.eye(3), (2, 1, 1))
-    motors, quat = control(controller, VIEWS[[1, 1]], np.zeros((2, 3)), rot, setpoints(ref, state.phase,
-                                                                                     np.zeros((0, 3))),
-                           DT, PHANTOM4)
+    hover = setpoints(ref, state.phase, np.zeros((0, 3)), np.zeros(2))
+    motors, quat = control(controller, VIEWS[[1, 1]], np.zeros((2, 3)), rot, hover, DT, PHANTOM4)
     assert motors == pytest.approx(np.full((2, 4), PHANTOM4.weight_n / 4.0))
     # level, heading the segment's end yaw (pi/2)
     assert quat == pytest.approx(np.tile([np.cos(np.pi / 4), 0.0, 0.0, np.sin(np.pi / 4)], (2, 1)))
     # a vehicle 1 m below its reference climbs: more thrust, capped at the motors' maximum
-    motors, _ = control(controller, VIEWS[[1, 1]] - [0.0, 0.0, 1.0], np.zeros((2, 3)), rot,
-                        setpoints(ref, state.phase, np.zeros((0, 3))), DT, PHANTOM4)
+    motors, _ = control(controller, VIEWS[[1, 1]] - [0.0, 0.0, 1.0], np.zeros((2, 3)), rot, hover, DT, PHANTOM4)
     assert np.all(motors > PHANTOM4.weight_n / 4.0) and np.all(motors <= PHANTOM4.max_thrust_per_motor_n)
 
 
-def test_failed_flights_are_parked_where_they_are_above_the_sea():
+def test_ended_flights_are_parked_where_they_are_above_the_sea():
     park = np.array([[0.0, 0.0, 30.0, 1.0, 0.0, 0.0, 0.0], [5.0, 5.0, 30.0, 0.0, 0.0, 0.0, 1.0]])
     qpos = parked_pose(np.array([[3.0, 4.0, -2.0], [np.nan, 1.0, 10.0]]), park)
     assert np.array_equal(qpos[0], [3.0, 4.0, 1.0, 1.0, 0.0, 0.0, 0.0])

@@ -126,6 +126,11 @@ class WindScenario(StrictModel):
 class Perturbation(StrictModel):
     """How each trial's commanded viewpoints differ from the plan, and the paper's extra disturbance.
 
+    design ``physical`` (the default): the viewpoints are flown as planned (commanded offsets 0) and the flown
+    offsets are exactly the flight's (no extra disturbance, whatever ``flown_disturbance`` says): everything in
+    a capture comes from the flight (navigation, gimbal, wind, capture mode, ship motion). ``none``: commanded
+    offsets 0, with the paper's extra disturbance of the flown offsets.
+
     design ``box``: per viewpoint (dx, dy, dz, dyaw) uniform in [-half_width, +half_width], drawn as a
     scrambled Sobol sequence (``sampler: sobol``, extendable: trial k is point k whatever the trial count) or a
     Latin hypercube over the campaign's n_trials (``sampler: lhs``; the design then depends on n_trials).
@@ -142,7 +147,7 @@ class Perturbation(StrictModel):
     every flown offset is scaled by (1 + e), e ~ U(-f, f), f = flown_disturbance (0 disables it).
     """
 
-    design: Literal["none", "box", "common"] = "none"
+    design: Literal["physical", "none", "box", "common"] = "physical"
     sampler: Literal["sobol", "lhs"] = "sobol"
     position_half_width_m: float = Field(2.0, ge=0)
     yaw_half_width_deg: float = Field(20.0, ge=0, le=180)

@@ -1,12 +1,14 @@
 """The real trial evaluator: batched MuJoCo flights of the (perturbed) path through each trial's wind, then
 the reconstruction oracle on each trial's capture poses.
 
-Per batch of trials: one wind field for the batch (the wind stage's ``build_wind_field``), one ``FlightSimulator.fly`` call with
-the commanded offsets, then per trial the paper's extra disturbance of the wind-induced deviation, the
-capture set and one oracle call. Offsets are measured from the planned viewpoints:
+Per batch of trials: one wind field for the batch (the wind stage's ``build_wind_field``), one
+``FlightSimulator.fly`` call with the commanded offsets, around the ship (its box for the compass and the views' depth, its motion), each
+trial's navigation errors and ship motion drawn from its own ``flight_seed``; then per trial the paper's extra
+disturbance of the wind-induced deviation, the capture set (with the gimbal's roll and the navigation's
+positions as priors) and one oracle call. Offsets are measured from the planned viewpoints:
     flown = commanded + disturbance * (sim_offset - commanded)
-(``sim_offset`` = the simulator's actual capture pose minus the plan). With ``flown_disturbance: 0`` the
-capture poses are exactly the simulator's.
+(``sim_offset`` = the simulator's actual capture pose minus the plan). With the ``physical`` design (commanded 0,
+no extra disturbance) the capture poses are exactly the simulator's.
 """
 
 from __future__ import annotations
@@ -22,6 +24,8 @@ from wrp_eval.errors import InputError
 from wrp_eval.recon.scene import scored_ship
 from wrp_eval.sim.captures import CaptureSet
 from wrp_eval.sim.flight import FlightSimulator
+from wrp_eval.sim.flight_state import COMPLETED
+from wrp_eval.sim.onboard import ShipInScene
 from wrp_eval.wind.field import build_wind_field
 
 
@@ -58,13 +62,15 @@ class FlightEvaluator:
         self.sim = FlightSimulator(sim_section)
         self.dt_s = sim_section.timestep_s * sim_section.chunk_steps
         self.trajectory_points = self.config.campaign.outputs.trajectory_points
+        self.in_scene = ShipInScene.of(self.ship.mesh, self.config.ship.motion, self.ship.particulars)
 
     def evaluate(self, batch: list[TrialInputs]) -> list[TrialOutcome]:
         start = time.perf_counter()
         wind = build_wind_field([trial_wind_section(self.config.wind, t.wind) for t in batch], self.ship.particulars,
                                 [trial_wind_rng(t.wind) for t in batch], self.dt_s, self.config_dir)
         commanded = np.stack([t.commanded_offsets for t in batch])           # (b, n, 4)
-        result = self.sim.fly(self.path, wind, len(batch), view_offsets=commanded)
+        result = self.sim.fly(self.path, wind, len(batch), view_offsets=commanded, ship=self.in_scene,
+                              flight_rngs=[np.random.default_rng(t.flight_seed) for t in batch])
         flight_s = (time.perf_counter() - start) / len(batch)
         disturbance = np.stack([t.disturbance for t in batch])
         flown = commanded + disturbance * (result.offsets - commanded)         # NaN stays NaN (views not taken)
@@ -78,8 +84,9 @@ class FlightEvaluator:
             t0 = time.perf_counter()
             taken = result.taken[i]
             pose = planned[taken] + flown[i, taken]
+            prior = self.path.positions[taken] + result.estimated_offsets[i, taken, :3]
             captures = CaptureSet(pose[:, :3], pose[:, 3], result.camera_pitch[i, taken], np.flatnonzero(taken),
-                                  self.path.camera)
+                                  self.path.camera, roll=result.camera_roll[i, taken], prior_positions=prior)
             recon = self.ship.score(captures, inputs.oracle_seed)
             reasons = []
             if result.failed[i]:
@@ -93,7 +100,11 @@ class FlightEvaluator:
                 flown_offsets=flown[i], camera_pitch=np.where(taken, result.camera_pitch[i], np.nan),
                 metrics=metrics, failed=bool(result.failed[i] or recon.failed),
                 reason="; ".join(reasons), trajectory=trajectories[i], wind_at_views=wind_at_views[i],
-                timings={"flight_s": flight_s, "oracle_s": time.perf_counter() - t0}))
+                timings={"flight_s": flight_s, "oracle_s": time.perf_counter() - t0},
+                capture_time_s=result.capture_time_s[i], camera_roll=result.camera_roll[i],
+                estimated_offsets=result.estimated_offsets[i],
+                blur_px=result.blur_px[i], battery_charge=result.battery_charge[i], ship_motion=result.ship_motion[i],
+                flight_outcome="completed" if result.outcome[i] == COMPLETED else result.outcome_reason[i]))
         return outcomes
 
     def close(self) -> None:

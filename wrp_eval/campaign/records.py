@@ -25,7 +25,14 @@ class TrialOutcome:
     failed/reason: the flight or the reconstruction failed (a result, not an error); trajectory (m, 3) m:
     down-sampled flown positions; wind_at_views (n_views, 3) m/s: the wind felt at each capture;
     timings: seconds by phase (e.g. flight_s, oracle_s); camera_pitch (n_views,) rad: the gimbal pitch
-    achieved at each capture (the planned one unless the gimbal saturated), NaN for views not taken."""
+    achieved at each capture (the planned one unless the gimbal saturated), NaN for views not taken.
+    The capture realism (all per view, NaN for views not taken; None when the evaluator has none):
+    capture_time_s (n_views,) s of the shutter; camera_roll (n_views,) rad: the residual roll;
+    estimated_offsets (n_views, 4): the navigation's record of
+    the capture pose minus the plan (the image's position prior); blur_px (n_views,); battery_charge
+    (n_views,) fraction left at the shutter; ship_motion (n_views, 4): heave m, roll, pitch, yaw rad of the
+    ship at the shutter; flight_outcome: "completed" or why the sortie ended early (returned home: battery,
+    wind limit) or failed."""
 
     flown_offsets: np.ndarray
     metrics: dict[str, float]
@@ -35,6 +42,18 @@ class TrialOutcome:
     wind_at_views: np.ndarray | None = None
     timings: dict[str, float] = field(default_factory=dict)
     camera_pitch: np.ndarray | None = None
+    capture_time_s: np.ndarray | None = None
+    camera_roll: np.ndarray | None = None
+    estimated_offsets: np.ndarray | None = None
+    blur_px: np.ndarray | None = None
+    battery_charge: np.ndarray | None = None
+    ship_motion: np.ndarray | None = None
+    flight_outcome: str | None = None
+
+
+# per-view columns of the capture realism: name -> values per view (1: a list of floats, k: nested lists)
+REALISM_COLUMNS = {"capture_time_s": 1, "camera_roll": 1, "estimated_offsets": 4, "blur_px": 1, "battery_charge": 1,
+                   "ship_motion": 4}
 
 
 def _nested(k: int) -> pa.DataType:
@@ -62,6 +81,9 @@ SCHEMA = pa.schema([
     pa.field("flown_offsets", _nested(4)),
     pa.field("camera_pitch", pa.list_(pa.float64())),   # rad per view; null in campaigns stored before it
     pa.field("wind_at_views", _nested(3)),
+    # capture realism (null in campaigns stored before it, and for evaluators without it)
+    *[pa.field(name, pa.list_(pa.float64()) if k == 1 else _nested(k)) for name, k in REALISM_COLUMNS.items()],
+    pa.field("flight_outcome", pa.string()),
     pa.field("trajectory", _nested(3)),
     # oracle
     *[pa.field(name, pa.float64()) for name in METRIC_NAMES],
@@ -83,6 +105,12 @@ def _rows(a: np.ndarray | None, k: int) -> list | None:
     return None if a is None else np.asarray(a, dtype=float).reshape(-1, k).tolist()
 
 
+def _per_view(a: np.ndarray | None, k: int) -> list | None:
+    if a is None:
+        return None
+    return np.asarray(a, dtype=float).ravel().tolist() if k == 1 else _rows(a, k)
+
+
 def make_record(inputs, outcome: TrialOutcome | None, *, root_seed: int, path_digest: str, n_views: int,
                 attempts: int, trial_s: float, worker: str, finished_unix: float,
                 error: str | None = None) -> dict:
@@ -100,6 +128,7 @@ def make_record(inputs, outcome: TrialOutcome | None, *, root_seed: int, path_di
     if outcome is None:
         nan = np.full((n_views, 4), np.nan)
         row.update({"flown_offsets": _rows(nan, 4), "camera_pitch": None, "wind_at_views": None, "trajectory": None,
+                    **{name: None for name in REALISM_COLUMNS}, "flight_outcome": None,
                     **{m: float("nan") for m in METRIC_NAMES}, "failed": True,
                     "failure_reason": "error", "error": error, "flight_s": None, "oracle_s": None})
         return row
@@ -107,6 +136,8 @@ def make_record(inputs, outcome: TrialOutcome | None, *, root_seed: int, path_di
         "flown_offsets": _rows(outcome.flown_offsets, 4),
         "camera_pitch": None if outcome.camera_pitch is None else np.asarray(outcome.camera_pitch, float).tolist(),
         "wind_at_views": _rows(outcome.wind_at_views, 3),
+        **{name: _per_view(getattr(outcome, name), k) for name, k in REALISM_COLUMNS.items()},
+        "flight_outcome": outcome.flight_outcome,
         "trajectory": _rows(outcome.trajectory, 3),
         **{m: float(outcome.metrics.get(m, float("nan"))) for m in METRIC_NAMES},
         "failed": bool(outcome.failed), "failure_reason": outcome.reason, "error": None,

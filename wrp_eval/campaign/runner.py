@@ -77,7 +77,8 @@ def fingerprint(config_doc: dict, digest: str, root_seed: int, evaluator: str, o
     out: retuning the surrogate must not make thousands of stored flights unusable."""
     doc = {name: json.loads(json.dumps(config_doc.get(name))) for name in _TRIAL_SECTIONS}
     campaign = doc["campaign"]
-    lhs = campaign["perturbation"]["design"] != "none" and campaign["perturbation"]["sampler"] == "lhs"
+    design = campaign["perturbation"]
+    lhs = design["design"] not in ("none", "physical") and design["sampler"] == "lhs"
     for key in _NEUTRAL_KEYS:
         if not (key == "n_trials" and lhs):
             campaign.pop(key, None)

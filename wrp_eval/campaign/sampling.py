@@ -24,7 +24,7 @@ from scipy.stats import qmc
 
 from wrp_eval.campaign.config import CampaignSection, Choice, Normal, Uniform
 from wrp_eval.wind.config import WindSection
-from wrp_eval.wind.dryden import flight_generators
+from wrp_eval.streams import flight_generators
 
 WIND_STREAM, PERTURB_STREAM, DISTURB_STREAM, FLIGHT_STREAM = 0, 1, 2, 3
 # child index of each wind input within the trial's WIND_STREAM children
@@ -85,7 +85,7 @@ def trial_wind_section(base: WindSection, draw: WindDraw) -> WindSection:
 
 def trial_wind_rng(draw: WindDraw) -> np.random.Generator:
     """The generator of the trial's wind realisation (its turbulence and gusts): flight 0 of a batch of one
-    seeded by ``draw.seed`` (:func:`wrp_eval.wind.dryden.flight_generators`), whatever batch the trial flies
+    seeded by ``draw.seed`` (:func:`wrp_eval.streams.flight_generators`), whatever batch the trial flies
     in, so a trial's wind never depends on the others."""
     return flight_generators(draw.seed, 1)[0]
 
@@ -135,7 +135,7 @@ def unit_design_point(sampler: str, root_seed: int, n_trials: int, trial_id: int
 def commanded_offsets(section: CampaignSection, root_seed: int, trial_id: int, n_views: int) -> np.ndarray:
     """(n_views, 4) commanded offsets (dx, dy, dz m, dyaw rad) of trial ``trial_id`` from the planned views."""
     pert = section.perturbation
-    if pert.design == "none":
+    if pert.design in ("physical", "none"):
         return np.zeros((n_views, 4))
     half = np.array([pert.position_half_width_m] * 3 + [np.radians(pert.yaw_half_width_deg)])
     if pert.design == "common":
@@ -155,6 +155,8 @@ def commanded_offsets(section: CampaignSection, root_seed: int, trial_id: int, n
 def disturbance_factors(section: CampaignSection, root_seed: int, trial_id: int, n_views: int) -> np.ndarray:
     """(n_views, 4) factors (1 + e), e ~ U(-f, f), applied to the wind-induced part of the flown offsets."""
     f = section.perturbation.flown_disturbance
+    if section.perturbation.design == "physical":
+        return np.ones((n_views, 4))
     rng = trial_rng(root_seed, DISTURB_STREAM, trial_id)
     e = rng.uniform(-f, f, size=(n_views, 4)) if f > 0 else np.zeros((n_views, 4))
     return 1.0 + e

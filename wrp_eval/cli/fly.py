@@ -28,6 +28,7 @@ from wrp_eval.sim.hover import analytic_hover_balance, hover_statistics
 from wrp_eval.sim.outputs import write_flight_tables, write_rerun
 from wrp_eval.sim.simple_wind import ConstantWind
 from wrp_eval.wind.config import WindSection
+from wrp_eval.sim.onboard import ShipInScene
 from wrp_eval.wind.field import build_wind_field
 
 
@@ -55,7 +56,8 @@ def _fly(args: argparse.Namespace) -> int:
         hover_wind = ConstantWind.blowing_from(args.wind_speed or 0.0, args.wind_dir or 0.0,
                                                ctx.particulars.heading_deg)
         with FlightSimulator(config.sim) as sim:
-            result = sim.hover(hover_wind, [0.0, 0.0, args.altitude], 0.0, args.duration, batch=args.trials)
+            result = sim.hover(hover_wind, [0.0, 0.0, args.altitude], 0.0, args.duration, batch=args.trials,
+                               flight_rngs=np.random.SeedSequence(seed).spawn(2)[1])
         stats = hover_statistics(result)
         stats["analytic"] = analytic_hover_balance(hover_wind.vector, config.sim)
         if args.json:
@@ -71,9 +73,11 @@ def _fly(args: argparse.Namespace) -> int:
     path = Path.load(args.path)
     section = _wind_section(args, config)
     dt = config.sim.timestep_s * config.sim.chunk_steps          # the wind is stepped at the controller rate
-    wind = build_wind_field([section] * args.trials, ctx.particulars, np.random.SeedSequence(seed), dt, config_dir)
+    wind_seed, flight_seed = np.random.SeedSequence(seed).spawn(2)
+    wind = build_wind_field([section] * args.trials, ctx.particulars, wind_seed, dt, config_dir)
+    ship = ShipInScene.of(ctx.ship.mesh, config.ship.motion, ctx.particulars)
     with FlightSimulator(config.sim) as sim:
-        result = sim.fly(path, wind, args.trials)
+        result = sim.fly(path, wind, args.trials, ship=ship, flight_rngs=flight_seed)
     out = FsPath(args.out)
     a, b = write_flight_tables(result, path, out, seed)
     if args.rerun:

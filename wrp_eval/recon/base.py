@@ -141,6 +141,11 @@ def check_inputs(capture_set: CaptureSet, mesh: trimesh.Trimesh) -> None:
     n = len(capture_set)
     shapes = {"positions": (capture_set.positions, (n, 3)), "yaw": (capture_set.yaw, (n,)),
               "pitch": (capture_set.pitch, (n,)), "planned_index": (capture_set.planned_index, (n,))}
+    # optional fields: None means level camera / priors = true positions
+    if capture_set.roll is not None:
+        shapes["roll"] = (capture_set.roll, (n,))
+    if capture_set.prior_positions is not None:
+        shapes["prior_positions"] = (capture_set.prior_positions, (n, 3))
     for name, (arr, shape) in shapes.items():
         arr = np.asarray(arr)
         if arr.shape != shape:

@@ -9,16 +9,19 @@ import pyarrow.parquet as pq
 
 from wrp_eval.errors import InputError
 from wrp_eval.planning.path import Path
-from wrp_eval.sim.captures import CaptureSet
+from wrp_eval.sim.captures import PRIOR_COLUMNS, ROLL_COLUMN, CaptureSet
 
 CAPTURE_COLUMNS = ("trial", "view", "taken", "x_m", "y_m", "z_m", "yaw_deg", "pitch_deg")
+# optional columns (files written before them still load): camera roll, recorded (GNSS) positions
+OPTIONAL_COLUMNS = (ROLL_COLUMN, *PRIOR_COLUMNS)
 
 
-def captures_from_path(path: Path, offsets: np.ndarray | None = None, pitch: np.ndarray | None = None
-                       ) -> CaptureSet:
+def captures_from_path(path: Path, offsets: np.ndarray | None = None, pitch: np.ndarray | None = None,
+                       roll: np.ndarray | None = None, prior_positions: np.ndarray | None = None) -> CaptureSet:
     """Every view of a path as a capture set: the planned poses (a windless, perfectly flown trial), moved by
     ``offsets`` (n, 4: dx, dy, dz m, dyaw rad) when given; the gimbal at ``pitch`` (n,) rad where given and
-    finite (an achieved pitch from a campaign), else at its planned pitch."""
+    finite (an achieved pitch from a campaign), else at its planned pitch; ``roll`` (n,) rad and the recorded
+    ``prior_positions`` (n, 3) m passed through (None: level camera, priors = true positions)."""
     pose = np.concatenate([np.asarray(path.positions, dtype=float), np.asarray(path.yaw, dtype=float)[:, None]],
                           axis=1)
     if offsets is not None:
@@ -27,20 +30,37 @@ def captures_from_path(path: Path, offsets: np.ndarray | None = None, pitch: np.
     if pitch is not None:
         pitch = np.asarray(pitch, dtype=float).reshape(planned_pitch.shape)
         planned_pitch = np.where(np.isfinite(pitch), pitch, planned_pitch)
-    return CaptureSet(pose[:, :3], pose[:, 3], planned_pitch, np.arange(len(path)), path.camera)
+    if roll is not None:
+        roll = np.asarray(roll, dtype=float).reshape(planned_pitch.shape)
+    if prior_positions is not None:
+        prior_positions = np.asarray(prior_positions, dtype=float).reshape(pose[:, :3].shape)
+    return CaptureSet(pose[:, :3], pose[:, 3], planned_pitch, np.arange(len(path)), path.camera, roll,
+                      prior_positions)
 
 
-def captures_from_parquet(file: str | FsPath, trial: int, path: Path) -> CaptureSet:
-    """The views actually taken in ``trial`` of a ``captures.parquet`` (the simulator's table; one row per
-    trial x view, degrees at the edge); the camera comes from ``path``."""
-    file = FsPath(file)
+def _read_columns(file: FsPath) -> dict[str, np.ndarray]:
+    """The required capture columns and whichever optional ones the file has, as numpy arrays."""
     try:
-        table = pq.read_table(file, columns=list(CAPTURE_COLUMNS))
+        names = set(pq.read_schema(file).names)
+        wanted = list(CAPTURE_COLUMNS) + [c for c in OPTIONAL_COLUMNS if c in names]
+        table = pq.read_table(file, columns=wanted)
     except FileNotFoundError:
         raise InputError(file, "no such captures file") from None
     except Exception as err:  # pyarrow raises several types for unreadable / schema-less files
         raise InputError(file, f"not a captures table with columns {', '.join(CAPTURE_COLUMNS)}: {err}") from None
-    cols = {c: table.column(c).to_numpy(zero_copy_only=False) for c in CAPTURE_COLUMNS}
+    present = [c for c in PRIOR_COLUMNS if c in names]
+    if present and len(present) != len(PRIOR_COLUMNS):
+        raise InputError(file, f"has {', '.join(present)} but not all of {', '.join(PRIOR_COLUMNS)}")
+    return {c: table.column(c).to_numpy(zero_copy_only=False) for c in wanted}
+
+
+def captures_from_parquet(file: str | FsPath, trial: int, path: Path) -> CaptureSet:
+    """The views actually taken in ``trial`` of a ``captures.parquet`` (the simulator's table; one row per
+    trial x view, degrees at the edge); the camera comes from ``path``. The optional ``roll_deg`` and
+    ``prior_x_m`` / ``prior_y_m`` / ``prior_z_m`` columns (:func:`wrp_eval.sim.captures.pose_columns`) become
+    the capture set's roll and position priors; a file without them gives None (level camera, exact priors)."""
+    file = FsPath(file)
+    cols = _read_columns(file)
     rows = (cols["trial"] == trial) & cols["taken"].astype(bool)
     if not np.any(cols["trial"] == trial):
         raise InputError(file, f"no rows for trial {trial} (trials {int(cols['trial'].min())}.."
@@ -51,6 +71,10 @@ def captures_from_parquet(file: str | FsPath, trial: int, path: Path) -> Capture
     pos = np.column_stack([cols["x_m"][rows], cols["y_m"][rows], cols["z_m"][rows]]).astype(float)
     yaw = np.radians(cols["yaw_deg"][rows].astype(float))
     pitch = np.radians(cols["pitch_deg"][rows].astype(float))
-    if not (np.all(np.isfinite(pos)) and np.all(np.isfinite(yaw)) and np.all(np.isfinite(pitch))):
+    roll = np.radians(cols[ROLL_COLUMN][rows].astype(float)) if ROLL_COLUMN in cols else None
+    prior = (np.column_stack([cols[c][rows] for c in PRIOR_COLUMNS]).astype(float) if PRIOR_COLUMNS[0] in cols
+             else None)
+    values = [pos, yaw, pitch] + [a for a in (roll, prior) if a is not None]
+    if not all(np.all(np.isfinite(a)) for a in values):
         raise InputError(file, f"trial {trial}: a taken view has non-finite pose values")
-    return CaptureSet(pos, yaw, pitch, view, path.camera)
+    return CaptureSet(pos, yaw, pitch, view, path.camera, roll, prior)

@@ -4,17 +4,20 @@ Pipeline (the open stand-in for the paper's ContextCapture, Sec. 4.1):
 1. render every capture pose (:mod:`wrp_eval.recon.render`, solid procedural texture, sea as occluder);
 2. pycolmap SIFT feature extraction with the known pinhole intrinsics (drone images carry them in EXIF),
    exhaustive (or sequential) matching with geometric verification (RANSAC seeded);
-3. pose priors: every image's capture position (the drone's GPS fix; ContextCapture's aerotriangulation
-   takes the same) is written to the COLMAP database as a position prior with a standard deviation of
-   ``prior_position_sigma_m``;
+3. pose priors: every image's recorded position (``CaptureSet.prior_positions``, the drone's navigation /
+   GNSS estimate that a photo's GPS tag carries; the true position where none was recorded; ContextCapture's
+   aerotriangulation takes the same) is written to the COLMAP database as a position prior with a standard
+   deviation of ``prior_position_sigma_m``;
 4. incremental mapping (default) with position-prior bundle adjustment (COLMAP's ``use_prior_position``:
    the model is aligned to the priors and every global bundle adjustment keeps the cameras near them, so a
    weakly chained view graph cannot fold), single-threaded with a fixed seed (reproducible); or global
    mapping (GLOMAP, no priors; random position initialisation, not reproducible);
 5. keep the model with the most registered images; failed when it holds fewer than half the images (or
    fewer than 3), issue 6's rule, as the synthetic oracle;
-6. georeference: similarity from the registered cameras' centres to the true capture positions (a no-op up
-   to the priors' residual after prior BA), then ICP with scale against the ground truth (:mod:`base`);
+6. georeference: similarity from the registered cameras' centres to the true capture positions (with exact
+   priors a no-op up to their residual after prior BA; with GNSS priors it removes their common error, the
+   evaluator's coarse alignment before ICP, as a CloudCompare user aligns by hand first), then ICP with scale
+   against the ground truth (:mod:`base`);
    optionally (``max_camera_residual_m``, off by default) a model whose cameras stay farther than that
    (RMS) from their positions after the similarity has broken geometry and counts as failed;
 7. score the sparse points as surfels: normal from the 12 nearest neighbours (PCA, open3d), radius the
@@ -60,6 +63,17 @@ def _similarity_from_centres(src: np.ndarray, dst: np.ndarray) -> np.ndarray:
     return np.asarray(est.compute_transformation(a, b, pairs))
 
 
+def rotation_errors_deg(world_from_cam: np.ndarray, similarity: np.ndarray, truth: np.ndarray) -> np.ndarray:
+    """Angles (k,) in degrees between a model's camera orientations, world-from-camera (k, 3, 3) in the model
+    frame, carried into the capture frame by the rotation of ``similarity`` (4x4, scale removed), and the
+    true world-from-camera rotations ``truth`` (k, 3, 3) (COLMAP's camera frame is OpenCV's, as ours)."""
+    lin = similarity[:3, :3]
+    rot = lin / np.cbrt(np.linalg.det(lin))
+    rel = np.einsum("kji,jl,klm->kim", truth, rot, world_from_cam)  # truth^T Q R_model
+    cos = (np.trace(rel, axis1=1, axis2=2) - 1.0) / 2.0
+    return np.degrees(np.arccos(np.clip(cos, -1.0, 1.0)))
+
+
 def sparse_surfels(points: np.ndarray) -> Surfels:
     """Surfels from a sparse cloud: PCA normals (12 neighbours) and the 4th-neighbour distance as radius."""
     if len(points) < 5:
@@ -77,6 +91,10 @@ def database_fingerprint(capture_set: CaptureSet, mesh_key: str, section: Oracle
     h = hashlib.sha256()
     for arr in (capture_set.positions, capture_set.yaw, capture_set.pitch):
         h.update(np.ascontiguousarray(arr, dtype=np.float64).tobytes())
+    # roll changes the rendered images; a level set hashes as before (kept databases stay valid). The
+    # position priors are not hashed: they are rewritten before every mapping
+    if capture_set.roll is not None and np.any(np.asarray(capture_set.roll) != 0):
+        h.update(b"roll" + np.ascontiguousarray(capture_set.roll, dtype=np.float64).tobytes())
     cam = capture_set.camera
     h.update(json.dumps([cam.focal_mm, cam.sensor_width_mm, cam.image_width_px, cam.image_height_px, mesh_key,
                          section.gt_seed, c.image_width_px, c.max_num_features, c.match_exhaustive,
@@ -84,17 +102,19 @@ def database_fingerprint(capture_set: CaptureSet, mesh_key: str, section: Oracle
     return h.hexdigest()
 
 
-def write_position_priors(database_path: Path, names: list[str], positions: np.ndarray, sigma_m: float) -> int:
-    """Write one Cartesian position prior (m, isotropic covariance sigma_m^2) per image of ``names``.
-
-    positions: (n, 3) capture positions in the ship frame, aligned with ``names``. Returns the priors written.
+def write_position_priors(database_path: Path, names: list[str], capture_set: CaptureSet, sigma_m: float) -> int:
+    """Write one Cartesian position prior (m, isotropic covariance sigma_m^2) per image of ``names`` (aligned
+    with the views of ``capture_set``): the recorded navigation positions ``capture_set.prior_positions``
+    (what an image's GPS tag gives a photogrammetry tool), or the true positions where there are none.
+    Positions in the ship frame. Returns the number of priors in the database.
     """
     import pycolmap  # lazily: pycolmap is the optional [photogrammetry] extra
+    positions = capture_set.position_priors()
     db = pycolmap.Database.open(str(database_path))
     try:
         db.clear_pose_priors()
         by_name = {image.name: image for image in db.read_all_images()}
-        for name, pos in zip(names, np.asarray(positions, dtype=float)):
+        for name, pos in zip(names, positions):
             prior = pycolmap.PosePrior()
             prior.corr_data_id = by_name[name].data_id
             prior.position = pos
@@ -228,7 +248,7 @@ class ColmapOracle(MeshOracle):
         extra["database_reused"] = reused
         database = work / "database.db"
         if c.prior_position_sigma_m is not None:
-            write_position_priors(database, names, capture_set.positions, c.prior_position_sigma_m)
+            write_position_priors(database, names, capture_set, c.prior_position_sigma_m)
         out = work / "sparse"
         if out.exists():
             shutil.rmtree(out)
@@ -247,12 +267,18 @@ class ColmapOracle(MeshOracle):
 
         # georeference with the registered cameras' centres -> true capture positions
         name_to_view = {name: i for i, name in enumerate(names)}
-        centres, truth = [], []
+        centres, views, model_rot = [], [], []
         for image in best.images.values():
             if image.has_pose:
                 centres.append(np.asarray(image.projection_center()))
-                truth.append(capture_set.positions[name_to_view[image.name]])
-        centres, truth = np.asarray(centres), np.asarray(truth)
+                views.append(name_to_view[image.name])
+                pose = image.cam_from_world() if callable(image.cam_from_world) else image.cam_from_world
+                model_rot.append(np.asarray(pose.rotation.matrix()).T)  # world-from-camera, model frame
+        centres, truth = np.asarray(centres), capture_set.positions[np.asarray(views, dtype=int)]
+        if len(centres) and capture_set.prior_positions is not None:
+            # how far the model sits from the recorded positions it was held to (prior BA), before any similarity
+            priors = capture_set.position_priors()[np.asarray(views, dtype=int)]
+            extra["camera_prior_residual_m"] = float(np.sqrt(np.mean(np.sum((centres - priors) ** 2, axis=1))))
         pts = np.array([p.xyz for p in best.points3D.values()]) if best.num_points3D() else np.zeros((0, 3))
         if len(centres) >= 3:
             extra["camera_residual_before_m"] = float(np.sqrt(np.mean(np.sum((centres - truth) ** 2, axis=1))))
@@ -260,6 +286,11 @@ class ColmapOracle(MeshOracle):
             pts = pts @ transform[:3, :3].T + transform[:3, 3]
             moved = centres @ transform[:3, :3].T + transform[:3, 3]
             extra["camera_residual_m"] = float(np.sqrt(np.mean(np.sum((moved - truth) ** 2, axis=1))))
+            # orientation check of the whole chain (render, camera model with roll, SfM): median angle between
+            # the model's georeferenced cameras and the capture rotations
+            truth_rot = capture_set.rotations()[np.asarray(views, dtype=int)]
+            extra["camera_rotation_error_deg"] = float(np.median(rotation_errors_deg(np.asarray(model_rot),
+                                                                                     transform, truth_rot)))
         pts = pts[np.isfinite(pts).all(axis=1)]
         extra["points3D"] = int(len(pts))
         reason = ""

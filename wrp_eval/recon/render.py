@@ -15,7 +15,7 @@ from __future__ import annotations
 import numpy as np
 import open3d as o3d
 
-from wrp_eval.camera import Camera, camera_rotations
+from wrp_eval.camera import Camera
 from wrp_eval.recon.base import GroundTruth
 from wrp_eval.sim.captures import CaptureSet
 
@@ -79,7 +79,7 @@ def render_views(capture_set: CaptureSet, gt: GroundTruth, width_px: int, textur
     uu, vv = np.meshgrid(u, v)
     cam_dirs = np.stack([(uu - width_px / 2) / f, (vv - height_px / 2) / f, np.ones_like(uu)], axis=-1)
     cam_dirs = (cam_dirs / np.linalg.norm(cam_dirs, axis=-1, keepdims=True)).reshape(-1, 3)
-    rot = camera_rotations(capture_set.yaw, capture_set.pitch)
+    rot = capture_set.rotations()  # roll included: a rolled camera renders a rotated image
     n = len(capture_set)
     images = np.zeros((n, height_px, width_px, 3), dtype=np.uint8)
     per_call = max(1, max_rays_per_call // len(cam_dirs))

@@ -37,6 +37,12 @@ For one capture set on the true ship mesh:
 6. **Score.** Surfels (hit, normal, footprint radius) -> ICP with scale -> metrics (:mod:`base`).
 
 Every random draw comes from ``numpy.random.default_rng(seed)``: same inputs and seed, same result.
+
+Poses: every step uses the true camera poses, roll included (:meth:`CaptureSet.rotations`). The oracle has no
+notion of a pose prior: it models which surface points an SfM + MVS pipeline matches and triangulates, which
+depends on where the cameras really were, not on their recorded (GNSS) positions
+(``CaptureSet.prior_positions``, used by the COLMAP oracle's pose priors); the score is taken after a
+similarity ICP to the ground truth, which removes any georeferencing offset.
 """
 
 from __future__ import annotations
@@ -48,7 +54,7 @@ import open3d as o3d
 import scipy.sparse as sp
 from scipy.sparse.csgraph import connected_components, minimum_spanning_tree
 
-from wrp_eval.camera import Camera, camera_rotations, optical_axes
+from wrp_eval.camera import Camera, optical_axes
 from wrp_eval.recon.base import GroundTruth, MeshOracle, Surfels
 from wrp_eval.recon.config import OracleSection
 from wrp_eval.sim.captures import CaptureSet
@@ -93,7 +99,7 @@ def observe(capture_set: CaptureSet, gt: GroundTruth, rays_x: int, rays_y: int, 
     n = len(capture_set)
     cam_dirs, _ = ray_grid(capture_set.camera, rays_x, rays_y)
     r = len(cam_dirs)
-    rot = camera_rotations(capture_set.yaw, capture_set.pitch)
+    rot = capture_set.rotations()  # roll included: a rolled view's ray grid turns about its optical axis
     dirs = np.einsum("nij,rj->nri", rot, cam_dirs)
     origins = np.broadcast_to(np.asarray(capture_set.positions, dtype=float)[:, None, :], (n, r, 3))
     rays = np.concatenate([origins, dirs], axis=2).astype(np.float32).reshape(-1, 6)
@@ -315,13 +321,15 @@ class SyntheticOracle(MeshOracle):
         # rays would miss cells it sees.
         spacing = obs.dist * px_spacing / f
         cell_m = max(p.cell_m, 1.5 * float(np.percentile(spacing, 95)))
+        # roll turns a view about its optical axis: the axis, and the angle between it and any of the view's
+        # rays, do not depend on it, so this pruning bound holds for rolled views too
         axes = optical_axes(capture_set.yaw, capture_set.pitch)
         hit, partner, _ = candidate_pairs(obs, n, cell_m, p.max_partners, axes,
                                           np.radians(p.parallax_max_deg) + max(cam.half_fov_x, cam.half_fov_y))
 
         # --- match every candidate pair (vectorised over pairs) ---
         pos = np.asarray(capture_set.positions, dtype=np.float32)
-        rot = camera_rotations(capture_set.yaw, capture_set.pitch).astype(np.float32)
+        rot = capture_set.rotations().astype(np.float32)  # roll included: decides what lands in j's image
         # cheap geometric tests first (range, incidence in j, parallax <= max), projection on the survivors
         rel = obs.points[hit] - pos[partner]
         dist_j = np.sqrt(np.einsum("kj,kj->k", rel, rel))

@@ -33,15 +33,18 @@ from wrp_eval.sim.captures import CaptureSet
 
 
 def _subset(cs: CaptureSet, keep: np.ndarray) -> CaptureSet:
-    return CaptureSet(cs.positions[keep], cs.yaw[keep], cs.pitch[keep], cs.planned_index[keep], cs.camera)
+    return cs.subset(keep)  # roll and position priors carried along
 
 
 def _perturbed(cs: CaptureSet, rng: np.random.Generator, sigma_m: float, sigma_yaw_deg: float) -> CaptureSet:
-    """Wind-like offsets: Gaussian position (m) and yaw (deg) errors, pitch kept (gimbal-stabilised)."""
+    """Wind-like offsets: Gaussian position (m) and yaw (deg) errors, pitch and roll kept (gimbal-stabilised).
+
+    Recorded positions (if any) move with the true ones: the navigation error (prior - true) is kept."""
     pos = cs.positions + rng.normal(0.0, sigma_m, cs.positions.shape)
     pos[:, 2] = np.maximum(pos[:, 2], 1.0)
     yaw = cs.yaw + np.radians(rng.normal(0.0, sigma_yaw_deg, len(cs)))
-    return CaptureSet(pos, yaw, cs.pitch, cs.planned_index, cs.camera)
+    prior = None if cs.prior_positions is None else cs.prior_positions + (pos - cs.positions)
+    return CaptureSet(pos, yaw, cs.pitch, cs.planned_index, cs.camera, cs.roll, prior)
 
 
 def _per_face_views(lo: np.ndarray, hi: np.ndarray, standoff: float, camera: Camera) -> CaptureSet:

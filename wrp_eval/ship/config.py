@@ -19,6 +19,7 @@ from typing import Any, Literal
 
 from pydantic import Field, field_validator, model_validator
 
+from wrp_eval.ship.motion import ShipMotionSection
 from wrp_eval.ship.particulars import ShipType
 from wrp_eval.validation import StrictModel
 
@@ -82,6 +83,8 @@ class ShipSection(StrictModel):
     proxy_height_error: float = Field(0.0, gt=-0.9, le=2.0, description="signed error of the proxy's height as a "
                                       "fraction of the true height above the waterline (paper Table 1: an unreliable "
                                       "AIS draught); the mesh (the truth) keeps its height", **_METRES)
+    motion: ShipMotionSection = Field(ShipMotionSection(), description="heave, roll, pitch, yaw swing for a sea "
+                                     "state (off by default: the paper's ship lies still, sea state 0)")
 
     @field_validator("mesh", mode="before")
     @classmethod

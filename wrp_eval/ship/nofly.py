@@ -83,3 +83,27 @@ def leg_flyable(starts: np.ndarray, ends: np.ndarray, box: np.ndarray | None, mi
     if box is not None:
         ok &= ~segments_intrude(starts, ends, box)
     return ok
+
+
+def distance_to_box(points: np.ndarray, box: np.ndarray) -> np.ndarray:
+    """(...,) m: Euclidean distance from points (..., 3) to the closed box (2, 3) (0 inside)."""
+    p = np.asarray(points, dtype=float)
+    box = np.asarray(box, dtype=float)
+    outside = np.maximum(box[0] - p, 0.0) + np.maximum(p - box[1], 0.0)
+    return np.sqrt((outside ** 2).sum(axis=-1))
+
+
+def ray_box_distance(origins: np.ndarray, directions: np.ndarray, box: np.ndarray) -> np.ndarray:
+    """(...,) m: distance along unit rays origins + t directions (..., 3) to where they enter the box (2, 3);
+    NaN where a ray misses it or starts inside (the slab test of :func:`segments_intrude`, on a ray)."""
+    a = np.asarray(origins, dtype=float)
+    d = np.asarray(directions, dtype=float)
+    box = np.asarray(box, dtype=float)
+    with np.errstate(divide="ignore", invalid="ignore"):
+        t1, t2 = (box[0] - a) / d, (box[1] - a) / d
+    flat = d == 0
+    inside_slab = (a >= box[0]) & (a <= box[1])
+    enter = np.where(flat, np.where(inside_slab, -np.inf, np.inf), np.minimum(t1, t2)).max(axis=-1)
+    leave = np.where(flat, np.where(inside_slab, np.inf, -np.inf), np.maximum(t1, t2)).min(axis=-1)
+    hit = (enter > 0.0) & (enter <= leave)
+    return np.where(hit, enter, np.nan)

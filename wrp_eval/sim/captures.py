@@ -2,20 +2,31 @@
 
 from __future__ import annotations
 
+from collections.abc import Sequence
 from dataclasses import dataclass
 
 import numpy as np
 
-from wrp_eval.camera import Camera
+from wrp_eval.camera import Camera, camera_rotations
+
+# captures.parquet columns of the optional pose fields (degrees / metres at the edge, as the other columns):
+# the camera roll and the navigation estimate of the position (the photo's GPS tag)
+ROLL_COLUMN = "roll_deg"
+PRIOR_COLUMNS = ("prior_x_m", "prior_y_m", "prior_z_m")
 
 
 @dataclass(frozen=True)
 class CaptureSet:
     """Camera poses actually flown for one trial.
 
-    positions (n, 3) m; yaw (n,) rad (follows the airframe); pitch (n,) rad (gimbal-stabilised, so the
-    planned pitch unless the gimbal range was exceeded); planned_index (n,) int, the path viewpoint each
-    capture belongs to. Views never taken (a failed flight) are simply absent.
+    positions (n, 3) m, true camera centres; yaw (n,) rad (follows the airframe); pitch (n,) rad
+    (gimbal-stabilised, so the planned pitch unless the gimbal range was exceeded); planned_index (n,) int,
+    the path viewpoint each capture belongs to; roll (n,) rad about the optical axis, the roll the gimbal
+    left (sign: :mod:`wrp_eval.camera`, positive = right side of the image down), None = level (0);
+    prior_positions (n, 3) m, the position the drone's navigation (GNSS) recorded for each photo, what a
+    photogrammetry tool gets as the image's position prior; None = the true positions (a perfect fix).
+    Views never taken (a failed flight) are simply absent. The two last fields have defaults, so the
+    positional form ``CaptureSet(positions, yaw, pitch, planned_index, camera)`` is unchanged.
     """
 
     positions: np.ndarray
@@ -23,6 +34,45 @@ class CaptureSet:
     pitch: np.ndarray
     planned_index: np.ndarray
     camera: Camera = Camera()
+    roll: np.ndarray | None = None
+    prior_positions: np.ndarray | None = None
 
     def __len__(self) -> int:
         return int(self.positions.shape[0])
+
+    def rotations(self) -> np.ndarray:
+        """World-from-camera rotations (n, 3, 3) of the views, roll included."""
+        return camera_rotations(self.yaw, self.pitch, self.roll)
+
+    def position_priors(self) -> np.ndarray:
+        """(n, 3) m: the recorded (navigation) positions, or the true ones where none were recorded."""
+        return np.asarray(self.positions if self.prior_positions is None else self.prior_positions, dtype=float)
+
+    def subset(self, keep: np.ndarray) -> CaptureSet:
+        """The views selected by ``keep`` (boolean mask (n,) or indices), every field carried along."""
+        return CaptureSet(self.positions[keep], self.yaw[keep], self.pitch[keep], self.planned_index[keep],
+                          self.camera, None if self.roll is None else np.asarray(self.roll)[keep],
+                          None if self.prior_positions is None else np.asarray(self.prior_positions)[keep])
+
+
+def pose_columns(capture_sets: Sequence[CaptureSet], n_views: int) -> dict[str, np.ndarray]:
+    """Per trial x view columns (flattened, trial-major, NaN where a view was not taken) of the poses in
+    ``capture_sets`` (one per trial): x_m, y_m, z_m, yaw_deg, pitch_deg, and ``roll_deg`` / ``prior_*_m``
+    when any capture set has a roll / position priors (a set without them writes 0 / its true positions,
+    what None means). The layout of ``captures.parquet``; :mod:`wrp_eval.recon.capture_io` reads it back."""
+    b = len(capture_sets)
+    pos = np.full((b, n_views, 3), np.nan)
+    ang = np.full((b, n_views, 3), np.nan)  # yaw, pitch, roll
+    prior = np.full((b, n_views, 3), np.nan)
+    for i, cs in enumerate(capture_sets):  # one row per trial (a handful of arrays each), not per time step
+        idx = np.asarray(cs.planned_index, dtype=int)
+        pos[i, idx] = cs.positions
+        ang[i, idx] = np.column_stack([cs.yaw, cs.pitch, np.zeros(len(cs)) if cs.roll is None else cs.roll])
+        prior[i, idx] = cs.position_priors()
+    cols = {"x_m": pos[..., 0].ravel(), "y_m": pos[..., 1].ravel(), "z_m": pos[..., 2].ravel(),
+            "yaw_deg": np.degrees(ang[..., 0]).ravel(), "pitch_deg": np.degrees(ang[..., 1]).ravel()}
+    if any(cs.roll is not None for cs in capture_sets):
+        cols[ROLL_COLUMN] = np.degrees(ang[..., 2]).ravel()
+    if any(cs.prior_positions is not None for cs in capture_sets):
+        cols.update({name: prior[..., k].ravel() for k, name in enumerate(PRIOR_COLUMNS)})
+    return cols

@@ -6,6 +6,10 @@ from typing import Literal
 
 from pydantic import Field
 
+from wrp_eval.sim.capture_mode import CaptureSection
+from wrp_eval.sim.gimbal import GimbalSection
+from wrp_eval.sim.navigation import NavigationSection
+from wrp_eval.sim.power import BatterySection
 from wrp_eval.validation import StrictModel
 
 
@@ -39,12 +43,18 @@ class SimSection(StrictModel):
                                     description="take the photo anyway after this long trying to settle "
                                                 "(what a waypoint mission does in gusts)")
     dwell_s: float | None = Field(None, ge=0.0, description="hover before each photo; None: the path's dwell")
-    fail_distance_m: float = Field(5.0, gt=0.0, description="lost position: farther than this from the "
-                                                               "reference ...")
-    fail_time_s: float = Field(3.0, gt=0.0, description="... for longer than this -> failed flight")
     leash_m: float = Field(2.0, gt=0.0, description="in transit the reference waits while the vehicle is "
                                                     "farther than this behind it (head wind)")
-    stall_time_s: float = Field(20.0, gt=0.0, description="held back by the leash for longer than this -> "
-                                                          "failed flight (no headway against the wind)")
+    wind_limit_m_s: float | None = Field(10.0, gt=0.0, description="the autopilot turns home when its wind "
+                                         "estimate exceeds this (Phantom 4: max wind speed resistance 10 m/s; "
+                                         "PX4 COM_WIND_MAX); None: never")
+    wind_average_s: float = Field(30.0, gt=0.0, description="time constant of the autopilot's wind estimate (a "
+                                  "first-order average of the wind vector at the vehicle; PX4's EKF2 estimates the "
+                                  "wind as a slowly varying state, no time constant is published: assumed)")
     record_interval_s: float = Field(0.2, gt=0.0, description="trajectory down-sampling interval")
-    max_flight_time_s: float = Field(3600.0, gt=0.0, description="abort a flight after this (failed)")
+    max_flight_time_s: float = Field(3600.0, gt=0.0, description="the simulator's own limit: a flight still "
+                                                                 "flying after this has failed (timed out)")
+    navigation: NavigationSection = NavigationSection()
+    gimbal: GimbalSection = GimbalSection()
+    capture: CaptureSection = CaptureSection()
+    battery: BatterySection = BatterySection()

@@ -11,13 +11,15 @@ the chunk (zero-order hold, 50 ms by default: the position loop runs at 20 Hz); 
 inside MuJoCo at every physics step (200 Hz, vehicle.build_scene), so the numpy loop can run at the
 slower rate a position loop needs.
 
-Flight logic per viewpoint: TRANSIT along the straight segment at the cruise speed (accel-limited), then
-SETTLE until within the tolerances (or a timeout: a waypoint mission in gusts takes the photo anyway),
-then DWELL, then the photo is triggered and the capture pose recorded. A flight farther than
-``fail_distance_m`` from its reference for longer than ``fail_time_s``, held back more than ``leash_m``
-behind a waiting reference for longer than ``stall_time_s`` (no headway against the wind), below the sea
-surface, or not finished after ``max_flight_time_s`` is a failed flight (reason recorded); its remaining
-views are not taken.
+Flight logic (phases.py): in ``stop`` mode, per viewpoint TRANSIT along the straight segment at the cruise
+speed (accel-limited), then SETTLE until within the tolerances (or a timeout: a waypoint mission in gusts takes
+the photo anyway), then DWELL, then the photo; in ``fly-through`` mode (capture_mode.py) the reference runs
+through the viewpoints and each photo is triggered when the estimated position passes its viewpoint. The
+controller flies on the navigation estimate; photos are taken at the true state, through the gimbal, with
+their blur, in the ship's frame at the shutter (onboard.py). A real autopilot keeps trying against the wind
+(the reference waits on a leash); it turns home on its battery reserve or its wind limit (the views not
+reached are not taken, the flight is not failed); a flight below the sea surface, with a non-finite state or
+not finished after ``max_flight_time_s`` has failed (reason recorded).
 
 Structure: :class:`wrp_eval.sim.flight_state.FlightState` holds what the flight logic carries between chunks
 (batch-first arrays), :mod:`wrp_eval.sim.phases` the per-chunk steps on it (reference, failures, phase
@@ -39,6 +41,7 @@ from mujoco import rollout as mj_rollout
 
 from wrp_eval.planning.path import Path
 from wrp_eval.sim.aero import drag_force
+from wrp_eval.sim.capture_mode import shutter_offset, vertex_speeds
 from wrp_eval.sim.config import SimSection
 from wrp_eval.sim.controller import (
     GAIN_PRESETS,
@@ -48,21 +51,25 @@ from wrp_eval.sim.controller import (
     yaw_of,
 )
 from wrp_eval.sim.flight_state import (
-    FAILED,
-    NO_FAILURE,
+    ENDED,
     FlightState,
     FlightTargets,
     TrajectoryLog,
 )
+from wrp_eval.sim.onboard import Onboard, ShipInScene, view_depths
 from wrp_eval.sim.phases import (
+    YAW_RATE_REF_RAD_S,
     Profile,
     Reference,
-    apply_failures,
+    advance,
+    apply_endings,
     apply_transitions,
     check_failures,
+    check_returns,
     control,
-    failure_reasons,
+    outcome_reasons,
     parked_pose,
+    passing_views,
     reference,
     reference_profile,
     setpoints,
@@ -92,13 +99,13 @@ def _pad(rows: np.ndarray, padded: int) -> np.ndarray:
     return np.concatenate([rows, np.zeros((padded - len(rows),) + rows.shape[1:], dtype=rows.dtype)])
 
 
-def _start_poses(targets: FlightTargets, padded: int) -> np.ndarray:
-    """Free-joint poses (padded, 7): each flight hovering level at its first body target with its first
-    heading; the fillers of the last model 50 m above the first flight's (out of everyone's way)."""
+def _start_poses(targets: FlightTargets, padded: int, position: np.ndarray) -> np.ndarray:
+    """Free-joint poses (padded, 7): each flight hovering level at ``position`` (batch, 3) m with its first
+    heading; the fillers of the last model 50 m above the first flight's target (out of everyone's way)."""
     batch = targets.batch
     start = np.zeros((padded, 7))
     start[:, 3] = 1.0
-    start[:batch, :3] = targets.body[:, 0]
+    start[:batch, :3] = position
     start[batch:, :3] = targets.body[0, 0] + np.array([0.0, 0.0, 50.0])
     start[:batch, 3] = np.cos(targets.yaw[:, 0] / 2)
     start[:batch, 6] = np.sin(targets.yaw[:, 0] / 2)
@@ -220,11 +227,12 @@ class FlightSimulator:
         mocap_flat = model_of[:, None] * self.ncontrol + nu + 4 * sc.mocap_index[drone_of][:, None] + np.arange(4)
         return n_models, padded, qpos_flat, qvel_flat, motor_flat, drag_flat, mocap_flat
 
-    def _start_batch(self, targets: FlightTargets, sec: SimSection) -> _Batch:
-        """Rollout state and buffers for ``targets.batch`` flights, every drone at its start pose."""
+    def _start_batch(self, targets: FlightTargets, sec: SimSection, position: np.ndarray) -> _Batch:
+        """Rollout state and buffers for ``targets.batch`` flights, every drone at its start pose (centre of
+        mass at ``position`` (batch, 3) m)."""
         n_models, padded, qpos_flat, qvel_flat, motor_flat, drag_flat, mocap_flat = self._layout(targets.batch)
         state = np.tile(self._initial_state, (n_models, 1))
-        park = _start_poses(targets, padded)
+        park = _start_poses(targets, padded, position)
         state.reshape(-1)[qpos_flat] = park
         # ~4 tasks per thread: with chunks of a few steps the default (10 per thread) costs more in dispatch
         # than it gains in balance (measured, README.md)
@@ -252,17 +260,22 @@ class FlightSimulator:
         run.state = np.ascontiguousarray(run.out[:, -1])
         return wind
 
-    def _commands(self, run: _Batch, controller: PositionController, body: Body, ref: Reference,
+    def _commands(self, run: _Batch, controller: PositionController, body: Body, nav, ref: Reference,
                   state: FlightState, wind_b: np.ndarray, dt: float, sec: SimSection):
         """Motor thrusts (padded, 4) N, attitude targets (padded, 4) and drag (padded, 3) N for the next
-        chunk, from the wind ``wind_b`` (batch, 3) m/s at the flights (calm at the fillers). Failed flights
-        are parked (held still, no forces): they take no further photos."""
+        chunk, from the wind ``wind_b`` (batch, 3) m/s at the flights (calm at the fillers); the position
+        loop flies on the navigation estimate ``nav`` (the fillers on their true state). Ended flights are
+        parked (held still, no forces): they take no further photos."""
         par = self.params
         drag = drag_force(_pad(wind_b, run.padded) - body.velocity, body.yaw, par, sec.drag_coefficient,
                           sec.air_density_kg_m3)
-        motors, quat_d = control(controller, body.position, body.velocity, body.rot,
-                                 setpoints(ref, state.phase, run.park[run.batch:, :3]), dt, par)
-        dead = _pad(state.phase == FAILED, run.padded)
+        position, velocity = body.position, body.velocity
+        if nav.position is not body.position[:run.batch]:
+            position = np.concatenate([nav.position, body.position[run.batch:]])
+            velocity = np.concatenate([nav.velocity, body.velocity[run.batch:]])
+        motors, quat_d = control(controller, position, velocity, body.rot,
+                                 setpoints(ref, state.phase, run.park[run.batch:, :3], nav.yaw_error), dt, par)
+        dead = _pad(state.phase == ENDED, run.padded)
         if np.any(dead):
             run.hold(dead, parked_pose(body.position[dead], run.park[dead]))
             motors[dead] = par.weight_n / 4.0
@@ -273,42 +286,76 @@ class FlightSimulator:
 
     # -- flights --------------------------------------------------------------------------------------
     def fly(self, path: Path, wind, batch: int, view_offsets: np.ndarray | None = None,
-            start_time_s: float = 0.0) -> FlightResult:
+            start_time_s: float = 0.0, *, ship: ShipInScene | None = None, flight_rngs=None) -> FlightResult:
         """Fly ``path`` ``batch`` times through ``wind`` (anything with ``velocity(points (n,3), t)``,
         row i = flight i). ``view_offsets`` (batch, n_views, 4): commanded (dx, dy, dz m, dyaw rad) added to
         the plan per flight; the recorded offsets are always measured against the unperturbed plan.
+        ``ship``: the ship flown around (its box for the compass and the views' depth, its motion); None:
+        open sea. ``flight_rngs``: one Generator per flight (or a seed they are spawned from) for the
+        navigation errors and the ship's motion; None: seed 0.
         """
-        return self._fly(path, wind, batch, view_offsets, start_time_s, self.section)
+        return self._fly(path, wind, batch, view_offsets, start_time_s, self.section, ship, flight_rngs)
 
-    def _fly(self, path, wind, batch, view_offsets, start_time_s, sec: SimSection) -> FlightResult:
-        """:meth:`fly` under the settings ``sec``: per chunk the phase steps (phases.py) on the flight state,
-        then the commands, the record and the rollout."""
+    def _targets(self, path, batch, view_offsets, ship, profile: Profile, sec: SimSection) -> FlightTargets:
+        targets = FlightTargets.from_path(path, batch, view_offsets, self.params.camera_offset_m,
+                                          view_depths(path, None if ship is None else ship.box))
+        if not profile.through:
+            return targets
+        return targets.with_speeds(*vertex_speeds(targets.body, targets.yaw, path.speed_m_s, sec.acceleration_m_s2,
+                                                  YAW_RATE_REF_RAD_S, sec.capture.corner_radius_m))
+
+    def _fly(self, path, wind, batch, view_offsets, start_time_s, sec: SimSection, ship=None,
+             flight_rngs=None) -> FlightResult:
+        """:meth:`fly` under the settings ``sec``: per chunk the sensing and phase steps (onboard.py,
+        phases.py) on the flight state, then the commands, the record and the rollout."""
         par = self.params
         dt = sec.timestep_s * sec.chunk_steps
-        dwell = path.dwell_s if sec.dwell_s is None else sec.dwell_s
-        targets = FlightTargets.from_path(path, batch, view_offsets, par.camera_offset_m)
-        run = self._start_batch(targets, sec)
+        profile = Profile.of(path.speed_m_s, sec)
+        dwell = 0.0 if profile.through else (path.dwell_s if sec.dwell_s is None else sec.dwell_s)
+        targets = self._targets(path, batch, view_offsets, ship, profile, sec)
+        onboard = Onboard(sec, par, targets, ship, 0 if flight_rngs is None else flight_rngs, dt, path.speed_m_s,
+                          path.camera)
+        # each vehicle starts hovering where its navigation believes it is on the first target (it has been
+        # holding there before the mission starts), not at the true target with its error as a step at t = 0
+        first = onboard.sense(start_time_s, targets.body[:, 0], np.zeros((batch, 3)), targets.yaw[:, 0])
+        run = self._start_batch(targets, sec, targets.body[:, 0] - first.position_error)
         state = FlightState.start(targets)
         controller = PositionController(par, self.gains, run.padded)
-        profile = Profile.of(path.speed_m_s, sec)
         log = TrajectoryLog()
         record_every = max(1, int(round(sec.record_interval_s / dt)))
         max_chunks = int(np.ceil(sec.max_flight_time_s / dt))
+        latency = sec.capture.trigger_latency_s
         wind_next = None
         for chunk in range(max_chunks + 1):
             t = chunk * dt
             body = run.body()
-            p_b, v_b, yaw = body.position[:batch], body.velocity[:batch], body.yaw[:batch]
-            ref = reference(state, p_b, profile, sec.leash_m)
-            apply_failures(state, check_failures(state, p_b, v_b, ref, dt, sec, chunk == max_chunks), t)
-            moves = transitions(state, p_b, v_b, yaw, targets, sec, dwell)
-            take_photos(state, targets, np.flatnonzero(moves.trigger), p_b, body.rot, yaw, t, profile, par)
-            apply_transitions(state, moves)
+            p_b, v_b, yaw, rot_b = body.position[:batch], body.velocity[:batch], body.yaw[:batch], body.rot[:batch]
+            nav = onboard.sense(start_time_s + t, p_b, v_b, yaw)
+            ref = reference(state, nav.position, profile, sec.leash_m)
             wind_b = _wind_at(wind, p_b, start_time_s + t, batch) if wind_next is None else wind_next
-            motors, quat_d, drag = self._commands(run, controller, body, ref, state, wind_b, dt, sec)
+            apply_endings(state, check_failures(state, p_b, v_b, chunk == max_chunks), t)
+            apply_endings(state, check_returns(state, *onboard.must_return(p_b, wind_b)), t)
+            attitude = onboard.point_camera(rot_b, yaw, targets.plan_pitch[np.minimum(state.photo,
+                                                                                       targets.n_views - 1)])
+            if profile.through:
+                rows, past, normal, missed = passing_views(state, nav.position, targets)
+                state.photo[missed] += 1
+                along = (nav.velocity[rows] * normal).sum(axis=1)
+                delay = shutter_offset(past, along, dt, latency)
+                take_photos(state, targets, rows, onboard.shoot(rows, state.photo[rows], delay, t, p_b, v_b,
+                                                                rot_b, nav, attitude, targets))
+            moves = transitions(state, nav.position, nav.velocity, nav.yaw, targets, sec, dwell, profile.through)
+            due = np.flatnonzero(moves.trigger & (state.photo == state.index))
+            take_photos(state, targets, due, onboard.shoot(due, state.photo[due], np.full(due.size, latency), t, p_b,
+                                                           v_b, rot_b, nav, attitude, targets))
+            advance(state, targets, np.flatnonzero(moves.trigger | moves.chain), profile)
+            apply_transitions(state, moves)
+            motors, quat_d, drag = self._commands(run, controller, body, nav, ref, state, wind_b, dt, sec)
+            power = onboard.spend(motors[:batch], drag[:batch], wind_b - v_b, state.flying)
             if chunk % record_every == 0:
-                log.append(t, position=p_b, reference=ref.position, yaw=yaw, tilt=tilt_of(body.rot[:batch]),
-                           thrust=motors[:batch].sum(axis=1), wind=wind_b, drag=drag[:batch])
+                log.append(t, position=p_b, reference=ref.position, yaw=yaw, tilt=tilt_of(rot_b),
+                           thrust=motors[:batch].sum(axis=1), wind=wind_b, drag=drag[:batch], power=power,
+                           charge=onboard.battery.charge)
             # the last chunk is still recorded (wind, drag, control included) before the loop ends, so a
             # flight's record does not depend on whether other flights of its batch are still flying
             if not np.any(state.flying):
@@ -317,22 +364,25 @@ class FlightSimulator:
             # prefetch: the wind of the next chunk is sampled while this one's rollout runs, at the
             # positions predicted for its end, p + v dt (the vehicle moves < 0.5 m per chunk, the
             # prediction is off by 0.5 a dt^2 < 1 cm, and the wind field varies over metres; README.md).
-            # The controller itself always uses the true state.
             sample = (partial(_wind_at, wind, p_b + v_b * dt, start_time_s + t + dt, batch)
                       if sec.prefetch_wind else None)
             wind_next = self._run_chunk(run, sec, sample)
             tick(state, ref, dt)
+        return self._result(state, path, log, sec)
 
+    def _result(self, state: FlightState, path, log: TrajectoryLog, sec: SimSection) -> FlightResult:
         cap = state.captures
-        return FlightResult(cap.capture_sets(path.camera), cap.offsets, cap.taken, cap.time, cap.pitch,
-                            cap.residual_roll, cap.saturated, state.failure != NO_FAILURE,
-                            failure_reasons(state, sec), state.flight_time, log.trajectory(), sec.timestep_s,
-                            sec.chunk_steps)
+        return FlightResult(cap.capture_sets(path.camera), cap.offsets, cap.estimated_offsets, cap.taken, cap.time,
+                            cap.pitch, cap.roll, cap.saturated, cap.blur_px, cap.charge, cap.ship_motion,
+                            state.outcome, outcome_reasons(state, sec), state.failed, state.flight_time,
+                            log.trajectory(), sec.timestep_s, sec.chunk_steps)
 
-    def hover(self, wind, position, yaw: float, duration_s: float, batch: int = 1) -> FlightResult:
+    def hover(self, wind, position, yaw: float, duration_s: float, batch: int = 1, flight_rngs=None) -> FlightResult:
         """Hold a hover at ``position`` (3,) m (camera position) with heading ``yaw`` rad for ``duration_s``:
-        a one-view path whose dwell is the duration (the settle phase is skipped by a zero timeout)."""
+        a one-view path whose dwell is the duration (the settle phase is skipped by a zero timeout; photo in
+        stop mode). ``flight_rngs``: as :meth:`fly`'s (the navigation errors)."""
         path = Path(np.asarray(position, dtype=float)[None, :], np.array([yaw]), np.array([0.0]),
                     np.array([-1]), np.array([1]), np.array([0]), speed_m_s=5.0, dwell_s=duration_s)
-        sec = self.section.model_copy(update={"settle_timeout_s": 1e-9, "dwell_s": duration_s})
-        return self._fly(path, wind, batch, None, 0.0, sec)
+        sec = self.section.model_copy(update={"settle_timeout_s": 1e-9, "dwell_s": duration_s,
+                                              "capture": self.section.capture.model_copy(update={"mode": "stop"})})
+        return self._fly(path, wind, batch, None, 0.0, sec, None, flight_rngs)

@@ -7,7 +7,8 @@ viewpoints). The MuJoCo side (body poses, controls) is not here: it lives in the
 
 from __future__ import annotations
 
-from dataclasses import dataclass, field, fields
+from dataclasses import dataclass, field, fields, replace
+from typing import NamedTuple
 
 import numpy as np
 
@@ -15,11 +16,15 @@ from wrp_eval.sim.captures import CaptureSet
 from wrp_eval.sim.controller import wrap_angle
 from wrp_eval.sim.results import Trajectory
 
-# flight phases: fly the segment, wait to be within the tolerances, hold still, then the photo (trigger)
-TRANSIT, SETTLE, DWELL, DONE, FAILED = 0, 1, 2, 3, 4
+# flight phases: fly the segment, wait to be within the tolerances, hold still, then the photo (trigger);
+# DONE after the last photo; ENDED: crashed or gone home early (parked, no further photos)
+TRANSIT, SETTLE, DWELL, DONE, ENDED = 0, 1, 2, 3, 4
 
-# failure causes, in the order they are reported when several hold at once (0: not failed)
-NO_FAILURE, NON_FINITE, DITCHED, STALLED, LOST, TIMED_OUT = 0, 1, 2, 3, 4, 5
+# how a flight ends, in the order they are reported when several hold at once. A real autopilot keeps trying
+# against the wind (the leash holds the reference); it turns home on its battery reserve or on its wind limit
+# (the views not reached are not taken: not a failure); crashes and the simulator's time limit are failures.
+COMPLETED, NON_FINITE, DITCHED, TIMED_OUT, RETURNED_BATTERY, RETURNED_WIND = 0, 1, 2, 3, 4, 5
+FAILURES = (NON_FINITE, DITCHED, TIMED_OUT)
 
 
 @dataclass(frozen=True)
@@ -29,7 +34,10 @@ class FlightTargets:
     plan_position (n_views, 3) m, plan_yaw (n_views,) rad, plan_pitch (n_views,) rad: the unperturbed
     plan's camera poses (capture offsets are measured against them). yaw (batch, n_views) rad: the
     commanded heading per flight (plan + view offsets); body (batch, n_views, 3) m: where the centre of
-    mass must be for the camera to sit on the commanded viewpoint at level attitude.
+    mass must be for the camera to sit on the commanded viewpoint at level attitude. depth (n_views,) m: the
+    planned distance along each view's optical axis to the ship (NaN: unknown), for the blur in pixels.
+    vertex_speed (batch, n_views) and leg_speed (batch, n_views - 1) m/s: the fly-through reference's speed
+    at each viewpoint and cruise limit of each leg (None in stop mode).
     """
 
     plan_position: np.ndarray
@@ -37,6 +45,9 @@ class FlightTargets:
     plan_pitch: np.ndarray
     yaw: np.ndarray
     body: np.ndarray
+    depth: np.ndarray
+    vertex_speed: np.ndarray | None = None
+    leg_speed: np.ndarray | None = None
 
     @property
     def batch(self) -> int:
@@ -47,10 +58,11 @@ class FlightTargets:
         return int(self.body.shape[1])
 
     @classmethod
-    def from_path(cls, path, batch: int, view_offsets: np.ndarray | None,
-                  camera_offset_m) -> FlightTargets:
+    def from_path(cls, path, batch: int, view_offsets: np.ndarray | None, camera_offset_m,
+                  depth_m: np.ndarray | None = None) -> FlightTargets:
         """Targets of ``batch`` flights of ``path``; ``view_offsets`` (batch, n_views, 4) (dx, dy, dz m,
-        dyaw rad) shift each flight's viewpoints; ``camera_offset_m`` (3,) the camera in the body frame."""
+        dyaw rad) shift each flight's viewpoints; ``camera_offset_m`` (3,) the camera in the body frame;
+        ``depth_m`` (n_views,) the planned distance to the ship along each optical axis (None: unknown)."""
         n_views = len(path)
         plan_pos = np.asarray(path.positions, dtype=float)
         plan_yaw = np.asarray(path.yaw, dtype=float)
@@ -68,7 +80,11 @@ class FlightTargets:
         cy, sy = np.cos(cmd_yaw), np.sin(cmd_yaw)
         body = cmd_pos - np.stack([cy * cam[0] - sy * cam[1], sy * cam[0] + cy * cam[1],
                                    np.full_like(cy, cam[2])], axis=-1)
-        return cls(plan_pos, plan_yaw, plan_pitch, cmd_yaw, body)
+        depth = np.full(n_views, np.nan) if depth_m is None else np.asarray(depth_m, dtype=float)
+        return cls(plan_pos, plan_yaw, plan_pitch, cmd_yaw, body, depth)
+
+    def with_speeds(self, vertex_speed: np.ndarray, leg_speed: np.ndarray) -> FlightTargets:
+        return replace(self, vertex_speed=vertex_speed, leg_speed=leg_speed)
 
 
 @dataclass(slots=True)
@@ -76,7 +92,8 @@ class Segment:
     """The straight segment each flight's reference runs along, batch-first (n = batch, or the rows being
     replaced): start, end (n, 3) m of the centre of mass; yaw0 (n,) rad heading at the start; dyaw (n,) rad
     turn to the end (wrapped); length (n,) m; direction (n, 3) unit vector (zero on a zero-length segment);
-    duration (n,) s of the reference along it."""
+    duration (n,) s of the reference along it; v0, v1, v_max (n,) m/s: the fly-through reference's speed at
+    the start, at the end and its cruise limit (zeros in stop mode, where segments run rest to rest)."""
 
     start: np.ndarray
     end: np.ndarray
@@ -85,13 +102,16 @@ class Segment:
     length: np.ndarray
     direction: np.ndarray
     duration: np.ndarray
+    v0: np.ndarray
+    v1: np.ndarray
+    v_max: np.ndarray
 
     @classmethod
     def at_rest(cls, position: np.ndarray, yaw: np.ndarray) -> Segment:
         """Zero-length segments at ``position`` (n, 3) m with heading ``yaw`` (n,) rad."""
         n = len(yaw)
         return cls(position.copy(), position.copy(), yaw.copy(), np.zeros(n), np.zeros(n), np.zeros((n, 3)),
-                   np.zeros(n))
+                   np.zeros(n), np.zeros(n), np.zeros(n), np.zeros(n))
 
     def assign(self, rows: np.ndarray, other: Segment) -> None:
         """Replace rows ``rows`` (m,) int of every array by ``other``'s m rows, in place."""
@@ -99,52 +119,81 @@ class Segment:
             getattr(self, f.name)[rows] = getattr(other, f.name)
 
 
+class Shot(NamedTuple):
+    """Photos being taken, m rows: time (m,) s of the shutter; position (m, 3) m, yaw, pitch, roll (m,) rad:
+    the true camera pose in the ship's frame at the shutter; saturated (m,) bool: gimbal at a stop;
+    estimated_position (m, 3) m and estimated_yaw (m,) rad: what the navigation recorded (the image's
+    position prior); blur_px (m,); charge (m,) battery fraction; ship_motion (m, 4): heave m, roll, pitch,
+    yaw rad of the ship at the shutter."""
+
+    time: np.ndarray
+    position: np.ndarray
+    yaw: np.ndarray
+    pitch: np.ndarray
+    roll: np.ndarray
+    saturated: np.ndarray
+    estimated_position: np.ndarray
+    estimated_yaw: np.ndarray
+    blur_px: np.ndarray
+    charge: np.ndarray
+    ship_motion: np.ndarray
+
+
+def _nan(*shape) -> np.ndarray:
+    return np.full(shape, np.nan)
+
+
 @dataclass(slots=True)
 class CaptureLog:
     """The photos of a batch of flights, (batch, n_views, ...); NaN (False) where not (yet) taken.
 
-    position (batch, n_views, 3) m and yaw (batch, n_views) rad of the camera; pitch (batch, n_views) rad the
-    gimbal achieved; residual_roll (batch, n_views) rad the gimbal could not compensate; saturated
-    (batch, n_views) bool; offsets (batch, n_views, 4): (dx, dy, dz m, dyaw rad) against the plan;
-    taken (batch, n_views) bool; time (batch, n_views) s.
+    The :class:`Shot` fields per view (position (batch, n_views, 3) etc.), plus offsets (batch, n_views, 4):
+    (dx, dy, dz m, dyaw rad) of the true pose against the plan; estimated_offsets (batch, n_views, 4): the
+    same for the navigation's record; taken (batch, n_views) bool.
     """
 
+    time: np.ndarray
     position: np.ndarray
     yaw: np.ndarray
     pitch: np.ndarray
-    residual_roll: np.ndarray
+    roll: np.ndarray
     saturated: np.ndarray
+    estimated_position: np.ndarray
+    estimated_yaw: np.ndarray
+    blur_px: np.ndarray
+    charge: np.ndarray
+    ship_motion: np.ndarray
     offsets: np.ndarray
+    estimated_offsets: np.ndarray
     taken: np.ndarray
-    time: np.ndarray
 
     @classmethod
     def empty(cls, batch: int, n_views: int) -> CaptureLog:
-        return cls(np.full((batch, n_views, 3), np.nan), np.full((batch, n_views), np.nan),
-                   np.full((batch, n_views), np.nan), np.full((batch, n_views), np.nan),
-                   np.zeros((batch, n_views), dtype=bool), np.full((batch, n_views, 4), np.nan),
-                   np.zeros((batch, n_views), dtype=bool), np.full((batch, n_views), np.nan))
+        b, n = batch, n_views
+        return cls(_nan(b, n), _nan(b, n, 3), _nan(b, n), _nan(b, n), _nan(b, n), np.zeros((b, n), dtype=bool),
+                   _nan(b, n, 3), _nan(b, n), _nan(b, n), _nan(b, n), _nan(b, n, 4), _nan(b, n, 4),
+                   _nan(b, n, 4), np.zeros((b, n), dtype=bool))
 
-    def record(self, rows: np.ndarray, views: np.ndarray, pose, targets: FlightTargets, t: float) -> None:
-        """Store photo ``views`` (m,) int of flights ``rows`` (m,) int taken at ``t`` s; ``pose`` is a
-        :class:`wrp_eval.sim.phases.CapturePose` of m rows. Offsets are against the unperturbed plan."""
-        self.position[rows, views] = pose.position
-        self.yaw[rows, views] = pose.yaw
-        self.pitch[rows, views] = pose.pitch
-        self.residual_roll[rows, views] = pose.residual_roll
-        self.saturated[rows, views] = pose.saturated
-        self.offsets[rows, views, :3] = pose.position - targets.plan_position[views]
-        self.offsets[rows, views, 3] = wrap_angle(pose.yaw - targets.plan_yaw[views])
+    def record(self, rows: np.ndarray, views: np.ndarray, shot: Shot, targets: FlightTargets) -> None:
+        """Store photo ``views`` (m,) int of flights ``rows`` (m,) int; offsets are against the unperturbed
+        plan."""
+        for name in Shot._fields:
+            getattr(self, name)[rows, views] = getattr(shot, name)
+        self.offsets[rows, views, :3] = shot.position - targets.plan_position[views]
+        self.offsets[rows, views, 3] = wrap_angle(shot.yaw - targets.plan_yaw[views])
+        self.estimated_offsets[rows, views, :3] = shot.estimated_position - targets.plan_position[views]
+        self.estimated_offsets[rows, views, 3] = wrap_angle(shot.estimated_yaw - targets.plan_yaw[views])
         self.taken[rows, views] = True
-        self.time[rows, views] = t
 
     def capture_sets(self, camera) -> tuple[CaptureSet, ...]:
         """One :class:`CaptureSet` per flight, holding only the views it took."""
         return tuple(CaptureSet(self.position[i, taken], self.yaw[i, taken], self.pitch[i, taken],
-                                np.flatnonzero(taken), camera) for i, taken in enumerate(self.taken))
+                                np.flatnonzero(taken), camera, roll=self.roll[i, taken],
+                                prior_positions=self.estimated_position[i, taken])
+                     for i, taken in enumerate(self.taken))
 
 
-TRAJECTORY_FIELDS = ("position", "reference", "yaw", "tilt", "thrust", "wind", "drag")
+TRAJECTORY_FIELDS = ("position", "reference", "yaw", "tilt", "thrust", "wind", "drag", "power", "charge")
 
 
 @dataclass(slots=True)
@@ -170,21 +219,20 @@ class TrajectoryLog:
 class FlightState:
     """What the flight logic carries from chunk to chunk, for a batch of flights.
 
-    phase (batch,) int: TRANSIT / SETTLE / DWELL / DONE / FAILED. index (batch,) int: the viewpoint being
-    flown to (or photographed). phase_time (batch,) s in the current phase (it stands still while the
-    leash holds the reference back). segment: the reference's current segment. lost_time (batch,) s
-    farther than the fail distance from the reference; held_time (batch,) s held back by the leash.
-    failure (batch,) int: cause code (NO_FAILURE ... TIMED_OUT). flight_time (batch,) s: time of the last
-    photo or of the failure. captures: the photos taken so far.
+    phase (batch,) int: TRANSIT / SETTLE / DWELL / DONE / ENDED. index (batch,) int: the viewpoint the
+    reference is flying to. photo (batch,) int: the next viewpoint to photograph (= index in stop mode; in
+    fly-through the vehicle may still be short of a view the reference has passed). phase_time (batch,) s
+    in the current phase (it stands still while the leash holds the reference back). segment: the
+    reference's current segment. outcome (batch,) int: COMPLETED (also while flying) ... RETURNED_WIND.
+    flight_time (batch,) s: time of the last photo or of the end. captures: the photos taken so far.
     """
 
     phase: np.ndarray
     index: np.ndarray
+    photo: np.ndarray
     phase_time: np.ndarray
     segment: Segment
-    lost_time: np.ndarray
-    held_time: np.ndarray
-    failure: np.ndarray
+    outcome: np.ndarray
     flight_time: np.ndarray
     captures: CaptureLog
 
@@ -192,11 +240,16 @@ class FlightState:
     def start(cls, targets: FlightTargets) -> FlightState:
         """Every flight hovering at its first viewpoint, settling there before the first photo."""
         batch = targets.batch
-        return cls(np.full(batch, SETTLE), np.zeros(batch, dtype=int), np.zeros(batch),
-                   Segment.at_rest(targets.body[:, 0], targets.yaw[:, 0]), np.zeros(batch), np.zeros(batch),
-                   np.full(batch, NO_FAILURE), np.zeros(batch), CaptureLog.empty(batch, targets.n_views))
+        return cls(np.full(batch, SETTLE), np.zeros(batch, dtype=int), np.zeros(batch, dtype=int), np.zeros(batch),
+                   Segment.at_rest(targets.body[:, 0], targets.yaw[:, 0]), np.full(batch, COMPLETED),
+                   np.zeros(batch), CaptureLog.empty(batch, targets.n_views))
 
     @property
     def flying(self) -> np.ndarray:
-        """(batch,) bool: neither done nor failed."""
+        """(batch,) bool: neither done nor ended."""
         return self.phase < DONE
+
+    @property
+    def failed(self) -> np.ndarray:
+        """(batch,) bool: crashed or out of the simulator's time."""
+        return np.isin(self.outcome, FAILURES)

@@ -33,18 +33,26 @@ def write_flight_tables(result: FlightResult, path: Path, out_dir: FsPath, seed:
     for i, cs in enumerate(result.captures):
         pos[i, cs.planned_index] = cs.positions
         yaw[i, cs.planned_index] = cs.yaw
+    est = result.estimated_offsets
     captures = pa.table({
         "trial": trial, "view": view, "taken": result.taken.ravel(),
         "x_m": pos[..., 0].ravel(), "y_m": pos[..., 1].ravel(), "z_m": pos[..., 2].ravel(),
         "yaw_deg": np.degrees(yaw).ravel(), "pitch_deg": np.degrees(result.camera_pitch).ravel(),
         "dx_m": result.offsets[..., 0].ravel(), "dy_m": result.offsets[..., 1].ravel(),
         "dz_m": result.offsets[..., 2].ravel(), "dyaw_deg": np.degrees(result.offsets[..., 3]).ravel(),
-        "residual_roll_deg": np.degrees(result.residual_roll).ravel(),
+        "roll_deg": np.degrees(result.camera_roll).ravel(),
+        "est_dx_m": est[..., 0].ravel(), "est_dy_m": est[..., 1].ravel(), "est_dz_m": est[..., 2].ravel(),
+        "est_dyaw_deg": np.degrees(est[..., 3]).ravel(), "blur_px": result.blur_px.ravel(),
+        "battery_charge": result.battery_charge.ravel(),
+        "ship_heave_m": result.ship_motion[..., 0].ravel(),
+        "ship_roll_deg": np.degrees(result.ship_motion[..., 1]).ravel(),
+        "ship_pitch_deg": np.degrees(result.ship_motion[..., 2]).ravel(),
+        "ship_yaw_deg": np.degrees(result.ship_motion[..., 3]).ravel(),
         "gimbal_saturated": result.gimbal_saturated.ravel(), "capture_time_s": result.capture_time_s.ravel(),
     })
     trials = pa.table({
         "trial": np.arange(b), "seed": np.full(b, seed), "failed": result.failed,
-        "failure_reason": list(result.failure_reason), "views_taken": result.taken.sum(axis=1),
+        "outcome": list(result.outcome_reason), "views_taken": result.taken.sum(axis=1),
         "flight_time_s": result.flight_time_s,
     })
     out_dir.mkdir(parents=True, exist_ok=True)
@@ -71,7 +79,7 @@ def _log_flights(rec: rr.RecordingStream, result: FlightResult, path: Path, max_
                 static=True)
     cs = result.captures[0]
     if len(cs):
-        rots = camera_rotations(cs.yaw, cs.pitch)
+        rots = camera_rotations(cs.yaw, cs.pitch, cs.roll)
         cam = cs.camera
         for j in range(len(cs)):
             ent = f"captures/trial0/view{int(cs.planned_index[j])}"

@@ -16,23 +16,25 @@ from typing import NamedTuple
 
 import numpy as np
 
+from wrp_eval.sim.capture_mode import through_profile
 from wrp_eval.sim.config import SimSection
 from wrp_eval.sim.controller import PositionController, wrap_angle
 from wrp_eval.sim.flight_state import (
+    COMPLETED,
     DITCHED,
     DONE,
     DWELL,
-    FAILED,
-    LOST,
-    NO_FAILURE,
+    ENDED,
     NON_FINITE,
+    RETURNED_BATTERY,
+    RETURNED_WIND,
     SETTLE,
-    STALLED,
     TIMED_OUT,
     TRANSIT,
     FlightState,
     FlightTargets,
     Segment,
+    Shot,
 )
 from wrp_eval.sim.vehicle import QuadrotorParams
 
@@ -90,33 +92,47 @@ def reference_profile(length, tau, v_max, a_max, t_jerk):
 @dataclass(frozen=True)
 class Profile:
     """Limits of the reference along a segment: cruise speed m/s, acceleration m/s^2, jerk window s (the
-    averaging window a/j of :func:`reference_profile`; 0: plain trapezoid)."""
+    averaging window a/j of :func:`reference_profile`; 0: plain trapezoid); through: fly-through segments
+    (:func:`wrp_eval.sim.capture_mode.through_profile`, from the segment's v0 to its v1) instead of rest to
+    rest."""
 
     cruise_m_s: float
     acceleration_m_s2: float
     jerk_window_s: float
+    through: bool = False
 
     @classmethod
     def of(cls, cruise_m_s: float, sec: SimSection) -> Profile:
         a_max = sec.acceleration_m_s2
-        return cls(cruise_m_s, a_max, a_max / sec.jerk_m_s3 if sec.jerk_m_s3 else 0.0)
+        return cls(cruise_m_s, a_max, a_max / sec.jerk_m_s3 if sec.jerk_m_s3 else 0.0,
+                   sec.capture.mode == "fly-through")
 
     def at(self, length: np.ndarray, tau: np.ndarray):
-        """(s m, v m/s, a m/s^2, duration s), each (n,), on segments of ``length`` (n,) m at ``tau`` (n,) s."""
+        """(s m, v m/s, a m/s^2, duration s), each (n,), rest to rest on segments of ``length`` (n,) m at
+        ``tau`` (n,) s."""
         return reference_profile(length, tau, self.cruise_m_s, self.acceleration_m_s2, self.jerk_window_s)
+
+    def along(self, seg: Segment, tau: np.ndarray):
+        """(s, v, a, duration) (n,) on the segments ``seg`` at ``tau`` (n,) s, in this profile's mode."""
+        if self.through:
+            return through_profile(seg.length, tau, seg.v0, seg.v1, seg.v_max, self.acceleration_m_s2)
+        return self.at(seg.length, tau)
 
 
 def plan_segments(start: np.ndarray, end: np.ndarray, yaw0: np.ndarray, yaw1: np.ndarray,
-                  profile: Profile) -> Segment:
-    """Segments from ``start`` to ``end`` (n, 3) m turning from ``yaw0`` to ``yaw1`` (n,) rad. A segment
-    lasts the speed profile's time, or longer where the turn needs it at YAW_RATE_REF_RAD_S."""
+                  profile: Profile, v0=None, v1=None, v_max=None) -> Segment:
+    """Segments from ``start`` to ``end`` (n, 3) m turning from ``yaw0`` to ``yaw1`` (n,) rad, in fly-through
+    from speed ``v0`` to ``v1`` with cruise limit ``v_max`` (n,) m/s (None: rest to rest). A segment lasts
+    the speed profile's time, or longer where the turn needs it at YAW_RATE_REF_RAD_S."""
     delta = end - start
     length = np.linalg.norm(delta, axis=1)
     direction = delta / np.maximum(length, 1e-12)[:, None]
     dyaw = wrap_angle(yaw1 - yaw0)
-    duration = profile.at(length, np.zeros_like(length))[3]
-    return Segment(start, end, yaw0, dyaw, length, direction,
-                   np.maximum(duration, np.abs(dyaw) / YAW_RATE_REF_RAD_S))
+    zeros = np.zeros_like(length)
+    seg = Segment(start, end, yaw0, dyaw, length, direction, zeros, zeros if v0 is None else v0,
+                  zeros if v1 is None else v1, zeros if v_max is None else v_max)
+    seg.duration = np.maximum(profile.along(seg, zeros)[3], np.abs(dyaw) / YAW_RATE_REF_RAD_S)
+    return seg
 
 
 # -- reference --------------------------------------------------------------------------------------------
@@ -135,9 +151,9 @@ class Reference(NamedTuple):
 
 def reference(state: FlightState, position: np.ndarray, profile: Profile, leash_m: float) -> Reference:
     """Each flight's reference at its phase time: along the segment in TRANSIT, at the segment's end
-    otherwise. ``position`` (batch, 3) m: the vehicles' centres of mass."""
+    otherwise. ``position`` (batch, 3) m: the vehicles' centres of mass as the navigation estimates them."""
     seg = state.segment
-    s, v, a, _ = profile.at(seg.length, state.phase_time)
+    s, v, a, _ = profile.along(seg, state.phase_time)
     transit = state.phase == TRANSIT
     ref_pos = np.where(transit[:, None], seg.start + seg.direction * s[:, None], seg.end)
     # Leash: a vehicle held back by a head wind is not "lost"; its reference waits for it (what a waypoint
@@ -152,88 +168,83 @@ def reference(state: FlightState, position: np.ndarray, profile: Profile, leash_
     return Reference(ref_pos, ref_vel, ref_acc, seg.yaw0 + seg.dyaw * frac, dist2, held)
 
 
-# -- failures ---------------------------------------------------------------------------------------------
-class Failures(NamedTuple):
-    """lost_time, held_time (batch,) s: the timers after this chunk; cause (batch,) int: the cause code of
-    flights failing now (NO_FAILURE elsewhere)."""
-
-    lost_time: np.ndarray
-    held_time: np.ndarray
-    cause: np.ndarray
-
-
-def check_failures(state: FlightState, position: np.ndarray, velocity: np.ndarray, ref: Reference,
-                   dt_s: float, sec: SimSection, out_of_time: bool) -> Failures:
-    """Flights failing now: lost (beyond ``fail_distance_m`` for longer than ``fail_time_s``), stalled
-    (held by the leash for longer than ``stall_time_s``), ditched (below the sea surface), non-finite
-    state, or still flying when ``out_of_time``. ``position``, ``velocity`` (batch, 3); ``dt_s`` the chunk."""
+# -- how flights end ----------------------------------------------------------------------------------------
+def check_failures(state: FlightState, position: np.ndarray, velocity: np.ndarray, out_of_time: bool) -> np.ndarray:
+    """(batch,) outcome codes of flights failing now (COMPLETED elsewhere): non-finite state, below the sea
+    surface (ditched), or still flying when ``out_of_time``. ``position``, ``velocity`` (batch, 3): true."""
     active = state.flying
-    lost_time = np.where(active & (ref.distance_sq > sec.fail_distance_m ** 2), state.lost_time + dt_s, 0.0)
-    held_time = np.where(ref.held, state.held_time + dt_s, 0.0)
     bad = ~np.isfinite(position.sum(axis=1) + velocity.sum(axis=1))
     ditched = position[:, 2] < 0.0
-    stalled = held_time > sec.stall_time_s
-    lost = lost_time > sec.fail_time_s
-    newly = active & (lost | stalled | ditched | bad)
+    newly = active & (ditched | bad)
     if out_of_time:
         newly |= active
-    cause = np.full(len(newly), NO_FAILURE)
+    cause = np.full(len(newly), COMPLETED)
     if newly.any():     # rare: np.select alone would cost a fifth of this function every chunk
-        first = np.select([bad, ditched, stalled, lost], [NON_FINITE, DITCHED, STALLED, LOST], TIMED_OUT)
+        first = np.select([bad, ditched], [NON_FINITE, DITCHED], TIMED_OUT)
         cause[newly] = first[newly]
-    return Failures(lost_time, held_time, cause)
+    return cause
 
 
-def apply_failures(state: FlightState, failures: Failures, t: float) -> None:
-    """Take the timers, and mark the failing flights FAILED at ``t`` s with their cause."""
-    state.lost_time, state.held_time = failures.lost_time, failures.held_time
-    newly = failures.cause != NO_FAILURE
+def check_returns(state: FlightState, battery_due: np.ndarray, wind_over: np.ndarray) -> np.ndarray:
+    """(batch,) outcome codes of flights the autopilot sends home now: the battery at its reserve (plus the
+    energy home), or its wind estimate over the limit; COMPLETED elsewhere."""
+    active = state.flying
+    return np.where(active & battery_due, RETURNED_BATTERY, np.where(active & wind_over, RETURNED_WIND, COMPLETED))
+
+
+def apply_endings(state: FlightState, cause: np.ndarray, t: float) -> None:
+    """Mark the flights with a cause (not COMPLETED) ENDED at ``t`` s with it."""
+    newly = cause != COMPLETED
     if not newly.any():
         return
-    state.failure = np.where(newly, failures.cause, state.failure)
+    state.outcome = np.where(newly, cause, state.outcome)
     state.flight_time = np.where(newly, t, state.flight_time)
-    state.phase = np.where(newly, FAILED, state.phase)
+    state.phase = np.where(newly, ENDED, state.phase)
 
 
-def failure_reason(cause: int, t: float, view: int, sec: SimSection) -> str:
-    """The text of a failure of cause ``cause`` at ``t`` s before viewpoint ``view`` ("" for NO_FAILURE)."""
+def outcome_reason(cause: int, t: float, view: int, sec: SimSection) -> str:
+    """The text of outcome ``cause`` at ``t`` s before viewpoint ``view`` ("" for COMPLETED)."""
     if cause == NON_FINITE:
         return f"non-finite state at t={t:.2f}s"
     if cause == DITCHED:
         return f"ditched (below sea level) at t={t:.2f}s"
-    if cause == STALLED:
-        return (f"no headway: > {sec.leash_m:g} m behind the reference for "
-                f"> {sec.stall_time_s:g} s at t={t:.2f}s (before view {view})")
-    if cause == LOST:
-        return (f"lost position: > {sec.fail_distance_m:g} m from the reference for "
-                f"> {sec.fail_time_s:g} s at t={t:.2f}s (before view {view})")
     if cause == TIMED_OUT:
         return f"not finished within max_flight_time_s={sec.max_flight_time_s:g}"
+    if cause == RETURNED_BATTERY:
+        return (f"returned home: battery at its reserve ({sec.battery.reserve:g}) plus the energy home at "
+                f"t={t:.2f}s (before view {view})")
+    if cause == RETURNED_WIND:
+        return (f"returned home: wind estimate over {sec.wind_limit_m_s:g} m/s at t={t:.2f}s (before view {view})")
     return ""
 
 
-def failure_reasons(state: FlightState, sec: SimSection) -> tuple[str, ...]:
-    """(batch,) texts of the flights' failures ("" for a completed flight)."""
-    return tuple(failure_reason(c, t, v, sec) for c, t, v in
-                 zip(state.failure.tolist(), state.flight_time.tolist(), state.index.tolist()))
+def outcome_reasons(state: FlightState, sec: SimSection) -> tuple[str, ...]:
+    """(batch,) texts of the flights' outcomes ("" for a completed flight)."""
+    return tuple(outcome_reason(c, t, v, sec) for c, t, v in
+                 zip(state.outcome.tolist(), state.flight_time.tolist(), state.photo.tolist()))
 
 
 # -- phase transitions and the photo trigger ---------------------------------------------------------------
 class Transitions(NamedTuple):
-    """(batch,) bool each: the segment's reference has arrived (TRANSIT -> SETTLE); within the tolerances
-    or out of settle time (SETTLE -> DWELL); dwelt long enough (DWELL -> photo)."""
+    """(batch,) bool each: the segment's reference has arrived at a stop (TRANSIT -> SETTLE); within the
+    tolerances or out of settle time (SETTLE -> DWELL); dwelt long enough (DWELL -> photo); fly-through: the
+    reference has passed a viewpoint without stopping (on to the next segment)."""
 
     to_settle: np.ndarray
     to_dwell: np.ndarray
     trigger: np.ndarray
+    chain: np.ndarray
 
 
 def transitions(state: FlightState, position: np.ndarray, velocity: np.ndarray, yaw: np.ndarray,
-                targets: FlightTargets, sec: SimSection, dwell_s: float) -> Transitions:
-    """The vectorised state machine's moves this chunk; ``position``, ``velocity`` (batch, 3), ``yaw`` (batch,)
-    rad of the vehicles."""
+                targets: FlightTargets, sec: SimSection, dwell_s: float, through: bool) -> Transitions:
+    """The vectorised state machine's moves this chunk, on the navigation's estimate: ``position``,
+    ``velocity`` (batch, 3), ``yaw`` (batch,) rad. In fly-through (``through``) the reference stops only at
+    the last viewpoint."""
     phase, phase_time = state.phase, state.phase_time
-    to_settle = (phase == TRANSIT) & (phase_time >= state.segment.duration)
+    arrived = (phase == TRANSIT) & (phase_time >= state.segment.duration)
+    chain = arrived & (state.index < targets.n_views - 1) if through else np.zeros_like(arrived)
+    to_settle = arrived & ~chain
     yaw_err = wrap_angle(yaw - targets.yaw[np.arange(len(phase)), state.index])
     settled = ((((position - state.segment.end) ** 2).sum(axis=1) < sec.settle_position_m ** 2)
                & ((velocity ** 2).sum(axis=1) < sec.settle_speed_m_s ** 2)
@@ -241,64 +252,78 @@ def transitions(state: FlightState, position: np.ndarray, velocity: np.ndarray, 
     to_dwell = (phase == SETTLE) & (settled | (phase_time >= sec.settle_timeout_s))
     # 1e-9: the dwell is a whole number of chunks, summed in floating point
     trigger = (phase == DWELL) & (phase_time >= dwell_s - 1e-9)
-    return Transitions(to_settle, to_dwell, trigger)
+    return Transitions(to_settle, to_dwell, trigger, chain)
 
 
-class CapturePose(NamedTuple):
-    """Camera at a photo, (n, ...): position (n, 3) m, yaw (n,) rad (the airframe's), pitch (n,) rad the
-    gimbal achieved, residual_roll (n,) rad beyond the gimbal's roll range, saturated (n,) bool."""
+def passing_views(state: FlightState, position: np.ndarray, targets: FlightTargets
+                  ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+    """Fly-through trigger: (rows (m,) int, distance past the view's plane (m,) m, the plane's unit normal
+    (m, 3), skipped rows (k,) int).
 
-    position: np.ndarray
-    yaw: np.ndarray
-    pitch: np.ndarray
-    residual_roll: np.ndarray
-    saturated: np.ndarray
+    A flight's next view (1 .. last, the reference at or past it) is passed when its estimated ``position``
+    (batch, 3) crosses the view's plane: through the view's target, normal to the bisector of the arriving and
+    the leaving leg (the mitre of the corner: a vehicle rounding the corner crosses it; at the last view, or a
+    U-turn, normal to the arriving leg). A view whose plane the vehicle has not crossed by the time the
+    reference is two views further on is skipped: a missed trigger, the photo is not taken."""
+    n = targets.n_views
+    rows = np.arange(len(state.phase))
+    view = np.minimum(state.photo, n - 1)
+    candidate = state.flying & (state.photo >= 1) & (state.photo < n) & (state.photo <= state.index)
+    target = targets.body[rows, view]
+    arriving = _unit(target - targets.body[rows, np.maximum(view - 1, 0)])
+    leaving = _unit(targets.body[rows, np.minimum(view + 1, n - 1)] - target)
+    mitre = arriving + leaving
+    norm = np.sqrt((mitre ** 2).sum(axis=1))
+    normal = np.where((norm > 1e-6)[:, None], mitre / np.maximum(norm, 1e-12)[:, None], arriving)
+    past = ((position - target) * normal).sum(axis=1)
+    hit = candidate & (past >= 0.0)
+    skipped = candidate & ~hit & (state.index >= state.photo + 2)
+    hits = np.flatnonzero(hit)
+    return hits, past[hits], normal[hits], np.flatnonzero(skipped)
 
 
-def capture_pose(position: np.ndarray, rot: np.ndarray, yaw: np.ndarray, wanted_pitch: np.ndarray,
-                 params: QuadrotorParams) -> CapturePose:
-    """Where the camera really is: body ``position`` (n, 3) m, attitude ``rot`` (n, 3, 3) world from body,
-    heading ``yaw`` (n,) rad, planned gimbal pitch ``wanted_pitch`` (n,) rad."""
-    lo_pitch, hi_pitch = params.gimbal_pitch_range_rad
-    lo_roll, hi_roll = params.gimbal_roll_range_rad
-    cam_pos = position + rot @ np.asarray(params.camera_offset_m)
-    # gimbal: joint angle = wanted world pitch - elevation of the nose, within its range
-    nose_elev = np.arcsin(np.clip(rot[:, 2, 0], -1, 1))
-    pitch = np.clip(wanted_pitch - nose_elev, lo_pitch, hi_pitch) + nose_elev
-    roll = np.arcsin(np.clip(rot[:, 2, 1], -1, 1))
-    residual = roll - np.clip(roll, lo_roll, hi_roll)
-    saturated = (np.abs(pitch - wanted_pitch) > 1e-9) | (residual != 0.0)
-    return CapturePose(cam_pos, yaw, pitch, residual, saturated)
+def _unit(v: np.ndarray) -> np.ndarray:
+    """Rows of ``v`` (n, 3) scaled to unit length (zero rows stay zero)."""
+    return v / np.maximum(np.sqrt((v ** 2).sum(axis=1)), 1e-12)[:, None]
 
 
-def take_photos(state: FlightState, targets: FlightTargets, rows: np.ndarray, position: np.ndarray,
-                rot: np.ndarray, yaw: np.ndarray, t: float, profile: Profile, params: QuadrotorParams) -> None:
-    """Flights ``rows`` (m,) int take their current view at ``t`` s from the true state (``position``
-    (batch, 3) m, ``rot`` (>= batch, 3, 3), ``yaw`` (batch,) rad); then they are DONE after the last view,
-    or start the segment to the next one."""
+def take_photos(state: FlightState, targets: FlightTargets, rows: np.ndarray, shot: Shot) -> None:
+    """Flights ``rows`` (m,) int take their next photo (``state.photo``), the :class:`Shot` of m rows."""
     if not rows.size:
         return
-    view = state.index[rows]
-    pose = capture_pose(position[rows], rot[rows], yaw[rows], targets.plan_pitch[view], params)
-    state.captures.record(rows, view, pose, targets, t)
-    state.flight_time[rows] = t
-    last = view == targets.n_views - 1
+    view = state.photo[rows]
+    state.captures.record(rows, view, shot, targets)
+    state.flight_time[rows] = shot.time
+    state.photo[rows] = view + 1
+
+
+def advance(state: FlightState, targets: FlightTargets, rows: np.ndarray, profile: Profile) -> None:
+    """Flights ``rows`` (m,) int are DONE after the last viewpoint, or start the segment to the next one."""
+    if not rows.size:
+        return
+    last = state.index[rows] == targets.n_views - 1
     state.phase[rows[last]] = DONE
     nxt = rows[~last]
-    if nxt.size:
-        k1 = state.index[nxt] + 1
-        state.segment.assign(nxt, plan_segments(state.segment.end[nxt], targets.body[nxt, k1],
-                                                targets.yaw[nxt, k1 - 1], targets.yaw[nxt, k1], profile))
-        state.index[nxt] = k1
-        state.phase[nxt] = TRANSIT
+    if not nxt.size:
+        return
+    k1 = state.index[nxt] + 1
+    speeds = {}
+    if profile.through:
+        speeds = dict(v0=targets.vertex_speed[nxt, k1 - 1], v1=targets.vertex_speed[nxt, k1],
+                      v_max=targets.leg_speed[nxt, k1 - 1])
+    state.segment.assign(nxt, plan_segments(state.segment.end[nxt], targets.body[nxt, k1],
+                                            targets.yaw[nxt, k1 - 1], targets.yaw[nxt, k1], profile, **speeds))
+    state.index[nxt] = k1
+    state.phase[nxt] = TRANSIT
 
 
 def apply_transitions(state: FlightState, moves: Transitions) -> None:
     """Move the flights to SETTLE / DWELL and restart the phase clock of every flight that moved (the
-    triggered ones included: :func:`take_photos` set their new phase)."""
+    triggered and chained ones included: :func:`advance` set their new phase)."""
     state.phase = np.where(moves.to_settle, SETTLE, state.phase)
     state.phase = np.where(moves.to_dwell, DWELL, state.phase)
-    state.phase_time = np.where(moves.trigger | moves.to_settle | moves.to_dwell, 0.0, state.phase_time)
+    state.phase_time = np.where(moves.trigger | moves.to_settle | moves.to_dwell | moves.chain, 0.0,
+                                state.phase_time)
 
 
 def tick(state: FlightState, ref: Reference, dt_s: float) -> None:
@@ -318,16 +343,19 @@ class Setpoint(NamedTuple):
     integrate: np.ndarray
 
 
-def setpoints(ref: Reference, phase: np.ndarray, filler_position: np.ndarray) -> Setpoint:
+def setpoints(ref: Reference, phase: np.ndarray, filler_position: np.ndarray, yaw_error: np.ndarray) -> Setpoint:
     """The flights' reference followed by the fillers' (hover at ``filler_position`` (padded - batch, 3) m,
-    heading 0). The integral grows only while the reference is at rest (conditional integration, README.md)."""
+    heading 0). The integral grows only while the reference is at rest (conditional integration, README.md).
+    ``yaw_error`` (batch,) rad: the navigation's heading error; the attitude loop turns the airframe to where
+    its estimated heading is the reference's, i.e. the true heading is the reference minus the error."""
     integrate = phase != TRANSIT
+    yaw = ref.yaw - yaw_error
     n = len(filler_position)
     if not n:     # the usual case, a batch filling its models: no copies
-        return Setpoint(ref.position, ref.velocity, ref.acceleration, ref.yaw, integrate)
+        return Setpoint(ref.position, ref.velocity, ref.acceleration, yaw, integrate)
     zeros = np.zeros((n, 3))
     return Setpoint(np.concatenate([ref.position, filler_position]), np.concatenate([ref.velocity, zeros]),
-                    np.concatenate([ref.acceleration, zeros]), np.concatenate([ref.yaw, np.zeros(n)]),
+                    np.concatenate([ref.acceleration, zeros]), np.concatenate([yaw, np.zeros(n)]),
                     np.concatenate([integrate, np.ones(n, dtype=bool)]))
 
 

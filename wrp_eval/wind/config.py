@@ -58,8 +58,28 @@ class GustSection(StrictModel):
     horizon_s: float = Field(1800.0, gt=0, description="gusts are drawn over [0, horizon_s]")
 
 
+class AirWakeSection(StrictModel):
+    """The ship's air wake (:mod:`wrp_eval.wind.air_wake`): the mean wind is reduced and the turbulence raised
+    in the lee of the hull box. The box comes from the ship's particulars: with only a pose (lat, lon, heading)
+    there is no hull and the wake is skipped, whatever ``enabled`` says.
+
+    Defaults from the PRIME building-wake model (Schulman, Strimaitis & Scire 2000, J. Air & Waste Manage.
+    Assoc. 50:378-390; EPA AERMOD ``prime.f``): near-wake speed deficit dU/U = 0.7 and wake factor 1.7 on
+    sigma_v, sigma_w (Weil 1996); wake influence limited to 15 scale lengths R."""
+
+    enabled: bool = Field(True, description="model the wake when the hull (ShipParticulars) is known")
+    lee_deficit: float = Field(0.7, ge=0, le=1.3, description="fraction of the mean wind removed in the "
+                               "recirculation cavity (PRIME dU/U = 0.7; > 1 reverses the mean flow, up to the "
+                               "0.3 U return flow Drivas & Shair 1974 measured)")
+    turbulence_ratio: float = Field(1.7, ge=1, le=5, description="turbulence sigma in the cavity / free-stream "
+                                    "sigma at the same height (Weil 1996 wake factor 1.7); 5: sanity bound")
+    extent_scale_lengths: float = Field(15.0, gt=0, le=50, description="wake length past the cavity end, in "
+                                        "Wilson scale lengths R (PRIME limits wake effects to 15 R)")
+
+
 class WindSection(StrictModel):
-    """Mean field (synthetic, WRF or MM5-as-netCDF) + turbulence + gusts, and how it is interpolated."""
+    """Mean field (synthetic, WRF or MM5-as-netCDF) + turbulence + gusts + the ship's air wake, and how it is
+    interpolated."""
 
     source: Literal["synthetic", "wrf", "mm5"] = "synthetic"
     file: str | None = Field(None, description="netCDF file for source wrf / mm5")
@@ -80,6 +100,7 @@ class WindSection(StrictModel):
     grid: WindGridSection = WindGridSection()
     turbulence: TurbulenceSection = TurbulenceSection()
     gusts: GustSection = GustSection()
+    air_wake: AirWakeSection = AirWakeSection()
 
     @model_validator(mode="after")
     def _check(self) -> "WindSection":

@@ -32,6 +32,7 @@ from collections.abc import Sequence
 import numpy as np
 from scipy.signal import lfilter
 
+from wrp_eval.streams import BlockNormals, flight_generators
 from wrp_eval.wind.boundary_layer import log_law_factor
 
 FT_M = 0.3048
@@ -109,18 +110,6 @@ def _discrete_lyapunov_2x2(F: np.ndarray, Q: np.ndarray) -> np.ndarray:
     return 0.5 * (P + np.swapaxes(P, -1, -2))
 
 
-def flight_generators(rngs, n_flights: int) -> list[np.random.Generator]:
-    """One Generator per flight: ``rngs`` is a seed / SeedSequence / None (spawned), a Generator (spawned),
-    or already a sequence of ``n_flights`` Generators."""
-    if isinstance(rngs, (int, np.integer, np.random.SeedSequence)) or rngs is None:
-        rngs = np.random.default_rng(rngs).spawn(n_flights)
-    elif isinstance(rngs, np.random.Generator):
-        rngs = rngs.spawn(n_flights)
-    if len(rngs) != n_flights:
-        raise ValueError(f"got {len(rngs)} generators for {n_flights} flights")
-    return list(rngs)
-
-
 class DrydenTurbulence:
     """Dryden turbulence for a batch of ``n_flights`` flights, each with its own random stream.
 
@@ -147,8 +136,7 @@ class DrydenTurbulence:
         self.w20_mps = np.broadcast_to(np.asarray(w20, dtype=float), (n_flights,)).copy()
         self.airspeed_floor_mps = float(airspeed_floor_mps)
         self.block_steps = int(block_steps)
-        self._noise = np.empty((n_flights, 0, 3))
-        self._cursor = 0
+        self._noise = BlockNormals(self.rngs, n_flights, 3, self.block_steps)
         self.state_u = None            # (n,)
         self.state_vw = None           # (n, 2, 2): [axis v/w, (x1, x2)]
         self.t_s: float | None = None
@@ -167,17 +155,7 @@ class DrydenTurbulence:
     # --- noise ---------------------------------------------------------------------------------------
     def _draw(self, n_steps: int) -> np.ndarray:
         """Unit normals (n, n_steps, 3) from each flight's own generator, in stream order."""
-        out = np.empty((self.n_flights, n_steps, 3))
-        filled = 0
-        while filled < n_steps:
-            if self._cursor >= self._noise.shape[1]:
-                self._noise = np.stack([g.standard_normal((self.block_steps, 3)) for g in self.rngs])
-                self._cursor = 0
-            take = min(n_steps - filled, self._noise.shape[1] - self._cursor)
-            out[:, filled:filled + take] = self._noise[:, self._cursor:self._cursor + take]
-            self._cursor += take
-            filled += take
-        return out
+        return self._noise.draw(n_steps)
 
     def _initialise(self, tau: np.ndarray) -> None:
         """Draw each flight's state from the stationary distribution of its discrete filters."""

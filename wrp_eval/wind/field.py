@@ -1,4 +1,5 @@
-"""The wind the simulator flies through: mean field + Dryden turbulence + optional gusts, batch-first.
+"""The wind the simulator flies through: mean field + Dryden turbulence + optional gusts, batch-first, in the
+ship's air wake when the hull is known.
 
 ``build_wind_field(sections, ship, flight_rngs, dt_s, base_dir)`` turns one ``wind:`` section per flight into
 ONE :class:`WindField` for the whole batch (a single flight is a batch of one); ``WindField.velocity(points,
@@ -17,13 +18,16 @@ from pathlib import Path
 import numpy as np
 
 from wrp_eval.frames import ship_pose
+from wrp_eval.ship.particulars import ShipParticulars
+from wrp_eval.ship.proxy import build_proxy
+from wrp_eval.streams import flight_generators
+from wrp_eval.wind.air_wake import ShipAirWake
 from wrp_eval.wind.base import WindModel
 from wrp_eval.wind.boundary_layer import synthetic_marine_grid
 from wrp_eval.wind.config import WindGridSection, WindSection
 from wrp_eval.wind.dryden import (
     FT_M,
     DrydenTurbulence,
-    flight_generators,
     severity_w20_mps,
 )
 from wrp_eval.wind.grid import GriddedMeanWind, WindGrid
@@ -35,23 +39,42 @@ TWENTY_FT_M = 20.0 * FT_M
 
 @dataclass
 class WindField:
-    """``velocity(points, t) -> (n, 3)`` m/s, world (ship) frame = mean + turbulence + gusts.
+    """``velocity(points, t) -> (n, 3)`` m/s, world (ship) frame = mean + turbulence + gusts, or in the ship's
+    air wake ``mean (1 - deficit) + gain turbulence + (1 - deficit) gusts``.
 
     With turbulence, gusts or flights in different mean fields, ``points`` must have one row per flight
     (n_flights, 3) and t must not decrease between calls; a mean field shared by every flight takes any (n, 3).
+    The wake (:class:`wrp_eval.wind.air_wake.ShipAirWake`) is oriented row by row by the free-stream mean wind
+    at the point. The Dryden filters keep seeing the free-stream mean (their axes and frozen-field speed), so
+    the turbulence stays continuous across the wake edge and the wake only scales it. Gusts are sheltered
+    like the mean wind (quasi-steady: the wake's speed scales with the approach speed, gusts included).
     """
 
     mean: WindModel
     turbulence: DrydenTurbulence | None = None
     gusts: OneMinusCosineGusts | None = None
+    wake: ShipAirWake | None = None
 
     def velocity(self, points: np.ndarray, t: float) -> np.ndarray:
         points = np.asarray(points, dtype=float)
         wind = self.mean.velocity(points, t)
+        if self.wake is not None:
+            return self._in_wake(points, t, wind)
         if self.turbulence is not None:
             wind = wind + self.turbulence.velocity(points, t, mean_wind=wind)
         if self.gusts is not None:
             wind = wind + self.gusts.velocity(points, t)
+        return wind
+
+    def _in_wake(self, points: np.ndarray, t: float, mean: np.ndarray) -> np.ndarray:
+        """The wind at points (n, 3) whose free-stream mean wind is ``mean`` (n, 3), in the air wake."""
+        deficit, gain = self.wake.factors(points, mean)
+        kept = (1.0 - deficit)[:, None]
+        wind = mean * kept
+        if self.turbulence is not None:
+            wind = wind + gain[:, None] * self.turbulence.velocity(points, t, mean_wind=mean)
+        if self.gusts is not None:
+            wind = wind + kept * self.gusts.velocity(points, t)
         return wind
 
 
@@ -100,7 +123,8 @@ def build_mean_wind(sections: Sequence[WindSection], ship, base_dir: str | Path 
     dumped: dict[int, str] = {}   # a batch often repeats one section object: dump each object once
     for s in sections:
         if id(s) not in dumped:
-            dumped[id(s)] = s.model_dump_json(exclude={"turbulence", "gusts", "interpolation", "idw_power", "clamp"})
+            dumped[id(s)] = s.model_dump_json(exclude={"turbulence", "gusts", "air_wake", "interpolation",
+                                                          "idw_power", "clamp"})
     keys = [dumped[id(s)] for s in sections]
     first: dict[str, int] = {}                                   # distinct field -> its first flight
     for i, k in enumerate(keys):
@@ -133,15 +157,27 @@ def flight_w20_mps(sections: Sequence[WindSection], at_20ft: np.ndarray) -> np.n
     return w20
 
 
+def build_air_wake(sections: Sequence[WindSection], ship) -> ShipAirWake | None:
+    """The batch's air wake (the flights share ``wind.air_wake``), or None when it is disabled or ``ship`` has
+    no hull: a :class:`ShipPose` or (lat, lon, heading) has no box, so the wake is skipped (documented in the
+    wind README; the ship-less benchmarks and grid samples build fields that way). The box is the proxy of the
+    true ship (no ``height_error``): the wind blows around the real hull."""
+    settings = _shared(sections, "air_wake", lambda s: s.air_wake)
+    if not settings.enabled or not isinstance(ship, ShipParticulars):
+        return None
+    return ShipAirWake.from_section(build_proxy(ship).bounds, settings)
+
+
 def build_wind_field(sections: Sequence[WindSection], ship, flight_rngs, dt_s: float = 0.01,
                      base_dir: str | Path | None = None) -> WindField:
     """ONE :class:`WindField` for a batch of F = len(sections) flights stepping by ``dt_s`` seconds.
 
     sections: flight i's ``wind:`` section (e.g. the config's for every flight, or each campaign trial's
-    drawn one); flights must share the interpolation, the airspeed floor and the gust settings.
-    ship: ShipParticulars, ShipPose or (lat, lon, heading) (:func:`wrp_eval.frames.ship_pose`).
+    drawn one); flights must share the interpolation, the airspeed floor, the gust and the air-wake settings.
+    ship: ShipParticulars, ShipPose or (lat, lon, heading) (:func:`wrp_eval.frames.ship_pose`); with
+    ShipParticulars and ``air_wake.enabled`` the field carries the ship's air wake (:func:`build_air_wake`).
     flight_rngs: one Generator per flight, or a seed / SeedSequence / Generator the F are spawned from
-    (:func:`wrp_eval.wind.dryden.flight_generators`). Flight i's generator is split in two, turbulence then
+    (:func:`wrp_eval.streams.flight_generators`). Flight i's generator is split in two, turbulence then
     gusts, so flight i's wind depends only on its section and its generator.
     base_dir: the folder relative netCDF files are resolved against.
     """
@@ -163,7 +199,7 @@ def build_wind_field(sections: Sequence[WindSection], ship, flight_rngs, dt_s: f
         azimuth = np.arctan2(at_20ft[:, 1], at_20ft[:, 0])                         # (F,) mean-wind azimuth
         gusts = OneMinusCosineGusts(n, [s[1] for s in streams], g.horizon_s, g.rate_per_min, g.amplitude_mps,
                                     g.duration_s, azimuth, g.direction_spread_deg)
-    return WindField(mean, turbulence, gusts)
+    return WindField(mean, turbulence, gusts, build_air_wake(sections, ship))
 
 
 def sample_mean_field(section: WindSection, ship, base_dir: str | Path | None = None):

@@ -13,7 +13,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from wrp_eval.wind.dryden import flight_generators
+from wrp_eval.streams import flight_generators
 
 
 class OneMinusCosineGusts:

@@ -1,0 +1,166 @@
+"""Fly-through capture: the v0 -> v1 speed profile between viewpoints, the planned speed at each viewpoint and the
+shutter time of a view whose plane was crossed within the last chunk."""
+
+import numpy as np
+import pytest
+from pydantic import ValidationError
+
+from wrp_eval.sim.capture_mode import (
+    CaptureSection,
+    crossed,
+    shutter_offset,
+    through_profile,
+    vertex_speeds,
+)
+from wrp_eval.sim.phases import YAW_RATE_REF_RAD_S, reference_profile
+
+A = 2.5      # m/s^2, the default reference acceleration
+
+
+# -- through_profile ---------------------------------------------------------------------------------------
+@pytest.mark.parametrize("length,v0,v1,v_max", [
+    (10.0, 2.0, 1.0, 5.0),       # accelerate, cruise, decelerate
+    (2.0, 1.0, 1.5, 5.0),        # too short for the cruise speed: a triangle
+    (20.0, 5.0, 5.0, 5.0),       # cruise all along
+    (3.0, 0.0, np.sqrt(2 * A * 3.0), 8.0),  # the end speed is just reachable: accelerate all along
+    (30.0, 0.0, 0.0, 5.0),       # rest to rest
+])
+def test_through_profile_is_one_consistent_trajectory(length, v0, v1, v_max):
+    dt = 1e-4
+    n = 200_000
+    tau = np.arange(n) * dt
+    s, v, a, duration = through_profile(np.full(n, length), tau, np.full(n, v0), np.full(n, v1), np.full(n, v_max), A)
+    end = duration[0]
+    assert end < tau[-1]
+    inside = tau < end
+    interior = (tau > dt) & (tau < end - dt)
+    # s' = v, v' = a (central differences, away from the ends and the acceleration's jumps)
+    assert np.abs(np.gradient(s, dt) - v)[interior].max() < 1e-3
+    smooth = np.abs(np.gradient(a, dt)) < 1.0
+    assert np.abs(np.gradient(v, dt) - a)[interior & smooth].max() < 1e-6
+    # the end conditions and the limits
+    assert s[0] == 0.0 and v[0] == pytest.approx(v0)
+    assert s[~inside][0] == pytest.approx(length) and v[~inside] == pytest.approx(np.full((~inside).sum(), v1))
+    assert v.max() <= max(v_max, v0, v1) + 1e-9 and np.abs(a).max() <= A + 1e-9
+    assert np.all(np.diff(s) >= -1e-12)                     # never backwards
+    # the integral of the speed is the length: duration = length / mean speed
+    assert np.trapezoid(v[inside], tau[inside]) == pytest.approx(length, rel=1e-3)
+
+
+def test_rest_to_rest_through_profile_is_the_stop_modes_trapezoid():
+    tau = np.linspace(0.0, 12.0, 2001)
+    length = np.full_like(tau, 17.0)
+    zero = np.zeros_like(tau)
+    s, v, a, duration = through_profile(length, tau, zero, zero, np.full_like(tau, 5.0), A)
+    s_ref, v_ref, a_ref, d_ref = reference_profile(length, tau, 5.0, A, 0.0)
+    assert duration == pytest.approx(d_ref) and s == pytest.approx(s_ref) and v == pytest.approx(v_ref)
+    moving = tau < duration
+    assert a[moving] == pytest.approx(a_ref[moving])
+
+
+def test_after_its_end_the_through_profile_holds_v1_without_acceleration():
+    # the flight loop asks for the reference at phase_time >= duration for one chunk before it chains to the
+    # next segment (or settles at the last view): the feed-forward must then be v1 and no acceleration
+    n = 3
+    args = np.full(n, 10.0), np.zeros(n), np.full(n, 2.0), np.full(n, 1.0), np.full(n, 5.0), A
+    tau = through_profile(*args)[3] + [0.05, 1.0, 40.0]      # one chunk, 1 s and 40 s after the end
+    s, v, a, _ = through_profile(args[0], tau, *args[2:])
+    assert s == pytest.approx(np.full(n, 10.0)) and v == pytest.approx(np.full(n, 1.0))
+    assert a == pytest.approx(np.zeros(n))
+
+
+def test_through_profile_at_cruise_takes_length_over_speed():
+    _, _, _, duration = through_profile(np.array([12.0]), np.zeros(1), np.array([4.0]), np.array([4.0]),
+                                        np.array([4.0]), A)
+    assert duration[0] == pytest.approx(3.0)
+
+
+# -- vertex_speeds ------------------------------------------------------------------------------------------
+def test_a_straight_line_is_flown_at_cruise_through_its_interior_views():
+    body = np.stack([np.linspace(0.0, 200.0, 5), np.zeros(5), np.full(5, 20.0)], axis=1)[None]
+    speed, leg = vertex_speeds(body, np.zeros((1, 5)), 5.0, A, YAW_RATE_REF_RAD_S, 2.0)
+    assert speed.tolist() == [[0.0, 5.0, 5.0, 5.0, 0.0]]
+    assert leg.tolist() == [[5.0] * 4]
+
+
+def test_a_right_angle_corner_is_taken_at_the_arc_speed():
+    # the arc tangent to both legs R from the corner has radius r = R / tan(theta / 2) (tangent length of a
+    # circular curve, T = r tan(theta / 2)); the speed with centripetal acceleration a is sqrt(a r)
+    radius = 2.0
+    body = np.array([[[0.0, 0.0, 20.0], [100.0, 0.0, 20.0], [100.0, 100.0, 20.0]]])
+    speed, _ = vertex_speeds(body, np.zeros((1, 3)), 20.0, A, YAW_RATE_REF_RAD_S, radius)
+    assert speed[0, 1] == pytest.approx(np.sqrt(A * radius / np.tan(np.radians(45.0))))
+    # a sharper turn (120 deg) is slower, a gentler one (30 deg) faster
+    turns = np.radians([120.0, 30.0])
+    third = 100.0 * np.stack([1.0 + np.cos(turns), np.sin(turns), np.zeros(2)], axis=1) + [0.0, 0.0, 20.0]
+    bodies = np.stack([np.tile(body[0, :2], (2, 1, 1))[i].tolist() + [third[i].tolist()] for i in range(2)])
+    speed2, _ = vertex_speeds(bodies, np.zeros((2, 3)), 20.0, A, YAW_RATE_REF_RAD_S, radius)
+    assert speed2[:, 1] == pytest.approx(np.sqrt(A * radius / np.tan(turns / 2.0)))
+    assert speed2[0, 1] < speed[0, 1] < speed2[1, 1]
+
+
+def test_a_heading_change_caps_the_legs_speed_at_the_reference_yaw_rate():
+    body = np.array([[[0.0, 0.0, 20.0], [10.0, 0.0, 20.0], [14.0, 0.0, 20.0], [24.0, 0.0, 20.0]]])
+    yaw = np.array([[0.0, 0.0, np.pi / 2, np.pi / 2]])        # turn 90 deg on the 4 m middle leg
+    speed, leg = vertex_speeds(body, yaw, 5.0, A, YAW_RATE_REF_RAD_S, 2.0)
+    cap = 4.0 * YAW_RATE_REF_RAD_S / (np.pi / 2)              # the leg lasts the turn at 60 deg/s: 1.5 s
+    assert cap < 5.0 and leg[0] == pytest.approx([5.0, cap, 5.0])
+    assert speed[0] == pytest.approx([0.0, cap, cap, 0.0])
+    # flown at its cap the middle leg lasts at least the turn's time
+    duration = through_profile(np.array([4.0]), np.zeros(1), speed[:, 1], speed[:, 2], leg[:, 1], A)[3]
+    assert duration[0] >= (np.pi / 2) / YAW_RATE_REF_RAD_S - 1e-9
+
+
+def test_vertex_speeds_are_reachable_with_the_acceleration_limit():
+    rng = np.random.default_rng(8)
+    batch, n = 6, 12
+    body = np.cumsum(rng.normal(0.0, 6.0, (batch, n, 3)), axis=1)
+    body[:, 3] = body[:, 2]                                   # a zero-length leg: stop there
+    yaw = rng.uniform(-np.pi, np.pi, (batch, n))
+    speed, leg = vertex_speeds(body, yaw, 5.0, A, YAW_RATE_REF_RAD_S, 2.0)
+    length = np.linalg.norm(np.diff(body, axis=1), axis=2)
+    assert np.all(speed[:, [0, -1]] == 0.0) and np.all(speed[:, 2:4] == 0.0)
+    assert np.all(speed[:, 1:] ** 2 <= speed[:, :-1] ** 2 + 2 * A * length + 1e-9)     # forward
+    assert np.all(speed[:, :-1] ** 2 <= speed[:, 1:] ** 2 + 2 * A * length + 1e-9)     # backward
+    assert np.all(speed[:, 1:-1] <= np.minimum(leg[:, :-1], leg[:, 1:]) + 1e-12) and np.all(leg <= 5.0)
+    # every leg then takes at least its heading change's time at the reference yaw rate
+    dyaw = np.abs((np.diff(yaw, axis=1) + np.pi) % (2 * np.pi) - np.pi)
+    duration = through_profile(length.ravel(), np.zeros(length.size), speed[:, :-1].ravel(), speed[:, 1:].ravel(),
+                               leg.ravel(), A)[3].reshape(length.shape)
+    moving = length > 1e-6
+    assert np.all(duration[moving] >= dyaw[moving] / YAW_RATE_REF_RAD_S - 1e-9)
+    # flights are planned independently: row 2 alone is row 2 of the batch
+    alone, _ = vertex_speeds(body[2:3], yaw[2:3], 5.0, A, YAW_RATE_REF_RAD_S, 2.0)
+    assert np.array_equal(alone[0], speed[2])
+
+
+# -- trigger and shutter ------------------------------------------------------------------------------------
+def test_the_shutter_opens_the_latency_after_the_interpolated_crossing():
+    chunk, latency = 0.05, 0.05
+    speed = np.array([5.0, 2.0, 5.0, 0.0])
+    past = np.array([0.1, 0.0, 1.0, 0.3])
+    offset = shutter_offset(past, speed, chunk, latency)
+    # crossed 0.02 s ago; just now; longer ago than a chunk (clipped to it); not moving along (a whole chunk)
+    assert offset == pytest.approx([0.03, 0.05, 0.0, 0.0])
+    # at constant speed the shutter is latency x speed past the plane, wherever the chunk boundary fell
+    x_now = np.array([0.0, 0.04, 0.11, 0.2499])
+    at_shutter = x_now + 5.0 * shutter_offset(x_now, np.full(4, 5.0), chunk, latency)
+    assert at_shutter == pytest.approx(np.full(4, 5.0 * latency))
+
+
+def test_crossing_the_views_plane_perpendicular_to_the_arriving_leg():
+    target = np.array([[10.0, 0.0, 20.0]] * 3)
+    previous = np.array([[0.0, 0.0, 20.0]] * 3)
+    position = np.array([[9.5, 3.0, 18.0], [10.2, -1.0, 25.0], [10.0, 0.0, 20.0]])
+    hit, past = crossed(position, target, previous)
+    assert hit.tolist() == [False, True, True] and past == pytest.approx([-0.5, 0.2, 0.0])
+
+
+def test_the_capture_section_rejects_bad_values():
+    assert CaptureSection().mode == "fly-through"
+    with pytest.raises(ValidationError, match="exposure_s"):
+        CaptureSection(exposure_s=0.0)
+    with pytest.raises(ValidationError, match="mode"):
+        CaptureSection(mode="hover")
+    with pytest.raises(ValidationError, match="trigger_latency_s"):
+        CaptureSection(trigger_latency_s=-0.01)

@@ -1,0 +1,135 @@
+"""``wrp-eval bench --only capture``: what the flight does to the photos (issue 16's figures).
+
+capture.hover_p95_m.<preset>: a calm-air hover (60 s, 256 flights, each with its own navigation errors), the
+95th percentile of the horizontal TRUE position error over the second half, all flights pooled; anchor: the
+preset's specification (:func:`wrp_eval.sim.navigation.hover_p95_spec_m`, e.g. the Phantom 4's +-1.5 m).
+
+For U10 = 0, 4, 8, 12 m/s (moderate Dryden turbulence, directions uniform, 64 flights each) the quickstart
+experiment's path is flown as planned (the ``physical`` design) with the default settings, as a campaign (2
+workers, the synthetic oracle): capture.position_offset_median_m.u<U> (median over the views taken of the
+true camera position's distance from the plan, in the ship's frame), capture.yaw_offset_median_deg.u<U>,
+capture.blur_px_p95.u<U>, capture.views_taken_fraction.u<U>, capture.error_mean_mm.u<U> /
+capture.error_std_mm.u<U> (the oracle's reconstruction error over the trials it scored).
+capture.offset_lag_corr: at U10 = 4, the correlation of the horizontal capture errors (dx with dx, dy with dy)
+of pairs of views of one flight taken less than 30 s apart.
+"""
+
+from __future__ import annotations
+
+import tempfile
+from pathlib import Path
+
+import numpy as np
+
+from wrp_eval.bench_record import BenchRecord
+from wrp_eval.campaign.jobs import campaign_job
+from wrp_eval.campaign.records import column_array
+from wrp_eval.campaign.store import TrialStore
+from wrp_eval.config import ExperimentConfig
+from wrp_eval.experiment import ExperimentContext
+from wrp_eval.sim.config import SimSection
+from wrp_eval.sim.flight import FlightSimulator
+from wrp_eval.sim.navigation import hover_p95_spec_m, navigation_params
+from wrp_eval.sim.simple_wind import ConstantWind
+
+PRESETS = ("ideal", "rtk", "consumer", "px4-sitl")
+SPEEDS = (0, 4, 8, 12)
+HOVER_FLIGHTS, HOVER_S = 256, 60.0
+FLIGHTS_PER_SPEED = 64
+LAG_S = 30.0
+
+
+def hover_p95_m(section: SimSection, flights: int = HOVER_FLIGHTS, duration_s: float = HOVER_S) -> float:
+    """The horizontal true position error's 95th percentile (m) of a calm hover, second half pooled."""
+    with FlightSimulator(section) as sim:
+        result = sim.hover(ConstantWind(np.zeros(3)), [0.0, 0.0, 30.0], 0.0, duration_s, batch=flights,
+                           flight_rngs=np.random.SeedSequence(16).spawn(flights))
+    tr = result.trajectory
+    half = slice(len(tr.time) // 2, None)
+    err = tr.position[:, half, :2] - tr.reference[:, half, :2]
+    return float(np.percentile(np.hypot(err[..., 0], err[..., 1]), 95))
+
+
+def lag_correlation(offsets: np.ndarray, times: np.ndarray, lag_s: float = LAG_S) -> float:
+    """Correlation of the horizontal errors of view pairs of one flight less than ``lag_s`` apart.
+    offsets (trials, n_views, 4); times (trials, n_views) s (NaN: not taken)."""
+    i, j = np.triu_indices(offsets.shape[1], k=1)
+    close = np.abs(times[:, i] - times[:, j]) < lag_s                      # (trials, pairs), NaN -> False
+    a = np.concatenate([offsets[:, i, 0][close], offsets[:, i, 1][close]])
+    b = np.concatenate([offsets[:, j, 0][close], offsets[:, j, 1][close]])
+    return float(np.corrcoef(a, b)[0, 1])
+
+
+def _campaign(ctx: ExperimentContext, speed: float, out: Path):
+    doc = ctx.config.model_dump(mode="json")
+    doc["campaign"].update({"n_trials": FLIGHTS_PER_SPEED, "seed": 16,
+                            "wind": {**doc["campaign"]["wind"], "speed_10m_m_s": float(speed),
+                                     "direction_deg": {"dist": "uniform", "low": 0.0, "high": 360.0},
+                                     "turbulence": {"severity": "moderate", "sigma_w_mps": None}},
+                            "perturbation": {"design": "physical"}})
+    doc["campaign"]["backend"].update({"kind": "local", "workers": 2})
+    doc["campaign"]["outputs"].update({"dir": str(out), "rerun": False})
+    summary = campaign_job(ctx.with_config(ExperimentConfig.model_validate(doc)), progress=False)
+    return summary, TrialStore(out).read_table()
+
+
+def _speed_records(speed: int, summary, table) -> tuple[list[BenchRecord], np.ndarray, np.ndarray]:
+    offsets = column_array(table, "flown_offsets")
+    blur = column_array(table, "blur_px")
+    times = column_array(table, "capture_time_s")
+    error_mm = 1e3 * table.column("error_m").to_numpy(zero_copy_only=False).astype(float)
+    scored = error_mm[np.isfinite(error_mm)]
+    taken = np.isfinite(offsets[..., 0])
+    outcome = [str(x) for x in table.column("flight_outcome").to_pylist()]
+    kinds, counts = np.unique([o.split(" at t=")[0] for o in outcome], return_counts=True)
+    complete = error_mm[np.isfinite(error_mm) & (np.array(outcome) == "completed")]
+    note = (f"quickstart path, physical design, U10 {speed} m/s, moderate turbulence, {len(table)} flights, "
+            f"{summary.trials_per_min:.0f} trials/min; outcomes {dict(zip(kinds.tolist(), counts.tolist()))}; "
+            f"completed flights only: error {complete.mean() if complete.size else float('nan'):.2f} mm "
+            f"(std {complete.std(ddof=1) if complete.size > 1 else float('nan'):.2f}, n {complete.size})")
+    tag = f"u{speed}"
+    return [
+        BenchRecord(f"capture.position_offset_median_m.{tag}", float(np.nanmedian(np.linalg.norm(
+            offsets[..., :3], axis=-1))), "m", note=note),
+        BenchRecord(f"capture.yaw_offset_median_deg.{tag}", float(np.degrees(np.nanmedian(np.abs(offsets[..., 3])))),
+                    "deg", note=note),
+        BenchRecord(f"capture.blur_px_p95.{tag}", float(np.nanpercentile(blur, 95)), "px",
+                    note=note + "; exposure 1/500 s unless configured"),
+        BenchRecord(f"capture.views_taken_fraction.{tag}", float(taken.mean()), "fraction", note=note),
+        BenchRecord(f"capture.error_mean_mm.{tag}", float(scored.mean()) if scored.size else float("nan"), "mm",
+                    note=note + f"; {scored.size} trials scored"),
+        BenchRecord(f"capture.error_std_mm.{tag}", float(scored.std(ddof=1)) if scored.size > 1 else float("nan"),
+                    "mm", note=note),
+    ], offsets, times
+
+
+def _quickstart() -> ExperimentContext:
+    """The quickstart experiment (experiments/quickstart.yaml of a source checkout; the embedded defaults
+    elsewhere, which plan the same ship and path)."""
+    file = Path(__file__).resolve().parents[2] / "experiments" / "quickstart.yaml"
+    return ExperimentContext.load(file) if file.is_file() else ExperimentContext(ExperimentConfig())
+
+
+def run_bench() -> list[BenchRecord]:
+    records = []
+    base = SimSection()
+    for preset in PRESETS:
+        section = base.model_copy(update={"navigation": base.navigation.model_copy(update={"preset": preset})})
+        params = navigation_params(section.navigation)
+        records.append(BenchRecord(f"capture.hover_p95_m.{preset}", hover_p95_m(section), "m",
+                                   f"{preset} specification ({params.spec_source})", hover_p95_spec_m(params),
+                                   f"calm hover {HOVER_S:.0f} s, {HOVER_FLIGHTS} flights, second half pooled, "
+                                   f"horizontal true position error"))
+    ctx = _quickstart()
+    lag = None
+    with tempfile.TemporaryDirectory() as tmp:
+        for speed in SPEEDS:
+            summary, table = _campaign(ctx, speed, Path(tmp) / f"u{speed}")
+            recs, offsets, times = _speed_records(speed, summary, table)
+            records += recs
+            if speed == 4:
+                lag = lag_correlation(offsets, times)
+    records.append(BenchRecord("capture.offset_lag_corr", lag, "correlation",
+                               note=f"U10 4 m/s: horizontal capture errors of view pairs < {LAG_S:.0f} s apart, "
+                                    f"one flight, dx with dx and dy with dy"))
+    return records

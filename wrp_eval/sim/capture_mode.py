@@ -1,0 +1,124 @@
+"""How the photos are taken: ``stop`` (fly to the viewpoint, settle, shoot) or ``fly-through`` (shoot when
+the estimated position passes the viewpoint, without stopping), the shutter's latency and exposure.
+
+Fly-through reference (batch-first): the reference runs through the viewpoints without stopping, at the
+path's cruise speed, slowing for corners and heading changes. Per flight the speed at every viewpoint is
+planned once (:func:`vertex_speeds`): at most the cruise speed; at a corner of turn angle theta at most
+sqrt(a_lat r) on the arc of radius r = R / tan(theta/2) tangent to both legs at ``corner_radius_m`` R from
+the viewpoint (centripetal acceleration v^2 / r = a_lat; R plays the part of PX4's waypoint acceptance
+radius NAV_ACC_RAD, the distance at which a mission turns towards the next leg); slow enough on each leg
+that the heading turns at the reference yaw rate; and reachable from its neighbours with the acceleration
+limit (a forward and a backward pass, the usual velocity planning of a polyline). Between viewpoints the
+speed is a trapezoid from v0 to v1 (:func:`through_profile`); the first viewpoint is left from rest (after
+its photo, taken hovering); the reference stops at the last, whose photo is taken when the vehicle crosses its
+plane (often still slowing down) or, failing that, once it has settled there. The reference's velocity turns
+at each viewpoint without a jerk limit (a corner is a step in the velocity direction; the controller rounds
+it): photos at corners carry the airframe's tilt transient (residual roll, blur).
+
+Trigger (:func:`wrp_eval.sim.phases.passing_views`): a view is shot when the estimated position crosses the
+plane through the view's target normal to the bisector of the arriving and leaving legs (a vehicle rounding
+the corner crosses it; what position-triggered survey cameras do); a view whose plane is not crossed before
+the reference is two views further on is missed (not taken). The crossing is detected at the position-loop
+rate; its time is interpolated within the chunk from the estimated speed along the plane's normal, and the
+shutter opens ``trigger_latency_s`` later (:func:`shutter_offset`).
+"""
+
+from __future__ import annotations
+
+from typing import Literal
+
+import numpy as np
+from pydantic import Field
+
+from wrp_eval.validation import StrictModel
+
+STOP, FLY_THROUGH = "stop", "fly-through"
+
+
+class CaptureSection(StrictModel):
+    """The ``sim.capture`` section.
+
+    mode: ``fly-through`` by default: the paper flies its tours at 5 m/s and reports 170.8 s of flight for 51
+    views on its reference ship (Table 1) - about the length over the speed, no stop at each view; survey
+    apps (DJI GS Pro, Pix4Dcapture) shoot on the move by default too. ``stop`` hovers at each view
+    (``sim.settle_*``, the path's dwell) before the photo.
+    trigger_latency_s: from the trigger decision to the shutter (assumed 50 ms: consumer camera trigger
+    latencies are tens of milliseconds; no DJI figure is published).
+    exposure_s: shutter time (1/500 s by default; the Phantom 4 Pro's mechanical shutter reaches 1/2000 s).
+    corner_radius_m: where the fly-through reference starts turning before a corner (see the module).
+    """
+
+    mode: Literal["stop", "fly-through"] = FLY_THROUGH
+    trigger_latency_s: float = Field(0.05, ge=0.0, le=2.0, description="trigger to shutter delay, s")
+    exposure_s: float = Field(1.0 / 500.0, gt=0.0, le=1.0, description="shutter time, s")
+    corner_radius_m: float = Field(2.0, gt=0.0, le=50.0, description="fly-through: corner turn starts this far "
+                                                                     "from the viewpoint, m")
+
+
+def vertex_speeds(body: np.ndarray, yaw: np.ndarray, cruise_m_s: float, accel_m_s2: float,
+                  yaw_rate_rad_s: float, corner_radius_m: float) -> tuple[np.ndarray, np.ndarray]:
+    """(speed at each viewpoint (batch, n_views), cruise limit of each leg (batch, n_views - 1)) m/s for the
+    fly-through reference through the body targets ``body`` (batch, n_views, 3) m with headings ``yaw``
+    (batch, n_views) rad. The first and last viewpoints are at rest."""
+    delta = np.diff(body, axis=1)
+    length = np.linalg.norm(delta, axis=2)
+    dyaw = np.abs((np.diff(yaw, axis=1) + np.pi) % (2.0 * np.pi) - np.pi)
+    with np.errstate(divide="ignore", invalid="ignore"):
+        turn_cap = np.where(dyaw > 1e-9, length * yaw_rate_rad_s / dyaw, np.inf)
+    leg_cap = np.where(length > 1e-6, np.minimum(cruise_m_s, turn_cap), 0.0)
+    unit = delta / np.maximum(length, 1e-12)[..., None]
+    cos_turn = np.clip((unit[:, :-1] * unit[:, 1:]).sum(axis=2), -1.0, 1.0)
+    half_turn = 0.5 * np.arccos(cos_turn)
+    with np.errstate(divide="ignore"):
+        corner = np.sqrt(accel_m_s2 * corner_radius_m / np.tan(half_turn))
+    speed = np.zeros(body.shape[:2])
+    speed[:, 1:-1] = np.minimum(np.nan_to_num(corner, nan=0.0, posinf=np.inf),
+                                np.minimum(leg_cap[:, :-1], leg_cap[:, 1:]))
+    for k in range(1, speed.shape[1]):             # over viewpoints (tens), every flight at once
+        speed[:, k] = np.minimum(speed[:, k], np.sqrt(speed[:, k - 1] ** 2 + 2.0 * accel_m_s2 * length[:, k - 1]))
+    for k in range(speed.shape[1] - 2, -1, -1):
+        speed[:, k] = np.minimum(speed[:, k], np.sqrt(speed[:, k + 1] ** 2 + 2.0 * accel_m_s2 * length[:, k]))
+    return speed, leg_cap
+
+
+def through_profile(length, tau, v0, v1, v_max, accel):
+    """Trapezoid from speed v0 to v1 over ``length`` (each (n,)) with acceleration ``accel`` and cruise at most
+    ``v_max``: (distance s, speed v, acceleration a, duration) (n,) at time ``tau`` (n,) s. The end speeds
+    must be reachable (:func:`vertex_speeds` makes them so). After the duration: at the end, at speed v1."""
+    v_peak = np.minimum(v_max, np.sqrt(np.maximum(accel * length + 0.5 * (v0 ** 2 + v1 ** 2), 0.0)))
+    v_peak = np.maximum(v_peak, np.maximum(v0, v1))
+    t_acc = (v_peak - v0) / accel
+    t_dec = (v_peak - v1) / accel
+    s_acc = 0.5 * (v_peak + v0) * t_acc
+    s_dec = 0.5 * (v_peak + v1) * t_dec
+    with np.errstate(divide="ignore", invalid="ignore"):
+        t_cruise = np.where(v_peak > 1e-9, np.maximum(length - s_acc - s_dec, 0.0) / v_peak, 0.0)
+    duration = t_acc + t_cruise + t_dec
+    moving = tau < duration
+    tau = np.clip(tau, 0.0, duration)
+    in_acc, in_cruise = tau < t_acc, tau < t_acc + t_cruise
+    t_d = tau - t_acc - t_cruise
+    s = np.where(in_acc, v0 * tau + 0.5 * accel * tau ** 2,
+                 np.where(in_cruise, s_acc + v_peak * (tau - t_acc),
+                          s_acc + v_peak * t_cruise + v_peak * t_d - 0.5 * accel * t_d ** 2))
+    v = np.where(in_acc, v0 + accel * tau, np.where(in_cruise, v_peak, v_peak - accel * t_d))
+    a = np.where(moving, np.where(in_acc & (t_acc > 0), accel,
+                                  np.where(in_cruise, 0.0, np.where(t_dec > 0, -accel, 0.0))), 0.0)
+    return np.minimum(s, length), v, a, duration
+
+
+def crossed(position: np.ndarray, target: np.ndarray, previous_target: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """(crossed (n,) bool, distance past the plane (n,) m): ``position`` (n, 3) is on or past the plane through
+    ``target`` (n, 3) perpendicular to the leg from ``previous_target`` (n, 3); the leg's unit direction is
+    returned implicitly through the distance (along it)."""
+    leg = target - previous_target
+    unit = leg / np.maximum(np.linalg.norm(leg, axis=1), 1e-12)[:, None]
+    past = ((position - target) * unit).sum(axis=1)
+    return past >= 0.0, past
+
+
+def shutter_offset(past_m: np.ndarray, speed_along_m_s: np.ndarray, chunk_s: float, latency_s: float) -> np.ndarray:
+    """(n,) s from now to the shutter of views whose plane was crossed ``past_m`` (n,) m ago at ``speed_along_m_s``
+    (n,): the crossing time interpolated within the last chunk, plus the trigger latency."""
+    since = np.clip(past_m / np.maximum(speed_along_m_s, 1e-3), 0.0, chunk_s)
+    return latency_s - since

@@ -1,0 +1,169 @@
+"""What the aircraft carries and senses besides its airframe, for a batch of flights: the navigation estimate,
+the gimbal, the battery, the autopilot's wind estimate, and the ship moving under it; and the photo that
+results at each shutter (:meth:`Onboard.shoot`).
+
+The controller flies on the navigation's estimate; the photo is taken at the true state (the camera's true
+pose, expressed in the ship's frame at the shutter instant: what the reconstruction sees); the image's
+position prior is the estimate (what the photo's GPS tag holds).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from wrp_eval.camera import Camera, camera_angles, camera_rotations, optical_axes
+from wrp_eval.ship.motion import ShipMotion, ShipMotionSection, ship_motion
+from wrp_eval.ship.nofly import distance_to_box, ray_box_distance
+from wrp_eval.sim.blur import angular_velocity, motion_blur_px
+from wrp_eval.sim.config import SimSection
+from wrp_eval.sim.flight_state import FlightTargets, Shot
+from wrp_eval.sim.gimbal import CameraAttitude, Gimbal, GimbalParams
+from wrp_eval.sim.navigation import (
+    NavigationEstimate,
+    NavigationEstimator,
+    navigation_params,
+)
+from wrp_eval.sim.power import (
+    Battery,
+    electrical_power_w,
+    level_flight_power_w,
+    return_energy_j,
+)
+from wrp_eval.sim.vehicle import QuadrotorParams
+from wrp_eval.streams import flight_generators
+
+
+@dataclass(frozen=True)
+class ShipInScene:
+    """The ship the drones fly around, as the simulator needs it: box (2, 3) m, the hull's cuboid (the
+    proxy's corners) in the ship frame, for the compass's distance to the hull and the views' depth;
+    motion: the ``ship.motion`` section (its swing in a seaway); particulars: for the motion model."""
+
+    box: np.ndarray
+    motion: ShipMotionSection = ShipMotionSection()
+    particulars: object | None = None
+
+    @classmethod
+    def of(cls, mesh, motion: ShipMotionSection, particulars=None) -> ShipInScene:
+        """The ship of a true ``mesh`` (trimesh, ship frame): its bounding box above the waterline."""
+        box = np.array(mesh.bounds, dtype=float)
+        box[0, 2] = max(box[0, 2], 0.0)
+        return cls(box, motion, particulars)
+
+
+def view_depths(path, box: np.ndarray | None) -> np.ndarray:
+    """(n_views,) m: distance along each planned optical axis to the ship's box, or, where the axis misses it
+    (transition views), to its nearest point; NaN without a box."""
+    if box is None:
+        return np.full(len(path), np.nan)
+    positions = np.asarray(path.positions, dtype=float)
+    along = ray_box_distance(positions, optical_axes(path.yaw, path.pitch), box)
+    return np.where(np.isfinite(along), along, distance_to_box(positions, box))
+
+
+class Onboard:
+    """The instruments of ``batch`` flights (module docstring), advanced once per chunk of ``dt_s`` s."""
+
+    def __init__(self, sec: SimSection, params: QuadrotorParams, targets: FlightTargets, ship: ShipInScene | None,
+                 flight_rngs, dt_s: float, cruise_m_s: float, camera: Camera):
+        batch = targets.batch
+        streams = [g.spawn(2) for g in flight_generators(flight_rngs, batch)]
+        self.sec, self.params, self.dt_s, self.camera = sec, params, dt_s, camera
+        self.cruise_m_s = cruise_m_s
+        self.navigation = NavigationEstimator(navigation_params(sec.navigation), [s[0] for s in streams], batch, dt_s)
+        self.box = None if ship is None else np.asarray(ship.box, dtype=float)
+        self.motion: ShipMotion | None = None if ship is None else ship_motion(
+            ship.motion, ship.particulars, [s[1] for s in streams], batch)
+        self.battery = Battery(sec.battery, batch)
+        self.home = targets.body[:, 0].copy()
+        self.gimbal_params = GimbalParams.of(sec.gimbal)
+        self.gimbal: Gimbal | None = None
+        self.camera_rot = None                 # (batch, 3, 3) the cameras one chunk ago
+        self.wind_estimate = None              # (batch, 3) m/s, the autopilot's averaged horizontal wind
+        self.wind_time = 0.0
+        self.cruise_power_w = float(level_flight_power_w(np.array([cruise_m_s]), params, sec.battery,
+                                                         sec.drag_coefficient, sec.air_density_kg_m3)[0])
+
+    def sense(self, t: float, position: np.ndarray, velocity: np.ndarray, yaw: np.ndarray) -> NavigationEstimate:
+        """The navigation estimate at ``t`` s of vehicles at ``position``, ``velocity`` (batch, 3), ``yaw``."""
+        hull = None if self.box is None else distance_to_box(position, self.box)
+        return self.navigation.estimate(t, position, velocity, yaw, hull)
+
+    def point_camera(self, rot: np.ndarray, yaw: np.ndarray, wanted_pitch: np.ndarray) -> CameraAttitude:
+        """Advance the gimbal one chunk (airframes ``rot`` (batch, 3, 3), planned pitch of each flight's next
+        view (batch,) rad) and return the cameras' attitude; remembers the camera rotations for the blur."""
+        if self.gimbal is None:
+            self.gimbal = Gimbal(self.gimbal_params, rot, wanted_pitch, self.dt_s)
+        else:
+            self.gimbal.step(rot, wanted_pitch)
+        attitude = self.gimbal.attitude(rot, yaw, wanted_pitch)
+        self._previous_rot = self.camera_rot
+        self.camera_rot = camera_rotations(attitude.yaw, attitude.pitch, attitude.roll)
+        if self._previous_rot is None:
+            self._previous_rot = self.camera_rot
+        return attitude
+
+    def spend(self, motors: np.ndarray, drag: np.ndarray, rel_air: np.ndarray, flying: np.ndarray) -> np.ndarray:
+        """Drain the batteries over the chunk: motor thrusts (batch, 4) N, drag (batch, 3) N, relative air
+        (batch, 3) m/s; returns the electrical power (batch,) W."""
+        power = electrical_power_w(motors, drag, rel_air, self.params, self.sec.battery, self.sec.air_density_kg_m3)
+        self.battery.drain(power, self.dt_s, flying)
+        return power
+
+    def must_return(self, position: np.ndarray, wind: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """(battery due (batch,) bool, wind over the limit (batch,) bool) for vehicles at ``position`` (batch, 3)
+        in ``wind`` (batch, 3) m/s. The way home is flown at cruise airspeed, its ground speed helped or
+        hindered by the wind along it (at least 1 m/s)."""
+        horizontal = wind * np.array([1.0, 1.0, 0.0])
+        if self.wind_estimate is None:
+            self.wind_estimate, self.wind_time, self.wind_samples = horizontal, 0.0, 1
+        else:
+            # a first-order average, which starts as the running mean (the weight of a new sample is never below
+            # 1/(samples so far), so the first gust after take-off does not dominate the first time constant)
+            self.wind_samples += 1
+            weight = max(1.0 - np.exp(-self.dt_s / self.sec.wind_average_s), 1.0 / self.wind_samples)
+            self.wind_estimate = self.wind_estimate + weight * (horizontal - self.wind_estimate)
+            self.wind_time += self.dt_s
+        limit = self.sec.wind_limit_m_s
+        # judged once the average has had its time constant to form (not on the first gust after take-off)
+        wind_over = np.zeros(len(wind), dtype=bool)
+        if limit is not None and self.wind_time >= self.sec.wind_average_s:
+            wind_over = np.hypot(self.wind_estimate[:, 0], self.wind_estimate[:, 1]) > limit
+        home = self.home - position
+        distance = np.sqrt((home ** 2).sum(axis=1))
+        tailwind = (wind * home).sum(axis=1) / np.maximum(distance, 1e-9)
+        ground = np.maximum(self.cruise_m_s + tailwind, 1.0)
+        due = self.battery.needs_return(return_energy_j(distance, ground, self.cruise_power_w))
+        return due, wind_over
+
+    def shoot(self, rows: np.ndarray, views: np.ndarray, delay_s: np.ndarray, t: float, position: np.ndarray,
+              velocity: np.ndarray, rot: np.ndarray, nav: NavigationEstimate, attitude: CameraAttitude,
+              targets: FlightTargets) -> Shot:
+        """The photos of flights ``rows`` (m,) of ``views`` (m,) whose shutters open ``delay_s`` (m,) s from ``t``
+        (negative: earlier in the last chunk): the true vehicle state (batch arrays: ``position``,
+        ``velocity`` (batch, 3), ``rot`` (batch, 3, 3)) and the estimate ``nav`` are carried to the shutter
+        instant at constant velocity."""
+        offset = rot[rows] @ np.asarray(self.params.camera_offset_m)
+        shift = velocity[rows] * delay_s[:, None]
+        cam_pos = position[rows] + shift + offset
+        estimated = nav.position[rows] + nav.velocity[rows] * delay_s[:, None] + offset
+        cam_rot = self.camera_rot[rows]
+        omega = angular_velocity(self._previous_rot[rows], cam_rot, self.dt_s)
+        blur = motion_blur_px(velocity[rows], cam_rot, omega, targets.depth[views], self.sec.capture.exposure_s,
+                              self.camera.focal_px)
+        shutter = t + delay_s
+        yaw, pitch, roll = attitude.yaw[rows], attitude.pitch[rows], attitude.roll[rows]
+        swing = np.zeros((len(rows), 4))
+        if self.motion is not None:
+            times = np.full(targets.batch, t)
+            times[rows] = shutter
+            ship_pos = np.zeros((targets.batch, 3))
+            ship_rot = np.tile(np.eye(3), (targets.batch, 1, 1))
+            ship_pos[rows], ship_rot[rows] = cam_pos, cam_rot
+            ship_pos, ship_rot = self.motion.to_ship_frame(times, ship_pos, ship_rot)
+            cam_pos, (yaw, pitch, roll) = ship_pos[rows], camera_angles(ship_rot[rows])
+            swing = self.motion.dof(times)[rows]
+        return Shot(shutter, cam_pos, yaw, pitch, roll, attitude.saturated[rows], estimated, nav.yaw[rows], blur,
+                    self.battery.charge[rows], swing)

@@ -1,0 +1,209 @@
+"""Electrical power and battery of the quadrotor: what a sortie costs and when it must turn for home.
+
+Power model (the classic rotorcraft power decomposition, Leishman, *Principles of Helicopter Aerodynamics*,
+2nd ed., Cambridge UP 2006, Ch. 2 (momentum theory, figure of merit) and Ch. 5 (forward-flight power =
+induced + profile + parasite); the same split for multirotors: Liu, Sengupta & Kurzhanskiy, "A power
+consumption model for multi-rotor small unmanned aircraft systems", ICUAS 2017)::
+
+    P_el = P_induced / (FoM * eta_drive) + |F_drag . v_rel| / eta_drive + P_avionics
+
+* ``P_induced`` = sum over rotors of T^(3/2) / sqrt(2 rho A): momentum theory's ideal hover power
+  (Leishman Ch. 2). The figure of merit FoM = ideal / actual rotor power (Leishman Ch. 2) adds the
+  profile (blade drag) and non-ideal losses, so P_induced / FoM is the rotors' shaft power at hover.
+* ``|F_drag . v_rel|`` = 0.5 rho C_d A |v_rel|^3: the parasite power, the work per second the rotors do
+  against the airframe's drag in the *air* frame (Leishman Ch. 5). It is there whenever the vehicle
+  moves relative to the air, also when it holds position in a steady wind.
+* ``eta_drive`` = motor x ESC efficiency: shaft power -> battery power.
+* ``P_avionics``: flight controller, gimbal, camera, video link: a constant.
+
+This module imports no simulator code at run time (``QuadrotorParams`` only for type hints), so that the
+``sim:`` schema can hold :class:`BatterySection` without pulling MuJoCo into config parsing.
+"""
+
+from __future__ import annotations
+
+from typing import TYPE_CHECKING
+
+import numpy as np
+from pydantic import Field, ValidationInfo, field_validator
+
+from wrp_eval.validation import StrictModel
+
+if TYPE_CHECKING:
+    from wrp_eval.sim.vehicle import QuadrotorParams
+
+JOULES_PER_WH = 3600.0
+
+
+class BatterySection(StrictModel):
+    """Battery and power-train settings (``sim.battery``).
+
+    Sources of the defaults:
+      - capacity_wh 89.2: DJI Phantom 4 Pro / Pro V2.0 Intelligent Flight Battery, 5870 mAh, 15.2 V LiPo 4S,
+        89.2 Wh (dji.com/phantom-4-pro/info, "Intelligent Flight Battery"; the same 5870 mAh pack fits the
+        Phantom 4 airframe: o-gs/dji-firmware-tools wiki "WM330 Battery Intelligent Board"). Spec-sheet
+        flight time ~30 min. The original Phantom 4 pack is 5350 mAh, 15.2 V = 81.3 Wh, ~28 min
+        (dji.com/phantom-4/info).
+      - reserve 0.15: PX4 ``BAT_LOW_THR`` default 0.15, the charge at which PX4 reports the battery low
+        (PX4-Autopilot src/lib/battery/battery_params_common.c; ``BAT_CRIT_THR`` 0.07 triggers RTL,
+        ``BAT_EMERGEN_THR`` 0.05 landing). Our return is triggered by *predicted* arrival charge (like DJI's
+        Smart Return-to-Home, which computes the power needed to fly home), so the reserve is the charge the
+        drone should still have when it lands at home; the low threshold, not the critical one, leaves a
+        margin for the simple return model and the landing.
+      - figure_of_merit 0.65: "in practice usually between 0.5-0.7" for real rotors (Leishman Ch. 2;
+        S. Kumar, HeliAeroNotes, "Figure of Merit"); small rotors at low Reynolds number sit in the lower
+        half ("Comparison of the hovering efficiency of rotating wing and flapping wing micro air
+        vehicles", J. AHS 55, 025001, 2010).
+      - drive_efficiency 0.85: combined brushless motor + ESC efficiency, 0.8-0.9 near the hover operating
+        point of quality multirotor drives (Bershadsky, Haviland & Johnson, "Electric multirotor propulsion
+        system sizing for performance prediction and design optimization", AIAA SciTech 2016: eta_M, eta_E;
+        thrust-stand data as combined motor+ESC efficiency: Tyto Robotics/RCbenchmark).
+      - avionics_w 10: *assumed* (no published Phantom 4 figure found): flight controller, vision sensors,
+        4K camera, 3-axis gimbal and the Lightbridge video link, a few percent of the ~140 W hover power.
+    """
+
+    enabled: bool = Field(True, description="track energy and end sorties at the reserve")
+    capacity_wh: float = Field(89.2, gt=0.0, le=10_000.0, description="usable battery energy (Wh)")
+    start_charge: float = Field(1.0, ge=0.0, le=1.0, description="state of charge at take-off (fraction)")
+    reserve: float = Field(0.15, ge=0.0, le=1.0,
+                           description="charge (fraction) still held when the drone lands back home: the "
+                                       "sortie ends when charge - return energy reaches it")
+    figure_of_merit: float = Field(0.65, gt=0.0, le=1.0, description="rotor hover figure of merit")
+    drive_efficiency: float = Field(0.85, gt=0.0, le=1.0, description="motor x ESC efficiency")
+    avionics_w: float = Field(10.0, ge=0.0, le=1000.0,
+                              description="constant draw of flight controller, gimbal, camera, video link (W)")
+
+    @field_validator("reserve")
+    @classmethod
+    def _reserve_below_start(cls, reserve: float, info: ValidationInfo) -> float:
+        start = info.data.get("start_charge")      # absent when start_charge itself failed validation
+        if start is not None and reserve >= start:
+            raise ValueError(f"must be below start_charge ({start}): the drone would have to return at once")
+        return reserve
+
+    @property
+    def capacity_j(self) -> float:
+        return self.capacity_wh * JOULES_PER_WH
+
+
+def rotor_disk_area_m2(params: QuadrotorParams) -> float:
+    """Area (m^2) swept by one rotor, pi r^2."""
+    return float(np.pi * params.rotor_radius_m ** 2)
+
+
+def induced_power_w(thrust_per_motor_n: np.ndarray, rotor_area_m2: float, air_density: float) -> np.ndarray:
+    """Ideal induced power (n,) W of the rotors: sum over rotors of T^(3/2) / sqrt(2 rho A).
+
+    ``thrust_per_motor_n`` (n, n_rotors) N (negative values count as zero: a fixed-pitch rotor cannot push);
+    ``rotor_area_m2`` one rotor's disk area; ``air_density`` kg/m^3. Momentum theory at hover (Leishman
+    Ch. 2). In forward flight (or in a wind) the through-flow lowers the induced velocity and with it the
+    induced power (Glauert's v_i = T / (2 rho A sqrt(V^2 + v_i^2)), Leishman Ch. 2 and 5); we neglect that,
+    which over-estimates the power and is the conservative side for an energy reserve.
+    """
+    thrust = np.clip(np.asarray(thrust_per_motor_n, dtype=float), 0.0, None)
+    return (thrust ** 1.5).sum(axis=-1) / np.sqrt(2.0 * air_density * rotor_area_m2)
+
+
+def parasite_power_w(drag_force_n: np.ndarray, rel_air_m_s: np.ndarray) -> np.ndarray:
+    """Parasite power (n,) W = |F_drag . v_rel|: drag (n, 3) N times the relative air velocity (n, 3) m/s.
+
+    For the drag of :func:`wrp_eval.sim.aero.drag_force` this is 0.5 rho C_d A |v_rel|^3 (Leishman Ch. 5).
+    """
+    return np.abs(np.einsum("ij,ij->i", np.asarray(drag_force_n, float), np.asarray(rel_air_m_s, float)))
+
+
+def electrical_power_w(thrust_per_motor_n: np.ndarray, drag_force_n: np.ndarray, rel_air_m_s: np.ndarray,
+                       params: QuadrotorParams, section: BatterySection, air_density: float) -> np.ndarray:
+    """Battery power (n,) W of a batch: P_ind / (FoM eta) + |F_drag . v_rel| / eta + P_avionics.
+
+    ``thrust_per_motor_n`` (n, 4) N (the motor commands; in a wind they already include the tilt that
+    balances the drag), ``drag_force_n`` (n, 3) N and ``rel_air_m_s`` (n, 3) m/s (wind - vehicle velocity),
+    ``air_density`` kg/m^3. Decomposition: Leishman Ch. 5, Liu et al. (ICUAS 2017); see the module docstring.
+    The parasite power is divided by the drive efficiency only (the figure of merit is a hover quantity).
+    """
+    rotors = induced_power_w(thrust_per_motor_n, rotor_disk_area_m2(params), air_density)
+    shaft = rotors / section.figure_of_merit + parasite_power_w(drag_force_n, rel_air_m_s)
+    return shaft / section.drive_efficiency + section.avionics_w
+
+
+def hover_power_w(params: QuadrotorParams, section: BatterySection, air_density: float) -> float:
+    """Battery power (W) at hover in still air: 4 (mg/4)^(3/2) / sqrt(2 rho A) / (FoM eta) + P_avionics."""
+    thrust = np.full((1, 4), params.weight_n / 4.0)
+    return float(electrical_power_w(thrust, np.zeros((1, 3)), np.zeros((1, 3)), params, section, air_density)[0])
+
+
+def return_energy_j(distance_home_m: np.ndarray, speed_m_s, cruise_power_w) -> np.ndarray:
+    """Energy (n,) J to fly home: straight line at constant ground speed and constant power, E = P d / V.
+
+    ``distance_home_m`` (n,) m, ``speed_m_s`` float or (n,) m/s ground speed towards home (> 0; pass the
+    cruise airspeed minus the head-wind component for a wind-aware estimate), ``cruise_power_w`` float or
+    (n,) W (e.g. the present power, or :func:`level_flight_power_w` at the cruise speed). A simple model:
+    no acceleration, climb or landing phase (the reserve covers them), like the distance/speed estimate of
+    DJI's Smart RTH and PX4's RTL time estimate.
+    """
+    speed = np.asarray(speed_m_s, dtype=float)
+    if np.any(speed <= 0.0):
+        raise ValueError("return speed must be positive")
+    return np.asarray(cruise_power_w, dtype=float) * np.asarray(distance_home_m, dtype=float) / speed
+
+
+def level_flight_power_w(airspeed_m_s: np.ndarray, params: QuadrotorParams, section: BatterySection,
+                         drag_coefficient: float, air_density: float) -> np.ndarray:
+    """Battery power (n,) W in steady level flight, nose first, at ``airspeed_m_s`` (n,) m/s.
+
+    Trim: the thrust vector balances weight and drag, so each motor gives sqrt(W^2 + D^2) / 4; the drag is
+    the windward-area drag of :mod:`wrp_eval.sim.aero` with the air coming head-on.
+    """
+    # aero imports vehicle (MuJoCo): imported here so that the sim schema can import this module cheaply
+    from wrp_eval.sim.aero import drag_force
+
+    speed = np.atleast_1d(np.asarray(airspeed_m_s, dtype=float))
+    rel_air = np.stack([-speed, np.zeros_like(speed), np.zeros_like(speed)], axis=1)
+    drag = drag_force(rel_air, np.zeros_like(speed), params, drag_coefficient, air_density)
+    per_motor = np.hypot(params.weight_n, np.linalg.norm(drag, axis=1)) / 4.0
+    return electrical_power_w(np.repeat(per_motor[:, None], 4, axis=1), drag, rel_air, params, section,
+                              air_density)
+
+
+class Battery:
+    """Remaining energy of a batch of flights (state ``energy_j`` (n,) J, from ``start_charge``).
+
+    Energy is counted in joules, linear in the drawn power (no Peukert effect, no voltage sag, no
+    temperature: a constant-capacity energy reservoir, as in Liu et al. 2017's endurance estimate).
+    """
+
+    def __init__(self, section: BatterySection, n_flights: int):
+        self.section = section
+        self.capacity_j = section.capacity_j
+        self.reserve_j = section.reserve * self.capacity_j
+        self.energy_j = np.full(n_flights, section.start_charge * self.capacity_j)
+
+    def drain(self, power_w: np.ndarray, dt_s: float, active: np.ndarray | None = None) -> None:
+        """Draw ``power_w`` (n,) W for ``dt_s`` s on the flights where ``active`` (n,) bool (default all);
+        the energy stops at zero (an empty battery: see :attr:`depleted`)."""
+        drawn = np.asarray(power_w, dtype=float) * dt_s
+        if active is not None:
+            drawn = np.where(active, drawn, 0.0)
+        self.energy_j = np.maximum(self.energy_j - drawn, 0.0)
+
+    @property
+    def charge(self) -> np.ndarray:
+        """(n,) state of charge, fraction of the capacity."""
+        return self.energy_j / self.capacity_j
+
+    @property
+    def depleted(self) -> np.ndarray:
+        """(n,) bool: the battery is empty (the flight fell short of home)."""
+        return self.energy_j <= 0.0
+
+    def needs_return(self, return_energy_j: np.ndarray) -> np.ndarray:
+        """(n,) bool: energy - return energy <= reserve, i.e. turning now lands home with just the reserve.
+
+        ``return_energy_j`` (n,) J or float (:func:`return_energy_j`; 0 for a pure reserve check). Always
+        False when the section is disabled."""
+        due = self.energy_j - np.asarray(return_energy_j, dtype=float) <= self.reserve_j
+        return due & self.section.enabled
+
+    def endurance_s(self, power_w) -> np.ndarray:
+        """(n,) s until the reserve at constant ``power_w`` (W): (energy - reserve) / P, at least 0."""
+        return np.maximum(self.energy_j - self.reserve_j, 0.0) / np.asarray(power_w, dtype=float)

@@ -1,0 +1,50 @@
+"""Per-flight random streams, batch-first: what keeps a flight's draws independent of the batch it flies in.
+
+Every stochastic model of a batch of flights (turbulence, navigation errors, ship motion) draws flight i's
+numbers from flight i's own ``numpy.random.Generator``, in stream order, so row i of any batched result is
+bit-identical to the same flight simulated alone, whatever the batch size, backend or chunking.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+
+def flight_generators(rngs, n_flights: int) -> list[np.random.Generator]:
+    """One Generator per flight: ``rngs`` is a seed / SeedSequence / None (spawned), a Generator (spawned),
+    or a sequence of n_flights Generators (used as is) or seeds / SeedSequences (one Generator each)."""
+    if isinstance(rngs, (int, np.integer, np.random.SeedSequence)) or rngs is None:
+        rngs = np.random.default_rng(rngs).spawn(n_flights)
+    elif isinstance(rngs, np.random.Generator):
+        rngs = rngs.spawn(n_flights)
+    if len(rngs) != n_flights:
+        raise ValueError(f"got {len(rngs)} generators for {n_flights} flights")
+    return [g if isinstance(g, np.random.Generator) else np.random.default_rng(g) for g in rngs]
+
+
+class BlockNormals:
+    """Standard normals (n_flights, n_steps, width) from each flight's own generator, drawn in blocks of
+    ``block_steps`` steps per flight (one stacked draw per block, not one per step): the numbers a flight
+    gets depend only on its generator and on how many steps it has consumed, never on how the caller
+    chunks the time axis."""
+
+    def __init__(self, rngs, n_flights: int, width: int, block_steps: int = 1024):
+        self.rngs = flight_generators(rngs, n_flights)
+        self.width = int(width)
+        self.block_steps = int(block_steps)
+        self._block = np.empty((n_flights, 0, self.width))
+        self._cursor = 0
+
+    def draw(self, n_steps: int) -> np.ndarray:
+        """The next ``n_steps`` steps of every flight's stream, (n_flights, n_steps, width)."""
+        out = np.empty((len(self.rngs), n_steps, self.width))
+        filled = 0
+        while filled < n_steps:
+            if self._cursor >= self._block.shape[1]:
+                self._block = np.stack([g.standard_normal((self.block_steps, self.width)) for g in self.rngs])
+                self._cursor = 0
+            take = min(n_steps - filled, self._block.shape[1] - self._cursor)
+            out[:, filled:filled + take] = self._block[:, self._cursor:self._cursor + take]
+            self._cursor += take
+            filled += take
+        return out
