@@ -41,7 +41,10 @@ class BlockNormals:
         filled = 0
         while filled < n_steps:
             if self._cursor >= self._block.shape[1]:
-                self._block = np.stack([g.standard_normal((self.block_steps, self.width)) for g in self.rngs])
+                if self._block.shape[1] != self.block_steps:
+                    self._block = np.empty((len(self.rngs), self.block_steps, self.width))
+                for row, g in zip(self._block, self.rngs):    # per flight: its own stream, into the buffer
+                    g.standard_normal(out=row)
                 self._cursor = 0
             take = min(n_steps - filled, self._block.shape[1] - self._cursor)
             out[:, filled:filled + take] = self._block[:, self._cursor:self._cursor + take]

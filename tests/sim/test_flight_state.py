@@ -4,6 +4,7 @@ import numpy as np
 import pytest
 
 from wrp_eval.camera import Camera
+from wrp_eval.sim.capture_mode import trigger_planes
 from wrp_eval.sim.flight_state import (
     COMPLETED,
     DITCHED,
@@ -130,6 +131,6 @@ def test_targets_carry_the_views_depth_and_the_fly_through_speeds():
     assert np.array_equal(plain.body, np.broadcast_to(path.positions, (2, 3, 3)))   # camera at the centre
     deep = FlightTargets.from_path(path, 2, None, (0.0, 0.0, 0.0), depth_m=np.array([5.0, 6.0, 7.0]))
     assert deep.depth.tolist() == [5.0, 6.0, 7.0] and (deep.batch, deep.n_views) == (2, 3)
-    fast = deep.with_speeds(np.ones((2, 3)), np.full((2, 2), 5.0))
+    fast = deep.flown_through(np.ones((2, 3)), np.full((2, 2), 5.0), *trigger_planes(deep.body))
     assert fast.vertex_speed.shape == (2, 3) and fast.leg_speed.tolist() == [[5.0, 5.0]] * 2
     assert deep.vertex_speed is None and np.array_equal(fast.body, deep.body)    # a new value, the old one kept

@@ -3,7 +3,7 @@
 import numpy as np
 import pytest
 
-from wrp_eval.sim.capture_mode import through_profile
+from wrp_eval.sim.capture_mode import through_profile, trigger_planes
 from wrp_eval.sim.config import SimSection
 from wrp_eval.sim.controller import GAIN_PRESETS, PositionController
 from wrp_eval.sim.flight_state import (
@@ -25,6 +25,7 @@ from wrp_eval.sim.flight_state import (
 from wrp_eval.sim.phases import (
     YAW_RATE_REF_RAD_S,
     Profile,
+    Reference,
     advance,
     apply_endings,
     apply_transitions,
@@ -62,7 +63,8 @@ def _targets(batch: int, through: bool = False) -> FlightTargets:
     targets = FlightTargets(VIEWS, YAWS, np.full(3, -0.3), np.tile(YAWS, (batch, 1)), np.tile(VIEWS, (batch, 1, 1)),
                             np.full(3, np.nan))
     if through:
-        targets = targets.with_speeds(np.tile([0.0, 2.0, 0.0], (batch, 1)), np.full((batch, 2), 5.0))
+        targets = targets.flown_through(np.tile([0.0, 2.0, 0.0], (batch, 1)), np.full((batch, 2), 5.0),
+                                        *trigger_planes(targets.body))
     return targets
 
 
@@ -299,7 +301,7 @@ def test_a_view_is_passed_when_the_estimate_crosses_its_mitre_plane():
     state.photo[3] = 0                          # view 0 is photographed hovering, never on the move
     state.photo[4] = 2                          # already photographed view 1; its reference not yet at view 2
     state.phase[5] = ENDED
-    rows, past, normal, skipped = passing_views(state, pos, targets)
+    rows, past, normal, skipped = passing_views(state, pos, targets, 2.0)
     assert rows.tolist() == [0, 2] and past == pytest.approx(np.array([0.5, 1.0]) / np.sqrt(2.0))
     assert normal == pytest.approx(np.tile([1.0, 1.0, 0.0], (2, 1)) / np.sqrt(2.0))
     assert skipped.size == 0
@@ -307,23 +309,63 @@ def test_a_view_is_passed_when_the_estimate_crosses_its_mitre_plane():
     state.index[:] = 2
     state.photo[:] = 2
     pos[:, 1] = [10.0, 9.0, 11.0, 10.0, 10.0, 10.0]
-    rows, past, normal, skipped = passing_views(state, pos, targets)
+    rows, past, normal, skipped = passing_views(state, pos, targets, 2.0)
     assert rows.tolist() == [0, 2, 3, 4] and past == pytest.approx([0.0, 1.0, 0.0, 0.0])
     assert normal == pytest.approx(np.tile([0.0, 1.0, 0.0], (4, 1)))
     state.photo[:] = 3                          # every view taken
-    assert passing_views(state, pos, targets)[0].size == 0
+    assert passing_views(state, pos, targets, 2.0)[0].size == 0
+
+
+def test_on_a_hairpin_a_vehicle_off_the_track_is_not_past_the_view_long_before_it():
+    # view 1 at (10, 0, 20), reached going east, left turning back by 170 deg: the mitre plane runs almost along
+    # the arriving leg, so a vehicle 1 m off the track at view 0 is "past" it by ~0.6 m, 10 m short of the view
+    back = np.radians(170.0)
+    views = np.array([[0.0, 0.0, 20.0], [10.0, 0.0, 20.0], [10.0 + 10 * np.cos(back), 10 * np.sin(back), 20.0]])
+    targets = FlightTargets(views, np.zeros(3), np.full(3, -0.3), np.zeros((2, 3)), np.tile(views, (2, 1, 1)),
+                            np.full(3, np.nan))
+    targets = targets.flown_through(np.zeros((2, 3)), np.full((2, 2), 5.0), *trigger_planes(targets.body))
+    state = FlightState.start(targets)
+    state.phase[:] = TRANSIT
+    state.index[:] = 1
+    state.photo[:] = 1
+    pos = np.array([[0.0, 1.0, 20.0], [9.0, 1.0, 20.0]])          # 10 m short, and 1 m short of the view
+    rows, past, _, _ = passing_views(state, pos, targets, 2.0)
+    assert past.size == 1 and rows.tolist() == [1]
+    # without the reach gate the plane alone would fire the photo 10 m early
+    assert passing_views(state, pos, targets, np.inf)[0].tolist() == [0, 1]
+
+
+def test_a_chained_segment_starts_as_far_in_as_the_clock_ran_past_the_last_one():
+    targets = _targets(3)
+    state = FlightState.start(targets)
+    state.phase[:] = TRANSIT
+    state.segment.duration[:] = 2.0
+    state.phase_time[:] = [2.03, 1.5, 2.0]
+    moves = transitions(state, targets.body[:, 0], np.zeros((3, 3)), targets.yaw[:, 0], targets, SEC, 0.0, True)
+    assert moves.chain.tolist() == [True, False, True]
+    apply_transitions(state, moves)
+    assert state.phase_time == pytest.approx([0.03, 1.5, 0.0])
+
+
+def test_in_fly_through_the_integral_grows_in_transit_too():
+    ref = Reference(np.zeros((2, 3)), np.zeros((2, 3)), np.zeros((2, 3)), np.zeros(2), np.zeros(2),
+                    np.zeros(2, dtype=bool))
+    phase = np.array([TRANSIT, SETTLE])
+    assert setpoints(ref, phase, np.zeros((0, 3)), np.zeros(2)).integrate.tolist() == [False, True]
+    assert setpoints(ref, phase, np.zeros((0, 3)), np.zeros(2), through=True).integrate.tolist() == [True, True]
 
 
 def test_a_view_not_passed_before_the_reference_is_two_views_on_is_skipped():
     views = np.stack([10.0 * np.arange(4), np.zeros(4), np.full(4, 20.0)], axis=1)
     targets = FlightTargets(views, np.zeros(4), np.full(4, -0.3), np.zeros((3, 4)), np.tile(views, (3, 1, 1)),
                             np.full(4, np.nan))
+    targets = targets.flown_through(np.zeros((3, 4)), np.full((3, 3), 5.0), *trigger_planes(targets.body))
     state = FlightState.start(targets)
     state.phase[:] = TRANSIT
     state.photo[:] = 1
     state.index[:] = [2, 3, 3]
     pos = np.array([[5.0, 0.0, 20.0], [5.0, 0.0, 20.0], [10.0, 0.0, 20.0]])    # short of view 1 but the last
-    rows, _, _, skipped = passing_views(state, pos, targets)
+    rows, _, _, skipped = passing_views(state, pos, targets, 2.0)
     assert rows.tolist() == [2] and skipped.tolist() == [1]
 
 

@@ -162,6 +162,10 @@ class ShipMotion:
         amp, w, phi = (a.reshape(shape) for a in (self.amplitude, self.frequency_rad_s, self.phase_rad))
         return np.sum(amp * np.sin(w * t[..., None, None] + phi), axis=-1)
 
+    def flights(self, rows: np.ndarray) -> ShipMotion:
+        """The motion of flights ``rows`` (m,) int alone (their own sinusoids)."""
+        return ShipMotion(self.sea_state, self.amplitude[rows], self.frequency_rad_s[rows], self.phase_rad[rows])
+
     def amplitudes(self) -> np.ndarray:
         """(n, 4) nominal amplitude of each flight's motion: sqrt(sum_k a_k^2) = sqrt(2) x RMS over a long
         window; for one component the sinusoid's amplitude, i.e. the table's figure (heave m, angles rad)."""

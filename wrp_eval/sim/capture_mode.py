@@ -81,6 +81,20 @@ def vertex_speeds(body: np.ndarray, yaw: np.ndarray, cruise_m_s: float, accel_m_
     return speed, leg_cap
 
 
+def trigger_planes(body: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """(arriving leg's unit direction, trigger plane's unit normal), each (batch, n_views, 3), of the viewpoints'
+    body targets ``body`` (batch, n_views, 3): the normal bisects the arriving and the leaving leg (the corner's
+    mitre); at the last view, a U-turn or a zero-length leg it is the arriving leg's direction (view 0: the
+    leaving leg's; it is photographed hovering)."""
+    legs = np.diff(body, axis=1)
+    unit = legs / np.maximum(np.linalg.norm(legs, axis=2, keepdims=True), 1e-12)
+    arriving = np.concatenate([unit[:, :1], unit], axis=1)
+    leaving = np.concatenate([unit, np.zeros_like(unit[:, :1])], axis=1)
+    mitre = arriving + leaving
+    norm = np.linalg.norm(mitre, axis=2, keepdims=True)
+    return arriving, np.where(norm > 1e-6, mitre / np.maximum(norm, 1e-12), arriving)
+
+
 def through_profile(length, tau, v0, v1, v_max, accel):
     """Trapezoid from speed v0 to v1 over ``length`` (each (n,)) with acceleration ``accel`` and cruise at most
     ``v_max``: (distance s, speed v, acceleration a, duration) (n,) at time ``tau`` (n,) s. The end speeds

@@ -41,7 +41,7 @@ from mujoco import rollout as mj_rollout
 
 from wrp_eval.planning.path import Path
 from wrp_eval.sim.aero import drag_force
-from wrp_eval.sim.capture_mode import shutter_offset, vertex_speeds
+from wrp_eval.sim.capture_mode import shutter_offset, trigger_planes, vertex_speeds
 from wrp_eval.sim.config import SimSection
 from wrp_eval.sim.controller import (
     GAIN_PRESETS,
@@ -99,16 +99,17 @@ def _pad(rows: np.ndarray, padded: int) -> np.ndarray:
     return np.concatenate([rows, np.zeros((padded - len(rows),) + rows.shape[1:], dtype=rows.dtype)])
 
 
-def _start_poses(targets: FlightTargets, padded: int, position: np.ndarray) -> np.ndarray:
-    """Free-joint poses (padded, 7): each flight hovering level at ``position`` (batch, 3) m with its first
-    heading; the fillers of the last model 50 m above the first flight's target (out of everyone's way)."""
+def _start_poses(targets: FlightTargets, padded: int, position: np.ndarray, yaw: np.ndarray) -> np.ndarray:
+    """Free-joint poses (padded, 7): each flight hovering level at ``position`` (batch, 3) m with heading
+    ``yaw`` (batch,) rad; the fillers of the last model 50 m above the first flight's target (out of
+    everyone's way)."""
     batch = targets.batch
     start = np.zeros((padded, 7))
     start[:, 3] = 1.0
     start[:batch, :3] = position
     start[batch:, :3] = targets.body[0, 0] + np.array([0.0, 0.0, 50.0])
-    start[:batch, 3] = np.cos(targets.yaw[:, 0] / 2)
-    start[:batch, 6] = np.sin(targets.yaw[:, 0] / 2)
+    start[:batch, 3] = np.cos(yaw / 2)
+    start[:batch, 6] = np.sin(yaw / 2)
     return start
 
 
@@ -227,12 +228,12 @@ class FlightSimulator:
         mocap_flat = model_of[:, None] * self.ncontrol + nu + 4 * sc.mocap_index[drone_of][:, None] + np.arange(4)
         return n_models, padded, qpos_flat, qvel_flat, motor_flat, drag_flat, mocap_flat
 
-    def _start_batch(self, targets: FlightTargets, sec: SimSection, position: np.ndarray) -> _Batch:
+    def _start_batch(self, targets: FlightTargets, sec: SimSection, position: np.ndarray, yaw: np.ndarray) -> _Batch:
         """Rollout state and buffers for ``targets.batch`` flights, every drone at its start pose (centre of
-        mass at ``position`` (batch, 3) m)."""
+        mass at ``position`` (batch, 3) m, heading ``yaw`` (batch,) rad)."""
         n_models, padded, qpos_flat, qvel_flat, motor_flat, drag_flat, mocap_flat = self._layout(targets.batch)
         state = np.tile(self._initial_state, (n_models, 1))
-        park = _start_poses(targets, padded, position)
+        park = _start_poses(targets, padded, position, yaw)
         state.reshape(-1)[qpos_flat] = park
         # ~4 tasks per thread: with chunks of a few steps the default (10 per thread) costs more in dispatch
         # than it gains in balance (measured, README.md)
@@ -261,20 +262,23 @@ class FlightSimulator:
         return wind
 
     def _commands(self, run: _Batch, controller: PositionController, body: Body, nav, ref: Reference,
-                  state: FlightState, wind_b: np.ndarray, dt: float, sec: SimSection):
+                  state: FlightState, wind_b: np.ndarray, dt: float, sec: SimSection, nav_is_truth: bool,
+                  through: bool):
         """Motor thrusts (padded, 4) N, attitude targets (padded, 4) and drag (padded, 3) N for the next
         chunk, from the wind ``wind_b`` (batch, 3) m/s at the flights (calm at the fillers); the position
-        loop flies on the navigation estimate ``nav`` (the fillers on their true state). Ended flights are
-        parked (held still, no forces): they take no further photos."""
+        loop flies on the navigation estimate ``nav`` (the fillers on their true state; ``nav_is_truth``:
+        the estimate is the truth, no copies). Ended flights are parked (held still, no forces): they take no
+        further photos."""
         par = self.params
         drag = drag_force(_pad(wind_b, run.padded) - body.velocity, body.yaw, par, sec.drag_coefficient,
                           sec.air_density_kg_m3)
         position, velocity = body.position, body.velocity
-        if nav.position is not body.position[:run.batch]:
+        if not nav_is_truth:
             position = np.concatenate([nav.position, body.position[run.batch:]])
             velocity = np.concatenate([nav.velocity, body.velocity[run.batch:]])
         motors, quat_d = control(controller, position, velocity, body.rot,
-                                 setpoints(ref, state.phase, run.park[run.batch:, :3], nav.yaw_error), dt, par)
+                                 setpoints(ref, state.phase, run.park[run.batch:, :3], nav.yaw_error, through), dt,
+                                 par)
         dead = _pad(state.phase == ENDED, run.padded)
         if np.any(dead):
             run.hold(dead, parked_pose(body.position[dead], run.park[dead]))
@@ -301,8 +305,9 @@ class FlightSimulator:
                                           view_depths(path, None if ship is None else ship.box))
         if not profile.through:
             return targets
-        return targets.with_speeds(*vertex_speeds(targets.body, targets.yaw, path.speed_m_s, sec.acceleration_m_s2,
-                                                  YAW_RATE_REF_RAD_S, sec.capture.corner_radius_m))
+        speeds = vertex_speeds(targets.body, targets.yaw, path.speed_m_s, sec.acceleration_m_s2, YAW_RATE_REF_RAD_S,
+                               sec.capture.corner_radius_m)
+        return targets.flown_through(*speeds, *trigger_planes(targets.body))
 
     def _fly(self, path, wind, batch, view_offsets, start_time_s, sec: SimSection, ship=None,
              flight_rngs=None) -> FlightResult:
@@ -315,10 +320,12 @@ class FlightSimulator:
         targets = self._targets(path, batch, view_offsets, ship, profile, sec)
         onboard = Onboard(sec, par, targets, ship, 0 if flight_rngs is None else flight_rngs, dt, path.speed_m_s,
                           path.camera)
-        # each vehicle starts hovering where its navigation believes it is on the first target (it has been
-        # holding there before the mission starts), not at the true target with its error as a step at t = 0
+        # each vehicle starts hovering where its navigation believes it is on the first target with its first
+        # heading (it has been holding there before the mission starts), not at the true target with its error
+        # as a step at t = 0
         first = onboard.sense(start_time_s, targets.body[:, 0], np.zeros((batch, 3)), targets.yaw[:, 0])
-        run = self._start_batch(targets, sec, targets.body[:, 0] - first.position_error)
+        run = self._start_batch(targets, sec, targets.body[:, 0] - first.position_error,
+                                targets.yaw[:, 0] - first.yaw_error)
         state = FlightState.start(targets)
         controller = PositionController(par, self.gains, run.padded)
         log = TrajectoryLog()
@@ -337,20 +344,20 @@ class FlightSimulator:
             apply_endings(state, check_returns(state, *onboard.must_return(p_b, wind_b)), t)
             attitude = onboard.point_camera(rot_b, yaw, targets.plan_pitch[np.minimum(state.photo,
                                                                                        targets.n_views - 1)])
+            shoot = partial(onboard.shoot, t=t, position=p_b, velocity=v_b, rot=rot_b, nav=nav, attitude=attitude,
+                            targets=targets)
             if profile.through:
-                rows, past, normal, missed = passing_views(state, nav.position, targets)
-                state.photo[missed] += 1
-                along = (nav.velocity[rows] * normal).sum(axis=1)
-                delay = shutter_offset(past, along, dt, latency)
-                take_photos(state, targets, rows, onboard.shoot(rows, state.photo[rows], delay, t, p_b, v_b,
-                                                                rot_b, nav, attitude, targets))
+                self._passing_photos(state, targets, nav, shoot, dt, sec)
             moves = transitions(state, nav.position, nav.velocity, nav.yaw, targets, sec, dwell, profile.through)
+            if profile.through:     # the last view, taken at rest: the views still pending before it were missed
+                last = moves.trigger & (state.index == targets.n_views - 1)
+                state.photo = np.where(last, np.maximum(state.photo, state.index), state.photo)
             due = np.flatnonzero(moves.trigger & (state.photo == state.index))
-            take_photos(state, targets, due, onboard.shoot(due, state.photo[due], np.full(due.size, latency), t, p_b,
-                                                           v_b, rot_b, nav, attitude, targets))
+            take_photos(state, targets, due, shoot(due, state.photo[due], np.full(due.size, latency)))
             advance(state, targets, np.flatnonzero(moves.trigger | moves.chain), profile)
             apply_transitions(state, moves)
-            motors, quat_d, drag = self._commands(run, controller, body, nav, ref, state, wind_b, dt, sec)
+            motors, quat_d, drag = self._commands(run, controller, body, nav, ref, state, wind_b, dt, sec,
+                                                  onboard.navigation.ideal, profile.through)
             power = onboard.spend(motors[:batch], drag[:batch], wind_b - v_b, state.flying)
             if chunk % record_every == 0:
                 log.append(t, position=p_b, reference=ref.position, yaw=yaw, tilt=tilt_of(rot_b),
@@ -369,6 +376,15 @@ class FlightSimulator:
             wind_next = self._run_chunk(run, sec, sample)
             tick(state, ref, dt)
         return self._result(state, path, log, sec)
+
+    @staticmethod
+    def _passing_photos(state: FlightState, targets: FlightTargets, nav, shoot, dt: float, sec: SimSection) -> None:
+        """Fly-through: photograph the views whose planes the flights have passed (the shutter interpolated
+        back to the crossing, plus the trigger latency); views missed are moved over."""
+        rows, past, normal, missed = passing_views(state, nav.position, targets, sec.capture.corner_radius_m)
+        state.photo[missed] += 1
+        delay = shutter_offset(past, (nav.velocity[rows] * normal).sum(axis=1), dt, sec.capture.trigger_latency_s)
+        take_photos(state, targets, rows, shoot(rows, state.photo[rows], delay))
 
     def _result(self, state: FlightState, path, log: TrajectoryLog, sec: SimSection) -> FlightResult:
         cap = state.captures

@@ -37,7 +37,8 @@ class FlightTargets:
     mass must be for the camera to sit on the commanded viewpoint at level attitude. depth (n_views,) m: the
     planned distance along each view's optical axis to the ship (NaN: unknown), for the blur in pixels.
     vertex_speed (batch, n_views) and leg_speed (batch, n_views - 1) m/s: the fly-through reference's speed
-    at each viewpoint and cruise limit of each leg (None in stop mode).
+    at each viewpoint and cruise limit of each leg; arriving and trigger_normal (batch, n_views, 3): the
+    arriving leg's direction and the trigger plane's normal at each viewpoint (None in stop mode).
     """
 
     plan_position: np.ndarray
@@ -48,6 +49,8 @@ class FlightTargets:
     depth: np.ndarray
     vertex_speed: np.ndarray | None = None
     leg_speed: np.ndarray | None = None
+    arriving: np.ndarray | None = None
+    trigger_normal: np.ndarray | None = None
 
     @property
     def batch(self) -> int:
@@ -83,8 +86,11 @@ class FlightTargets:
         depth = np.full(n_views, np.nan) if depth_m is None else np.asarray(depth_m, dtype=float)
         return cls(plan_pos, plan_yaw, plan_pitch, cmd_yaw, body, depth)
 
-    def with_speeds(self, vertex_speed: np.ndarray, leg_speed: np.ndarray) -> FlightTargets:
-        return replace(self, vertex_speed=vertex_speed, leg_speed=leg_speed)
+    def flown_through(self, vertex_speed: np.ndarray, leg_speed: np.ndarray, arriving: np.ndarray,
+                      trigger_normal: np.ndarray) -> FlightTargets:
+        """These targets with the fly-through reference's speeds and trigger planes."""
+        return replace(self, vertex_speed=vertex_speed, leg_speed=leg_speed, arriving=arriving,
+                       trigger_normal=trigger_normal)
 
 
 @dataclass(slots=True)

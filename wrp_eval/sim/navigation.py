@@ -306,6 +306,7 @@ class NavigationEstimator:
         self._white = np.array([p.white_noise_m, p.white_noise_m, p.vertical_white_noise_m])
         self._vel_sigma = p.velocity_noise_m_s * np.array([1.0, 1.0, 2.0])   # vertical twice, as PX4's vz/vxy
         self._phi = math.exp(-self.dt_s / p.correlation_time_s)
+        self._gm_drive = self._gm_sigma * math.sqrt(1 - self._phi**2)     # (3,) per-step driving std
         self._noise = BlockNormals(gens, n_flights, _WIDTH, block_steps)    # block size never changes the numbers
         self._fix_index = -1
         self._held_pos = np.zeros((n_flights, 3))
@@ -322,12 +323,14 @@ class NavigationEstimator:
             if k < self._k:
                 raise ValueError(f"time went backwards: t={t_s} before step {self._k}")
             rows = self._noise.draw(k - self._k)
-            if rows.shape[1]:
+            m = rows.shape[1]
+            if m == 1:      # the flight loop's case: one chunk
+                self._gm = self._phi * self._gm + self._gm_drive * rows[:, 0, 0:3]
+            elif m:
                 # m exact steps at once: x_m = phi^m x_0 + s sum_j phi^(m-1-j) n_j (identical to m single steps)
-                m = rows.shape[1]
                 weights = self._phi ** np.arange(m - 1, -1, -1)
                 drive = np.einsum("j,njc->nc", weights, rows[:, :, 0:3])
-                self._gm = self._phi**m * self._gm + self._gm_sigma * math.sqrt(1 - self._phi**2) * drive
+                self._gm = self._phi**m * self._gm + self._gm_drive * drive
         if rows.shape[1]:
             self._maybe_fix(k, rows[:, -1])
         self._k = k

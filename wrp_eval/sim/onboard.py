@@ -13,6 +13,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from scipy.spatial.transform import Rotation
+
 from wrp_eval.camera import Camera, camera_angles, camera_rotations, optical_axes
 from wrp_eval.ship.motion import ShipMotion, ShipMotionSection, ship_motion
 from wrp_eval.ship.nofly import distance_to_box, ray_box_distance
@@ -55,12 +57,13 @@ class ShipInScene:
 
 def view_depths(path, box: np.ndarray | None) -> np.ndarray:
     """(n_views,) m: distance along each planned optical axis to the ship's box, or, where the axis misses it
-    (transition views), to its nearest point; NaN without a box."""
+    (transition views), to its nearest point; NaN without a box and for a view inside it (no depth known)."""
     if box is None:
         return np.full(len(path), np.nan)
     positions = np.asarray(path.positions, dtype=float)
     along = ray_box_distance(positions, optical_axes(path.yaw, path.pitch), box)
-    return np.where(np.isfinite(along), along, distance_to_box(positions, box))
+    nearest = distance_to_box(positions, box)
+    return np.where(np.isfinite(along), along, np.where(nearest > 0.0, nearest, np.nan))
 
 
 class Onboard:
@@ -80,7 +83,8 @@ class Onboard:
         self.home = targets.body[:, 0].copy()
         self.gimbal_params = GimbalParams.of(sec.gimbal)
         self.gimbal: Gimbal | None = None
-        self.camera_rot = None                 # (batch, 3, 3) the cameras one chunk ago
+        self.attitude: CameraAttitude | None = None        # the cameras now ...
+        self._previous: CameraAttitude | None = None       # ... and one chunk ago (their rate: the blur)
         self.wind_estimate = None              # (batch, 3) m/s, the autopilot's averaged horizontal wind
         self.wind_time = 0.0
         self.cruise_power_w = float(level_flight_power_w(np.array([cruise_m_s]), params, sec.battery,
@@ -93,16 +97,14 @@ class Onboard:
 
     def point_camera(self, rot: np.ndarray, yaw: np.ndarray, wanted_pitch: np.ndarray) -> CameraAttitude:
         """Advance the gimbal one chunk (airframes ``rot`` (batch, 3, 3), planned pitch of each flight's next
-        view (batch,) rad) and return the cameras' attitude; remembers the camera rotations for the blur."""
+        view (batch,) rad) and return the cameras' attitude; the previous chunk's is kept for the blur."""
         if self.gimbal is None:
             self.gimbal = Gimbal(self.gimbal_params, rot, wanted_pitch, self.dt_s)
         else:
             self.gimbal.step(rot, wanted_pitch)
         attitude = self.gimbal.attitude(rot, yaw, wanted_pitch)
-        self._previous_rot = self.camera_rot
-        self.camera_rot = camera_rotations(attitude.yaw, attitude.pitch, attitude.roll)
-        if self._previous_rot is None:
-            self._previous_rot = self.camera_rot
+        self._previous = attitude if self.attitude is None else self.attitude
+        self.attitude = attitude
         return attitude
 
     def spend(self, motors: np.ndarray, drag: np.ndarray, rel_air: np.ndarray, flying: np.ndarray) -> np.ndarray:
@@ -115,7 +117,7 @@ class Onboard:
     def must_return(self, position: np.ndarray, wind: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """(battery due (batch,) bool, wind over the limit (batch,) bool) for vehicles at ``position`` (batch, 3)
         in ``wind`` (batch, 3) m/s. The way home is flown at cruise airspeed, its ground speed helped or
-        hindered by the wind along it (at least 1 m/s)."""
+        hindered by the estimated (averaged) wind along it (at least 1 m/s)."""
         horizontal = wind * np.array([1.0, 1.0, 0.0])
         if self.wind_estimate is None:
             self.wind_estimate, self.wind_time, self.wind_samples = horizontal, 0.0, 1
@@ -133,7 +135,7 @@ class Onboard:
             wind_over = np.hypot(self.wind_estimate[:, 0], self.wind_estimate[:, 1]) > limit
         home = self.home - position
         distance = np.sqrt((home ** 2).sum(axis=1))
-        tailwind = (wind * home).sum(axis=1) / np.maximum(distance, 1e-9)
+        tailwind = (self.wind_estimate * home).sum(axis=1) / np.maximum(distance, 1e-9)
         ground = np.maximum(self.cruise_m_s + tailwind, 1.0)
         due = self.battery.needs_return(return_energy_j(distance, ground, self.cruise_power_w))
         return due, wind_over
@@ -144,26 +146,32 @@ class Onboard:
         """The photos of flights ``rows`` (m,) of ``views`` (m,) whose shutters open ``delay_s`` (m,) s from ``t``
         (negative: earlier in the last chunk): the true vehicle state (batch arrays: ``position``,
         ``velocity`` (batch, 3), ``rot`` (batch, 3, 3)) and the estimate ``nav`` are carried to the shutter
-        instant at constant velocity."""
+        instant at constant velocity; ``attitude``: the cameras' now (:meth:`point_camera`'s). None when no
+        flight takes a photo."""
+        if not rows.size:
+            return None
         offset = rot[rows] @ np.asarray(self.params.camera_offset_m)
-        shift = velocity[rows] * delay_s[:, None]
-        cam_pos = position[rows] + shift + offset
+        cam_pos = position[rows] + velocity[rows] * delay_s[:, None] + offset
         estimated = nav.position[rows] + nav.velocity[rows] * delay_s[:, None] + offset
-        cam_rot = self.camera_rot[rows]
-        omega = angular_velocity(self._previous_rot[rows], cam_rot, self.dt_s)
+        before = self._previous
+        cam_rot = camera_rotations(attitude.yaw[rows], attitude.pitch[rows], attitude.roll[rows])
+        omega = angular_velocity(camera_rotations(before.yaw[rows], before.pitch[rows], before.roll[rows]), cam_rot,
+                                 self.dt_s)
         blur = motion_blur_px(velocity[rows], cam_rot, omega, targets.depth[views], self.sec.capture.exposure_s,
                               self.camera.focal_px)
         shutter = t + delay_s
         yaw, pitch, roll = attitude.yaw[rows], attitude.pitch[rows], attitude.roll[rows]
+        turned = np.any(delay_s != 0.0)
+        if turned:     # the camera keeps turning at its rate until the shutter (or back to it)
+            cam_rot = cam_rot @ Rotation.from_rotvec(omega * delay_s[:, None]).as_matrix()
+            yaw = np.arctan2(cam_rot[:, 1, 2], cam_rot[:, 0, 2])      # the optical axis's heading
+        estimated_yaw = yaw + nav.yaw_error[rows]       # the navigation's heading at the shutter
         swing = np.zeros((len(rows), 4))
         if self.motion is not None:
-            times = np.full(targets.batch, t)
-            times[rows] = shutter
-            ship_pos = np.zeros((targets.batch, 3))
-            ship_rot = np.tile(np.eye(3), (targets.batch, 1, 1))
-            ship_pos[rows], ship_rot[rows] = cam_pos, cam_rot
-            ship_pos, ship_rot = self.motion.to_ship_frame(times, ship_pos, ship_rot)
-            cam_pos, (yaw, pitch, roll) = ship_pos[rows], camera_angles(ship_rot[rows])
-            swing = self.motion.dof(times)[rows]
-        return Shot(shutter, cam_pos, yaw, pitch, roll, attitude.saturated[rows], estimated, nav.yaw[rows], blur,
+            ship = self.motion.flights(rows)
+            cam_pos, cam_rot = ship.to_ship_frame(shutter, cam_pos, cam_rot)
+            swing = ship.dof(shutter)
+        if turned or self.motion is not None:
+            yaw, pitch, roll = camera_angles(cam_rot)
+        return Shot(shutter, cam_pos, yaw, pitch, roll, attitude.saturated[rows], estimated, estimated_yaw, blur,
                     self.battery.charge[rows], swing)

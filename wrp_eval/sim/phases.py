@@ -228,12 +228,14 @@ def outcome_reasons(state: FlightState, sec: SimSection) -> tuple[str, ...]:
 class Transitions(NamedTuple):
     """(batch,) bool each: the segment's reference has arrived at a stop (TRANSIT -> SETTLE); within the
     tolerances or out of settle time (SETTLE -> DWELL); dwelt long enough (DWELL -> photo); fly-through: the
-    reference has passed a viewpoint without stopping (on to the next segment)."""
+    reference has passed a viewpoint without stopping (on to the next segment); overrun (batch,) s: how far
+    the phase clock ran past the segment's end (the chained segment starts that far in)."""
 
     to_settle: np.ndarray
     to_dwell: np.ndarray
     trigger: np.ndarray
     chain: np.ndarray
+    overrun: np.ndarray
 
 
 def transitions(state: FlightState, position: np.ndarray, velocity: np.ndarray, yaw: np.ndarray,
@@ -252,10 +254,10 @@ def transitions(state: FlightState, position: np.ndarray, velocity: np.ndarray, 
     to_dwell = (phase == SETTLE) & (settled | (phase_time >= sec.settle_timeout_s))
     # 1e-9: the dwell is a whole number of chunks, summed in floating point
     trigger = (phase == DWELL) & (phase_time >= dwell_s - 1e-9)
-    return Transitions(to_settle, to_dwell, trigger, chain)
+    return Transitions(to_settle, to_dwell, trigger, chain, phase_time - state.segment.duration)
 
 
-def passing_views(state: FlightState, position: np.ndarray, targets: FlightTargets
+def passing_views(state: FlightState, position: np.ndarray, targets: FlightTargets, reach_m: float
                   ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
     """Fly-through trigger: (rows (m,) int, distance past the view's plane (m,) m, the plane's unit normal
     (m, 3), skipped rows (k,) int).
@@ -263,32 +265,26 @@ def passing_views(state: FlightState, position: np.ndarray, targets: FlightTarge
     A flight's next view (1 .. last, the reference at or past it) is passed when its estimated ``position``
     (batch, 3) crosses the view's plane: through the view's target, normal to the bisector of the arriving and
     the leaving leg (the mitre of the corner: a vehicle rounding the corner crosses it; at the last view, or a
-    U-turn, normal to the arriving leg). A view whose plane the vehicle has not crossed by the time the
+    U-turn, normal to the arriving leg), and is at most ``reach_m`` short of the view along the arriving leg
+    (on a hairpin the mitre plane runs almost along the leg: without this a vehicle off the track would be
+    "past" it long before the view). A view whose plane the vehicle has not crossed by the time the
     reference is two views further on is skipped: a missed trigger, the photo is not taken."""
     n = targets.n_views
     rows = np.arange(len(state.phase))
     view = np.minimum(state.photo, n - 1)
     candidate = state.flying & (state.photo >= 1) & (state.photo < n) & (state.photo <= state.index)
-    target = targets.body[rows, view]
-    arriving = _unit(target - targets.body[rows, np.maximum(view - 1, 0)])
-    leaving = _unit(targets.body[rows, np.minimum(view + 1, n - 1)] - target)
-    mitre = arriving + leaving
-    norm = np.sqrt((mitre ** 2).sum(axis=1))
-    normal = np.where((norm > 1e-6)[:, None], mitre / np.maximum(norm, 1e-12)[:, None], arriving)
-    past = ((position - target) * normal).sum(axis=1)
-    hit = candidate & (past >= 0.0)
+    rel = position - targets.body[rows, view]
+    normal = targets.trigger_normal[rows, view]
+    past = (rel * normal).sum(axis=1)
+    hit = candidate & (past >= 0.0) & ((rel * targets.arriving[rows, view]).sum(axis=1) >= -reach_m)
     skipped = candidate & ~hit & (state.index >= state.photo + 2)
     hits = np.flatnonzero(hit)
     return hits, past[hits], normal[hits], np.flatnonzero(skipped)
 
 
-def _unit(v: np.ndarray) -> np.ndarray:
-    """Rows of ``v`` (n, 3) scaled to unit length (zero rows stay zero)."""
-    return v / np.maximum(np.sqrt((v ** 2).sum(axis=1)), 1e-12)[:, None]
-
-
-def take_photos(state: FlightState, targets: FlightTargets, rows: np.ndarray, shot: Shot) -> None:
-    """Flights ``rows`` (m,) int take their next photo (``state.photo``), the :class:`Shot` of m rows."""
+def take_photos(state: FlightState, targets: FlightTargets, rows: np.ndarray, shot: Shot | None) -> None:
+    """Flights ``rows`` (m,) int take their next photo (``state.photo``), the :class:`Shot` of m rows (None
+    when there are none)."""
     if not rows.size:
         return
     view = state.photo[rows]
@@ -322,7 +318,8 @@ def apply_transitions(state: FlightState, moves: Transitions) -> None:
     triggered and chained ones included: :func:`advance` set their new phase)."""
     state.phase = np.where(moves.to_settle, SETTLE, state.phase)
     state.phase = np.where(moves.to_dwell, DWELL, state.phase)
-    state.phase_time = np.where(moves.trigger | moves.to_settle | moves.to_dwell | moves.chain, 0.0,
+    restart = np.where(moves.chain, np.maximum(moves.overrun, 0.0), 0.0)
+    state.phase_time = np.where(moves.trigger | moves.to_settle | moves.to_dwell | moves.chain, restart,
                                 state.phase_time)
 
 
@@ -343,12 +340,16 @@ class Setpoint(NamedTuple):
     integrate: np.ndarray
 
 
-def setpoints(ref: Reference, phase: np.ndarray, filler_position: np.ndarray, yaw_error: np.ndarray) -> Setpoint:
+def setpoints(ref: Reference, phase: np.ndarray, filler_position: np.ndarray, yaw_error: np.ndarray,
+              through: bool = False) -> Setpoint:
     """The flights' reference followed by the fillers' (hover at ``filler_position`` (padded - batch, 3) m,
-    heading 0). The integral grows only while the reference is at rest (conditional integration, README.md).
+    heading 0). In stop mode the integral grows only while the reference is at rest (conditional integration,
+    README.md); in fly-through (``through``) the reference never rests, and the integral is what holds the
+    track against a steady wind (without it the drag leaves F / (m k_p): 3 / 13 / 29 cm at 4 / 8 / 12 m/s of
+    relative air), so it grows all the time (within its clamp).
     ``yaw_error`` (batch,) rad: the navigation's heading error; the attitude loop turns the airframe to where
     its estimated heading is the reference's, i.e. the true heading is the reference minus the error."""
-    integrate = phase != TRANSIT
+    integrate = np.ones(len(phase), dtype=bool) if through else phase != TRANSIT
     yaw = ref.yaw - yaw_error
     n = len(filler_position)
     if not n:     # the usual case, a batch filling its models: no copies

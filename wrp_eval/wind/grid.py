@@ -29,6 +29,7 @@ from __future__ import annotations
 
 from collections.abc import Sequence
 from dataclasses import dataclass
+from functools import cached_property
 
 import numpy as np
 
@@ -58,6 +59,13 @@ class WindGrid:
     velocity_mps: np.ndarray
     grid_yaw_rad: float = 0.0
     source: str = "wind grid"
+
+    @cached_property
+    def common_levels(self) -> np.ndarray | None:
+        """(nz,) the level heights when every column has the same ones (a flat sea: the synthetic field), else
+        None. Interpolation then finds a point's level once instead of once per column (same numbers)."""
+        first = self.heights_m[0, 0]
+        return first if np.all(self.heights_m == first) else None
 
     def __post_init__(self) -> None:
         x, y = np.asarray(self.x_m, float), np.asarray(self.y_m, float)
@@ -115,6 +123,41 @@ def _cell(axis: np.ndarray, coord: np.ndarray, clamp: bool, name: str, source: s
     return idx, frac
 
 
+def _outside_levels(z: np.ndarray, bottom: np.ndarray, top: np.ndarray, clamp: bool, source: str) -> None:
+    """Refuse (unless ``clamp``) heights z (n,) below ``bottom`` or above ``top`` (n,) of their cell."""
+    outside = (z < bottom) | (z > top) | ~np.isfinite(z)
+    if np.any(outside) and not clamp:
+        row = np.nonzero(outside)[0][0]
+        raise OutsideWindGridError(
+            source, f"query height z = {z[row]:.3f} m is outside the wind grid's levels "
+                    f"[{bottom[row]:.3f}, {top[row]:.3f}] m here (enlarge the grid or set wind.clamp)")
+
+
+def _column_levels(heights: np.ndarray, z: np.ndarray, clamp: bool, source: str):
+    """(lower level k (n, 4) int, fraction fz (n, 4)) of heights z (n, 1) in the cell's 4 columns' levels
+    ``heights`` (n, 4, nz). Outside = below every column's lowest level or above every column's top; between,
+    a column a little shorter than its neighbours holds its end value (per-column clipping)."""
+    _outside_levels(z[:, 0], heights[..., 0].min(axis=1), heights[..., -1].max(axis=1), clamp, source)
+    zc = np.clip(np.nan_to_num(np.broadcast_to(z, heights.shape[:2]), nan=0.0),
+                 heights[..., 0], heights[..., -1])        # (n, 4), clipped per column
+    nz = heights.shape[2]
+    k = np.clip((heights <= zc[..., None]).sum(axis=2) - 1, 0, nz - 2)   # (n, 4) lower level per column
+    h_lo = np.take_along_axis(heights, k[..., None], 2)[..., 0]
+    h_hi = np.take_along_axis(heights, k[..., None] + 1, 2)[..., 0]
+    return k, (zc - h_lo) / (h_hi - h_lo)
+
+
+def _common_level(levels: np.ndarray, z: np.ndarray, clamp: bool, source: str):
+    """:func:`_column_levels` where every column has the levels ``levels`` (nz,): the same arithmetic, once per
+    point instead of once per column; k, fz broadcast to (n, 4)."""
+    n = z.shape[0]
+    _outside_levels(z, np.full(n, levels[0]), np.full(n, levels[-1]), clamp, source)
+    zc = np.clip(np.nan_to_num(z, nan=0.0), levels[0], levels[-1])
+    k = np.clip((levels <= zc[:, None]).sum(axis=1) - 1, 0, levels.size - 2)
+    fz = (zc - levels[k]) / (levels[k + 1] - levels[k])
+    return np.broadcast_to(k[:, None], (n, 4)), np.broadcast_to(fz[:, None], (n, 4))
+
+
 def interpolate(grid: WindGrid, points: np.ndarray, method: str = "idw", idw_power: float = 2.0,
                 clamp: bool = False, values: np.ndarray | None = None,
                 value_index: np.ndarray | None = None) -> np.ndarray:
@@ -137,24 +180,10 @@ def interpolate(grid: WindGrid, points: np.ndarray, method: str = "idw", idw_pow
     # the 4 columns of the cell, order (i,j), (i+1,j), (i,j+1), (i+1,j+1): shape (n, 4)
     ci = np.stack([i, i + 1, i, i + 1], axis=1)
     cj = np.stack([j, j, j + 1, j + 1], axis=1)
-    heights = grid.heights_m[ci, cj]                       # (n, 4, nz)
-    z = g[:, 2:3]                                          # (n, 1)
-    # outside = below every column's lowest level or above every column's top; between, a column that is
-    # a little shorter than its neighbours holds its end value (per-column clipping below)
-    bottom, top = heights[..., 0].min(axis=1), heights[..., -1].max(axis=1)
-    outside = (z[:, 0] < bottom) | (z[:, 0] > top) | ~np.isfinite(z[:, 0])
-    if np.any(outside) and not clamp:
-        row = np.nonzero(outside)[0][0]
-        raise OutsideWindGridError(
-            grid.source, f"query height z = {z[row, 0]:.3f} m is outside the wind grid's levels "
-                         f"[{bottom[row]:.3f}, {top[row]:.3f}] m here (enlarge the grid or set wind.clamp)")
-    zc = np.clip(np.nan_to_num(np.broadcast_to(z, heights.shape[:2]), nan=0.0),
-                 heights[..., 0], heights[..., -1])        # (n, 4), clipped per column
-    nz = heights.shape[2]
-    k = np.clip((heights <= zc[..., None]).sum(axis=2) - 1, 0, nz - 2)   # (n, 4) lower level per column
-    h_lo = np.take_along_axis(heights, k[..., None], 2)[..., 0]
-    h_hi = np.take_along_axis(heights, k[..., None] + 1, 2)[..., 0]
-    fz = (zc - h_lo) / (h_hi - h_lo)                       # (n, 4)
+    if grid.common_levels is not None:
+        k, fz = _common_level(grid.common_levels, g[:, 2], clamp, grid.source)
+    else:
+        k, fz = _column_levels(grid.heights_m[ci, cj], g[:, 2:3], clamp, grid.source)
     if values is None:
         v_lo = grid.velocity_mps[ci, cj, k]                # (n, 4, 3)
         v_hi = grid.velocity_mps[ci, cj, k + 1]
