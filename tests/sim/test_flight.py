@@ -217,3 +217,36 @@ def test_a_flights_record_does_not_depend_on_its_batch(controller_section, short
     for field in ("position", "yaw", "thrust", "wind", "drag"):
         assert np.array_equal(getattr(alone.trajectory, field)[0], getattr(both.trajectory, field)[0, :n])
     assert np.array_equal(alone.offsets[0], both.offsets[0])
+
+
+def test_a_moving_ship_in_the_scene_follows_its_models_first_flight(controller_section):
+    import mujoco
+    import trimesh
+
+    import wrp_eval.ship.scene as scene_mod
+    from wrp_eval.ship.motion import ShipMotionSection
+    from wrp_eval.sim.flight import FlightSimulator
+    from wrp_eval.sim.flight_state import FlightTargets
+    from wrp_eval.sim.onboard import Onboard, ShipInScene
+    mesh = trimesh.creation.box(extents=(140.0, 20.0, 25.0))
+    root = scene_mod.build_scene(mesh, moving=True)
+    ship = ShipInScene(np.array([[-70.0, -10.0, 0.0], [70.0, 10.0, 12.5]]), ShipMotionSection(sea_state=5))
+    path = make_path(3)
+    with FlightSimulator(controller_section, scene_root=root) as sim:
+        assert sim.ship_mocap is not None
+        targets = FlightTargets.from_path(path, 6, None, PHANTOM4.camera_offset_m)
+        run = sim._start_batch(targets, controller_section, targets.body[:, 0], targets.yaw[:, 0])
+        onboard = Onboard(controller_section, PHANTOM4, targets, ship, 3, 0.05, 5.0, path.camera)
+        sim._move_ship(run, onboard, 12.3)
+        model = sim.scene.model
+        data = mujoco.MjData(model)
+        for m, flight in enumerate([0, 4]):          # 4 drones per model: models start at flights 0 and 4
+            mujoco.mj_setState(model, data, run.controls[m, -1], sim.control_spec)
+            mujoco.mj_forward(model, data)
+            translation, rotation = onboard.motion.flights(np.array([flight])).pose(12.3)
+            body = model.body("ship").id
+            assert np.allclose(data.xpos[body], translation[0], atol=1e-9)
+            assert np.allclose(data.xmat[body].reshape(3, 3), rotation[0], atol=1e-9)
+            assert abs(translation[0, 2]) > 1e-3            # it does move (sea state 5 heave)
+        res = sim.fly(path, ConstantWind([3.0, 0.0, 0.0]), batch=2, ship=ship, flight_rngs=1)
+    assert res.taken.all() and np.abs(res.ship_motion[:, :, 0]).max() > 1e-3

@@ -17,8 +17,9 @@ HULL_COLOUR = (0.55, 0.55, 0.58, 1.0)
 
 
 def build_scene(mesh: trimesh.Trimesh, model_name: str = "wrp_scene", sea_half_size_m: float | None = None,
-                timestep_s: float = 0.002) -> mjcf.RootElement:
-    """Sea plane at z = 0 and ``mesh`` (ship frame, metres) as a static body named "ship"."""
+                timestep_s: float = 0.002, moving: bool = False) -> mjcf.RootElement:
+    """Sea plane at z = 0 and ``mesh`` (ship frame, metres) as a body named "ship": static, or with ``moving`` a
+    mocap body whose pose the simulator sets (the ship swinging in a seaway, ``ship.motion``)."""
     root = mjcf.RootElement(model=model_name)
     root.option.timestep = timestep_s
     root.option.gravity = (0.0, 0.0, -9.81)
@@ -33,7 +34,7 @@ def build_scene(mesh: trimesh.Trimesh, model_name: str = "wrp_scene", sea_half_s
                        directional=True)
     root.worldbody.add("geom", name="sea", type="plane", size=(half, half, 1.0), material="sea",
                        contype=1, conaffinity=1)
-    ship = root.worldbody.add("body", name="ship")   # no joint: static
+    ship = root.worldbody.add("body", name="ship", mocap=moving)   # no joint: static, or moved from outside
     ship.add("geom", name="ship_hull", type="mesh", mesh="ship", rgba=HULL_COLOUR, contype=1, conaffinity=1,
              group=1)
     return root

@@ -38,6 +38,7 @@ from typing import NamedTuple
 import mujoco
 import numpy as np
 from mujoco import rollout as mj_rollout
+from scipy.spatial.transform import Rotation
 
 from wrp_eval.planning.path import Path
 from wrp_eval.sim.aero import drag_force
@@ -82,6 +83,15 @@ from wrp_eval.sim.vehicle import PHANTOM4, QuadrotorParams, Scene, build_scene
 
 # the profile's old home: tests/sim/test_flight.py imports it from here
 _reference_profile = reference_profile
+
+
+def _mocap_id(model: mujoco.MjModel, name: str) -> int | None:
+    """The mocap index of body ``name``, or None (no such body, or not a mocap body)."""
+    try:
+        mocap = int(model.body_mocapid[model.body(name).id])
+    except KeyError:
+        return None
+    return mocap if mocap >= 0 else None
 
 
 def _wind_at(wind, points, t, batch):
@@ -188,7 +198,12 @@ class FlightSimulator:
                                       g.yaw_bandwidth_rad_s), attitude_damping=g.attitude_damping)
         model = self.scene.model
         self.nstate = mujoco.mj_stateSize(model, mujoco.mjtState.mjSTATE_FULLPHYSICS)
-        self.control_spec = int(mujoco.mjtState.mjSTATE_CTRL | mujoco.mjtState.mjSTATE_MOCAP_QUAT)
+        # a scene with a moving ship (ship.scene.build_scene(..., moving=True)): its mocap pose is a control too
+        self.ship_mocap = _mocap_id(model, "ship")
+        spec = mujoco.mjtState.mjSTATE_CTRL | mujoco.mjtState.mjSTATE_MOCAP_QUAT
+        if self.ship_mocap is not None:
+            spec |= mujoco.mjtState.mjSTATE_MOCAP_POS
+        self.control_spec = int(spec)
         self.ncontrol = mujoco.mj_stateSize(model, self.control_spec)
         self.nthread = section.threads or (os.cpu_count() or 1)
         self._pool = mj_rollout.Rollout(nthread=self.nthread)
@@ -199,6 +214,8 @@ class FlightSimulator:
         mujoco.mj_forward(model, data)
         self._initial_state = np.zeros(self.nstate)
         mujoco.mj_getState(model, data, self._initial_state, mujoco.mjtState.mjSTATE_FULLPHYSICS)
+        self._initial_control = np.zeros(self.ncontrol)      # the mocap bodies' own poses where not set
+        mujoco.mj_getState(model, data, self._initial_control, self.control_spec)
 
     def close(self) -> None:
         self._worker.shutdown(wait=True)
@@ -224,8 +241,9 @@ class FlightSimulator:
         nu = self.scene.model.nu
         motor_flat = model_of[:, None] * self.ncontrol + sc.actuator_index[drone_of]
         drag_flat = model_of[:, None] * self.ncontrol + sc.drag_index[drone_of]
-        # control vector = [ctrl (nu), mocap_quat (nmocap x 4)]
-        mocap_flat = model_of[:, None] * self.ncontrol + nu + 4 * sc.mocap_index[drone_of][:, None] + np.arange(4)
+        # control vector = [ctrl (nu), (mocap_pos (nmocap x 3) with a moving ship), mocap_quat (nmocap x 4)]
+        quat0 = nu + (3 * self.scene.model.nmocap if self.ship_mocap is not None else 0)
+        mocap_flat = model_of[:, None] * self.ncontrol + quat0 + 4 * sc.mocap_index[drone_of][:, None] + np.arange(4)
         return n_models, padded, qpos_flat, qvel_flat, motor_flat, drag_flat, mocap_flat
 
     def _start_batch(self, targets: FlightTargets, sec: SimSection, position: np.ndarray, yaw: np.ndarray) -> _Batch:
@@ -239,7 +257,7 @@ class FlightSimulator:
         # than it gains in balance (measured, README.md)
         task_size = max(1, n_models // (4 * max(1, self.nthread)))
         return _Batch(targets.batch, padded, qpos_flat, qvel_flat, motor_flat, drag_flat, mocap_flat, state,
-                      np.zeros((n_models, self.ncontrol)), np.zeros((n_models, sec.chunk_steps, self.ncontrol)),
+                      np.tile(self._initial_control, (n_models, 1)), np.zeros((n_models, sec.chunk_steps, self.ncontrol)),
                       np.empty((n_models, sec.chunk_steps, self.nstate)), park, [self.scene.model] * n_models,
                       task_size)
 
@@ -368,6 +386,8 @@ class FlightSimulator:
             if not np.any(state.flying):
                 break
             run.set_controls(motors, drag, quat_d)
+            if self.ship_mocap is not None and onboard.motion is not None:
+                self._move_ship(run, onboard, start_time_s + t + dt)
             # prefetch: the wind of the next chunk is sampled while this one's rollout runs, at the
             # positions predicted for its end, p + v dt (the vehicle moves < 0.5 m per chunk, the
             # prediction is off by 0.5 a dt^2 < 1 cm, and the wind field varies over metres; README.md).
@@ -376,6 +396,19 @@ class FlightSimulator:
             wind_next = self._run_chunk(run, sec, sample)
             tick(state, ref, dt)
         return self._result(state, path, log, sec)
+
+    def _move_ship(self, run: _Batch, onboard: Onboard, t: float) -> None:
+        """Pose the scene's ship body of each model for the next chunk (held over it): the ship of the model's
+        first flight (each flight has its own sea; the ship is not part of the physics: contacts are off)."""
+        d = self.section.drones_per_model
+        translation, rotation = onboard.motion.flights(np.arange(0, run.batch, d)).pose(t)
+        quat = Rotation.from_matrix(rotation).as_quat()[:, [3, 0, 1, 2]]          # (w, x, y, z)
+        nmocap = self.scene.model.nmocap
+        base = run.control_vec[:len(translation)]
+        nu = self.scene.model.nu
+        base[:, nu + 3 * self.ship_mocap + np.arange(3)] = translation
+        base[:, nu + 3 * nmocap + 4 * self.ship_mocap + np.arange(4)] = quat
+        run.controls[:len(translation)] = base[:, None, :]
 
     @staticmethod
     def _passing_photos(state: FlightState, targets: FlightTargets, nav, shoot, dt: float, sec: SimSection) -> None:
