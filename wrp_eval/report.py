@@ -102,6 +102,14 @@ def _ci(ci) -> str:
     return f"[{fmt(ci[0])}, {fmt(ci[1])}]" if ci else "n/a"
 
 
+def _design_text(design: str) -> str:
+    """What a campaign's perturbation design means, for the report."""
+    if design == "physical":
+        return ("the path flown as planned (`physical` design: every capture error from the flight: navigation, "
+                "gimbal, fly-through capture, battery and wind limit, air wake, ship motion)")
+    return f"commanded offsets from the campaign's `{design}` perturbation design"
+
+
 def write_report(ctx: ExperimentContext, path, summary: dict, trials: TrialData) -> Path:
     """Figures under ``<run>/figures`` and ``<run>/report.md``; returns the report's path. path: the planned
     Path; summary: the run summary so far; trials: the campaign's trials (as the surrogate was trained on)."""
@@ -150,8 +158,8 @@ def write_report(ctx: ExperimentContext, path, summary: dict, trials: TrialData)
         "## Monte Carlo campaign",
         "",
         f"{summary['campaign']['trials']} trials ({summary['campaign']['failed']} failed) in "
-        f"`{summary['campaign']['dir']}`; commanded offsets from the campaign's perturbation design, flown "
-        "through sampled winds in MuJoCo, scored by the synthetic reconstruction oracle.",
+        f"`{summary['campaign']['dir']}`; {_design_text(config.campaign.perturbation.design)}, flown through "
+        "sampled winds in MuJoCo, scored by the synthetic reconstruction oracle.",
         "",
         "![flown offsets](figures/offsets.png)",
         "",
