@@ -115,7 +115,8 @@ def test_offsets_grow_with_turbulence_severity(controller_simulator):
     path = make_path(3, dwell_s=0.5)
     mags, yaws = [], []
     for severity in ("light", "moderate", "severe"):
-        res = controller_simulator.fly(path, dryden_wind(severity, per, 11, _control_dt(controller_simulator)), batch=per)
+        wind = dryden_wind(severity, per, 11, _control_dt(controller_simulator))
+        res = controller_simulator.fly(path, wind, batch=per)
         assert not res.failed.any()
         mags.append(np.linalg.norm(res.offsets[..., :3], axis=-1).mean())
         yaws.append(np.abs(res.offsets[..., 3]).mean())
@@ -126,7 +127,8 @@ def test_offsets_grow_with_turbulence_severity(controller_simulator):
 
 def test_same_seed_same_flight(controller_simulator, short_path):
     def run(seed):
-        return controller_simulator.fly(short_path, dryden_wind("moderate", 2, seed, _control_dt(controller_simulator)), batch=2).offsets
+        wind = dryden_wind("moderate", 2, seed, _control_dt(controller_simulator))
+        return controller_simulator.fly(short_path, wind, batch=2).offsets
     a, b, c = run(5), run(5), run(6)
     assert np.array_equal(a, b)
     assert not np.allclose(a, c)

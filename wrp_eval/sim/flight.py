@@ -257,7 +257,8 @@ class FlightSimulator:
         # than it gains in balance (measured, README.md)
         task_size = max(1, n_models // (4 * max(1, self.nthread)))
         return _Batch(targets.batch, padded, qpos_flat, qvel_flat, motor_flat, drag_flat, mocap_flat, state,
-                      np.tile(self._initial_control, (n_models, 1)), np.zeros((n_models, sec.chunk_steps, self.ncontrol)),
+                      np.tile(self._initial_control, (n_models, 1)),
+                      np.zeros((n_models, sec.chunk_steps, self.ncontrol)),
                       np.empty((n_models, sec.chunk_steps, self.nstate)), park, [self.scene.model] * n_models,
                       task_size)
 
