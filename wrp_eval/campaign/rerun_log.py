@@ -3,7 +3,9 @@
 Entities (world frame, metres):
   world/ship (static mesh), world/path (static planned line + viewpoints),
   world/trial/trajectory (flown, down-sampled), world/trial/frusta (capture frusta as line strips),
-  world/trial/wind (arrows at the capture points, 1 m per m/s), metrics/<name> (scalars per trial).
+  world/trial/wind (arrows at the capture points, 1 m per m/s), world/trial/recorded_positions (where the
+  navigation believed each photo was taken), metrics/<name> (scalars per trial: the oracle's metrics, failed,
+  views_taken_fraction, blur_px_p95, returned_home).
 The recording is written to a temporary beside ``<out>/campaign.rrd`` while the campaign runs and renamed to
 ``campaign.rrd`` when it ends (:func:`wrp_eval.recording.recording`). On a resume the stored trials are
 logged again from the Parquet store first (it holds everything drawn here), so the file always covers the
@@ -39,6 +41,8 @@ def blueprint():
                 rrb.TimeSeriesView(name="error (m)", origin="/metrics/error_m"),
                 rrb.TimeSeriesView(name="completeness", origin="/metrics/completeness"),
                 rrb.TimeSeriesView(name="failed", origin="/metrics/failed"),
+                rrb.TimeSeriesView(name="views taken", origin="/metrics/views_taken_fraction"),
+                rrb.TimeSeriesView(name="blur p95 (px)", origin="/metrics/blur_px_p95"),
             ),
             column_shares=[3, 2],
         ),
@@ -126,12 +130,30 @@ class CampaignRecorder:
             if wind:
                 rec.log("world/trial/wind", rr.Arrows3D(origins=capture, vectors=np.asarray(wind)[taken],
                                                         colors=[[120, 220, 255]]))
+            estimated = record.get("estimated_offsets")
+            if estimated:      # where the navigation believed each photo was taken (the image's position prior)
+                recorded = self.planned[taken] + np.asarray(estimated, dtype=float)[taken, :3]
+                rec.log("world/trial/recorded_positions", rr.Points3D(recorded, radii=0.15, colors=[[255, 80, 200]]))
+        self._log_capture_metrics(record, taken)
         for name in METRIC_NAMES:
             value = record.get(name)
             if value is not None and np.isfinite(value):
                 rec.log(f"metrics/{name}", rr.Scalars(float(value)))
         rec.log("metrics/failed", rr.Scalars(1.0 if record["failed"] else 0.0))
         self.seconds += time.perf_counter() - start
+
+    def _log_capture_metrics(self, record: dict, taken: np.ndarray) -> None:
+        """Per-trial figures of the capture realism (issue 16): views taken, blur p95, sent home early."""
+        rr, rec = self.rr, self.rec
+        rec.log("metrics/views_taken_fraction", rr.Scalars(float(taken.mean()) if taken.size else 0.0))
+        blur = record.get("blur_px")
+        if blur:
+            blur = np.asarray(blur, dtype=float)
+            if np.isfinite(blur).any():
+                rec.log("metrics/blur_px_p95", rr.Scalars(float(np.nanpercentile(blur, 95))))
+        outcome = record.get("flight_outcome")
+        if outcome:
+            rec.log("metrics/returned_home", rr.Scalars(1.0 if outcome.startswith("returned") else 0.0))
 
     def close(self) -> Path:
         """Flush, close and move the recording to ``campaign.rrd``."""
