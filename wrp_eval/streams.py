@@ -10,13 +10,23 @@ from __future__ import annotations
 import numpy as np
 
 
+def children(source, n: int) -> list[np.random.Generator]:
+    """n Generators derived from ``source`` (a SeedSequence or a Generator) as its first n spawned children
+    (``SeedSequence.spawn``'s numbers, spawn keys ``(..., i)``), without spawning: the caller's object is left as
+    it was, so passing the same object twice gives the same numbers twice."""
+    seq = source.bit_generator.seed_seq if isinstance(source, np.random.Generator) else source
+    return [np.random.default_rng(np.random.SeedSequence(seq.entropy, spawn_key=tuple(seq.spawn_key) + (i,),
+                                                         pool_size=seq.pool_size)) for i in range(n)]
+
+
 def flight_generators(rngs, n_flights: int) -> list[np.random.Generator]:
-    """One Generator per flight: ``rngs`` is a seed / SeedSequence / None (spawned), a Generator (spawned),
-    or a sequence of n_flights Generators (used as is) or seeds / SeedSequences (one Generator each)."""
-    if isinstance(rngs, (int, np.integer, np.random.SeedSequence)) or rngs is None:
+    """One Generator per flight: ``rngs`` is a seed / None, a SeedSequence or a Generator (its first n_flights
+    children, :func:`children`), or a sequence of n_flights Generators (used as is) or seeds / SeedSequences
+    (one Generator each)."""
+    if isinstance(rngs, (int, np.integer)) or rngs is None:
         rngs = np.random.default_rng(rngs).spawn(n_flights)
-    elif isinstance(rngs, np.random.Generator):
-        rngs = rngs.spawn(n_flights)
+    elif isinstance(rngs, (np.random.SeedSequence, np.random.Generator)):
+        rngs = children(rngs, n_flights)
     if len(rngs) != n_flights:
         raise ValueError(f"got {len(rngs)} generators for {n_flights} flights")
     return [g if isinstance(g, np.random.Generator) else np.random.default_rng(g) for g in rngs]

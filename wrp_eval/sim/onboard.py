@@ -34,7 +34,7 @@ from wrp_eval.sim.power import (
     return_energy_j,
 )
 from wrp_eval.sim.vehicle import QuadrotorParams
-from wrp_eval.streams import flight_generators
+from wrp_eval.streams import children, flight_generators
 
 
 @dataclass(frozen=True)
@@ -72,7 +72,7 @@ class Onboard:
     def __init__(self, sec: SimSection, params: QuadrotorParams, targets: FlightTargets, ship: ShipInScene | None,
                  flight_rngs, dt_s: float, cruise_m_s: float, camera: Camera):
         batch = targets.batch
-        streams = [g.spawn(2) for g in flight_generators(flight_rngs, batch)]
+        streams = [children(g, 2) for g in flight_generators(flight_rngs, batch)]
         self.sec, self.params, self.dt_s, self.camera = sec, params, dt_s, camera
         self.cruise_m_s = cruise_m_s
         self.navigation = NavigationEstimator(navigation_params(sec.navigation), [s[0] for s in streams], batch, dt_s)
@@ -152,7 +152,10 @@ class Onboard:
             return None
         offset = rot[rows] @ np.asarray(self.params.camera_offset_m)
         cam_pos = position[rows] + velocity[rows] * delay_s[:, None] + offset
-        estimated = nav.position[rows] + nav.velocity[rows] * delay_s[:, None] + offset
+        # the navigation puts the camera's lever arm on its own (estimated) heading
+        c, s = np.cos(nav.yaw_error[rows]), np.sin(nav.yaw_error[rows])
+        arm = np.stack([c * offset[:, 0] - s * offset[:, 1], s * offset[:, 0] + c * offset[:, 1], offset[:, 2]], 1)
+        estimated = nav.position[rows] + nav.velocity[rows] * delay_s[:, None] + arm
         before = self._previous
         cam_rot = camera_rotations(attitude.yaw[rows], attitude.pitch[rows], attitude.roll[rows])
         omega = angular_velocity(camera_rotations(before.yaw[rows], before.pitch[rows], before.roll[rows]), cam_rot,

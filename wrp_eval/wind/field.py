@@ -20,7 +20,7 @@ import numpy as np
 from wrp_eval.frames import ship_pose
 from wrp_eval.ship.particulars import ShipParticulars
 from wrp_eval.ship.proxy import build_proxy
-from wrp_eval.streams import flight_generators
+from wrp_eval.streams import children, flight_generators
 from wrp_eval.wind.air_wake import ShipAirWake
 from wrp_eval.wind.base import WindModel
 from wrp_eval.wind.boundary_layer import synthetic_marine_grid
@@ -185,7 +185,7 @@ def build_wind_field(sections: Sequence[WindSection], ship, flight_rngs, dt_s: f
     n = len(sections)
     if n < 1:
         raise ValueError("a wind field needs at least one flight")
-    streams = [g.spawn(2) for g in flight_generators(flight_rngs, n)]
+    streams = [children(g, 2) for g in flight_generators(flight_rngs, n)]
     mean = build_mean_wind(sections, ship, base_dir)
     at_20ft = mean.velocity(np.tile([0.0, 0.0, TWENTY_FT_M], (n, 1)), 0.0)          # (F, 3) over the ship
     w20 = flight_w20_mps(sections, at_20ft)

@@ -1,0 +1,29 @@
+"""Per-flight random streams: children are SeedSequence.spawn's numbers without spawning; blocks of normals
+do not depend on how the steps are drawn."""
+
+import numpy as np
+
+from wrp_eval.streams import BlockNormals, children, flight_generators
+
+
+def test_children_are_the_spawned_ones_and_leave_the_source_untouched():
+    seq = np.random.SeedSequence(5)
+    ours = [g.standard_normal(4) for g in children(seq, 3)]
+    spawned = [np.random.default_rng(s).standard_normal(4) for s in np.random.SeedSequence(5).spawn(3)]
+    assert all(np.array_equal(a, b) for a, b in zip(ours, spawned))
+    assert seq.n_children_spawned == 0
+    again = [g.standard_normal(4) for g in flight_generators(seq, 3)]     # the same object twice: same numbers
+    assert all(np.array_equal(a, b) for a, b in zip(ours, again))
+    gen = np.random.default_rng(7)
+    first = [g.standard_normal(2) for g in children(gen, 2)]
+    assert all(np.array_equal(a, b.standard_normal(2)) for a, b in zip(first, np.random.default_rng(7).spawn(2)))
+    assert all(np.array_equal(a, b.standard_normal(2)) for a, b in zip(first, children(gen, 2)))
+
+
+def test_block_normals_do_not_depend_on_the_chunking():
+    whole = BlockNormals(3, 2, 4, block_steps=8).draw(20)
+    pieces = BlockNormals(3, 2, 4, block_steps=8)
+    chunked = np.concatenate([pieces.draw(k) for k in (1, 7, 5, 7)], axis=1)
+    assert np.array_equal(whole, chunked)
+    alone = BlockNormals([np.random.default_rng(s) for s in np.random.SeedSequence(3).spawn(2)][1:], 1, 4, 8)
+    assert np.array_equal(whole[1:], alone.draw(20))
