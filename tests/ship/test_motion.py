@@ -113,7 +113,7 @@ def test_calm_sea_is_no_motion(sea_state):
     section = ShipMotionSection(sea_state=sea_state)
     assert not section.enabled
     assert ship_motion(section, None, 1, 3) is None
-    assert ShipMotionSection().sea_state is None        # the default: at anchor in a calm sea
+    assert ShipMotionSection().enabled                  # the default (from_wind) is not a calm sea
 
 
 @pytest.mark.parametrize("components", [1, 4])
@@ -192,3 +192,33 @@ def test_bad_config_names_the_key(bad, key):
         parse_model(Holder, {"motion": bad}, "experiment.yaml")
     with pytest.raises(ValueError, match="sea_state"):
         sea_state_figures(7)
+
+
+def test_from_wind_each_flight_swings_in_the_sea_of_its_own_wind():
+    from wrp_eval.ship.motion import (
+        ShipMotionSection,
+        sea_state_figures,
+        ship_motion,
+        wind_wave_height_m,
+        wmo_sea_state,
+    )
+    # Pierson-Moskowitz fully developed sea: Hs = 0.21 (1.06 U10)^2 / g
+    speeds = np.array([0.0, 6.0, 12.0])
+    hs = wind_wave_height_m(speeds)
+    assert hs == pytest.approx(0.21 * (1.06 * speeds) ** 2 / 9.81)
+    assert wmo_sea_state(hs).tolist() == [0, 3, 5]
+    motion = ship_motion(ShipMotionSection(), None, 4, 3, speeds)   # the default section: from_wind
+    row4, freqs = sea_state_figures(4)
+    assert motion.amplitudes() == pytest.approx(hs[:, None] / 2.5 * row4[None, :])
+    assert motion.frequencies()[1:] == pytest.approx(np.tile(freqs, (2, 1)))            # the table's, in a wind
+    assert np.all(motion.dof(np.linspace(0, 60, 7)[None, :].repeat(3, 0))[0] == 0.0)     # calm: still
+    alone = ship_motion(ShipMotionSection(), None, [np.random.default_rng(4).spawn(3)[2]], 1, speeds[2:])
+    assert np.array_equal(alone.dof(17.0)[0], motion.dof(17.0)[2])                      # batch-independent
+
+
+def test_from_wind_needs_the_wind_and_unknown_words_are_refused():
+    from wrp_eval.ship.motion import ShipMotionSection, ship_motion
+    with pytest.raises(ValueError, match="wind speed"):
+        ship_motion(ShipMotionSection(), None, 0, 2)
+    with pytest.raises(ValueError):
+        ShipMotionSection(sea_state="windy")

@@ -14,6 +14,7 @@ no extra disturbance) the capture poses are exactly the simulator's.
 from __future__ import annotations
 
 import time
+from dataclasses import replace
 
 import numpy as np
 
@@ -69,7 +70,8 @@ class FlightEvaluator:
         wind = build_wind_field([trial_wind_section(self.config.wind, t.wind) for t in batch], self.ship.particulars,
                                 [trial_wind_rng(t.wind) for t in batch], self.dt_s, self.config_dir)
         commanded = np.stack([t.commanded_offsets for t in batch])           # (b, n, 4)
-        result = self.sim.fly(self.path, wind, len(batch), view_offsets=commanded, ship=self.in_scene,
+        ship = replace(self.in_scene, wind_speed_10m_m_s=np.array([t.wind.speed_10m_m_s for t in batch]))
+        result = self.sim.fly(self.path, wind, len(batch), view_offsets=commanded, ship=ship,
                               flight_rngs=[np.random.default_rng(t.flight_seed) for t in batch])
         flight_s = (time.perf_counter() - start) / len(batch)
         disturbance = np.stack([t.disturbance for t in batch])

@@ -1,12 +1,14 @@
 """Ship motion in a seaway: heave, roll, pitch and yaw of each flight's ship, batch-first.
 
-The ship stage's ``ship.motion`` section. Off by default (``sea_state`` None or 0: the ship at anchor in a
-calm sea, WMO sea-state code 0), which keeps the paper's static-ship experiments unchanged.
+The ship stage's ``ship.motion`` section. By default (``sea_state: from_wind``) each flight's ship swings in
+the fully developed sea of that flight's own mean wind: the default experiment's 6 m/s is not a calm sea
+(Pierson-Moskowitz Hs 0.87 m, WMO code 3). ``sea_state: 0`` (or None) is the ship at anchor in a calm sea, as
+in the paper's static-ship experiments (experiments/paper/ set it).
 
 ```yaml
 ship:
   motion:
-    sea_state: 4                       # WMO code 0..6 (0 / absent = no motion)
+    sea_state: 4                       # WMO code 0..6 (0 / None = no motion), or from_wind (the default)
     components: 1                      # sinusoids per degree of freedom (1 = the published table as is)
     relative_bandwidth: 0.2            # spread of the component frequencies when components > 1
     amplitude_scale: [1, 1, 1, 1]      # heave, roll, pitch, yaw multipliers of the carrier figures
@@ -38,7 +40,7 @@ eq. 2.18) about the origin, and p_world = R p_ship + (0, 0, heave).
 from __future__ import annotations
 
 from dataclasses import dataclass
-from typing import Annotated
+from typing import Annotated, Literal
 
 import numpy as np
 from pydantic import Field
@@ -87,6 +89,27 @@ def _table() -> dict[int, tuple[np.ndarray, np.ndarray]]:
 SEA_STATE_TABLE = _table()
 
 
+# Fully developed sea of a wind (Pierson & Moskowitz 1964, J. Geophys. Res. 69(24): the PM spectrum's
+# significant wave height Hs = 0.21 U^2 / g, U the wind at 19.5 m above the sea); U19.5 = 1.06 U10 by the
+# marine log law (Charnock roughness ~0.2 mm: ln(19.5/z0)/ln(10/z0) = 1.06).
+PM_HS_COEFF = 0.21
+U195_PER_U10 = 1.06
+GRAVITY_M_S2 = 9.81
+
+
+def wind_wave_height_m(speed_10m_m_s) -> np.ndarray:
+    """Significant wave height (n,) m of the fully developed sea under a wind of ``speed_10m_m_s`` (n,) m/s at
+    10 m, capped at the table's largest sea state (6: 6 m)."""
+    u = U195_PER_U10 * np.asarray(speed_10m_m_s, dtype=float)
+    return np.minimum(PM_HS_COEFF * u ** 2 / GRAVITY_M_S2, WMO_HS_UPPER_M[MAX_SEA_STATE])
+
+
+def wmo_sea_state(wave_height_m) -> np.ndarray:
+    """The WMO sea-state code (n,) int of significant wave heights (n,) m (code c covers Hs up to its bound)."""
+    bounds = np.array([WMO_HS_UPPER_M[c] for c in range(MAX_SEA_STATE + 1)])
+    return np.minimum(np.searchsorted(bounds, np.asarray(wave_height_m, dtype=float), side="left"), MAX_SEA_STATE)
+
+
 def sea_state_figures(sea_state: int) -> tuple[np.ndarray, np.ndarray]:
     """(amplitudes (4,), frequencies (4,)) of a WMO sea state 0..6: heave m, roll / pitch / yaw rad; rad/s.
     The amplitude is the sinusoid's (sqrt(2) x RMS). Sea state 0 has zero amplitudes."""
@@ -100,10 +123,12 @@ _Scale = Annotated[float, Field(ge=0, le=100, allow_inf_nan=False)]
 
 
 class ShipMotionSection(StrictModel):
-    """Ship motion in a seaway (``ship.motion``); off unless ``sea_state`` is 1..6."""
+    """Ship motion in a seaway (``ship.motion``): by default the sea its wind raises; off with ``sea_state`` 0."""
 
-    sea_state: int | None = Field(None, ge=0, le=MAX_SEA_STATE, description="WMO sea-state code 0..6; None or 0 = "
-                                  "the ship at anchor in a calm sea (no motion, the default)")
+    sea_state: Annotated[int, Field(ge=0, le=MAX_SEA_STATE)] | Literal["from_wind"] | None = Field(
+        "from_wind", description="from_wind (the default): each flight's fully developed sea under its own mean "
+        "wind (Pierson-Moskowitz Hs = 0.21 U19.5^2 / g), the motion scaled from the sea-state-4 row by Hs / 2.5 m; "
+        "or a WMO sea-state code 0..6; None or 0 = the ship at anchor in a calm sea (no motion)")
     components: int = Field(1, ge=1, le=64, description="sinusoids per degree of freedom: 1 = the published "
                             "table's single sinusoid, more = a narrow-band random process of the same RMS")
     relative_bandwidth: float = Field(0.2, ge=0, lt=1, description="components > 1: the component frequencies "
@@ -115,7 +140,7 @@ class ShipMotionSection(StrictModel):
 
     @property
     def enabled(self) -> bool:
-        """True when the ship moves (sea state 1..6)."""
+        """True when the ship moves (sea state 1..6, or from the wind)."""
         return bool(self.sea_state)
 
 
@@ -203,13 +228,14 @@ class ShipMotion:
 
 
 def ship_motion(section: ShipMotionSection, particulars: ShipParticulars | None, rngs,
-                n_flights: int) -> ShipMotion | None:
+                n_flights: int, wind_speed_10m_m_s=None) -> ShipMotion | None:
     """The motion of ``n_flights`` ships in ``section``'s sea state, or None when it is off (sea state None / 0).
 
     particulars: the ship (unused by the carrier table, which is not ship-specific; kept so that a
     ship-dependent model can replace it). rngs: as :func:`wrp_eval.streams.flight_generators`; flight i draws
     from its own Generator, in this order, its phases (4, K) and, for K > 1, its frequency offsets (4, K), so its
-    motion does not depend on the batch it is in.
+    motion does not depend on the batch it is in. wind_speed_10m_m_s: scalar or (n_flights,) m/s, each flight's
+    mean wind (needed by ``sea_state: from_wind``; a flight in a calm wind gets a still ship).
     """
     del particulars
     if not section.enabled:
@@ -217,7 +243,16 @@ def ship_motion(section: ShipMotionSection, particulars: ShipParticulars | None,
     if n_flights < 1:
         raise ValueError("n_flights must be >= 1")
     k = section.components
-    amps, freqs = sea_state_figures(section.sea_state)
+    if section.sea_state == "from_wind":
+        if wind_speed_10m_m_s is None:
+            raise ValueError("ship.motion.sea_state from_wind needs each flight's wind speed")
+        row4, freqs = sea_state_figures(4)
+        hs = np.broadcast_to(wind_wave_height_m(wind_speed_10m_m_s), (n_flights,))
+        amps = hs[:, None] / WMO_HS_UPPER_M[4] * row4[None, :]        # (n, 4): linear response, as rows 1-3
+        sea_state = int(wmo_sea_state(hs.max()))
+    else:
+        amps, freqs = sea_state_figures(section.sea_state)
+        sea_state = section.sea_state
     amps = amps * np.asarray(section.amplitude_scale)
     gens = flight_generators(rngs, n_flights)
     phases = np.stack([g.uniform(0.0, 2.0 * np.pi, (4, k)) for g in gens])
@@ -226,7 +261,7 @@ def ship_motion(section: ShipMotionSection, particulars: ShipParticulars | None,
     else:
         offsets = np.zeros((n_flights, 4, 1))
     frequency = freqs[None, :, None] * (1.0 + section.relative_bandwidth * offsets)
-    amplitude = np.broadcast_to(amps[None, :, None] / np.sqrt(k), (n_flights, 4, k)).copy()
+    amplitude = np.broadcast_to(np.reshape(amps, (-1, 4))[:, :, None] / np.sqrt(k), (n_flights, 4, k)).copy()
     for array in (amplitude, frequency, phases):
         array.flags.writeable = False
-    return ShipMotion(section.sea_state, amplitude, frequency, phases)
+    return ShipMotion(sea_state, amplitude, frequency, phases)

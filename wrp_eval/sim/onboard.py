@@ -41,18 +41,20 @@ from wrp_eval.streams import children, flight_generators
 class ShipInScene:
     """The ship the drones fly around, as the simulator needs it: box (2, 3) m, the hull's cuboid (the
     proxy's corners) in the ship frame, for the compass's distance to the hull and the views' depth;
-    motion: the ``ship.motion`` section (its swing in a seaway); particulars: for the motion model."""
+    motion: the ``ship.motion`` section (its swing in a seaway); particulars: for the motion model;
+    wind_speed_10m_m_s: scalar or (batch,) m/s, each flight's mean wind (the sea of ``sea_state: from_wind``)."""
 
     box: np.ndarray
     motion: ShipMotionSection = ShipMotionSection()
     particulars: object | None = None
+    wind_speed_10m_m_s: object = None
 
     @classmethod
-    def of(cls, mesh, motion: ShipMotionSection, particulars=None) -> ShipInScene:
+    def of(cls, mesh, motion: ShipMotionSection, particulars=None, wind_speed_10m_m_s=None) -> ShipInScene:
         """The ship of a true ``mesh`` (trimesh, ship frame): its bounding box above the waterline."""
         box = np.array(mesh.bounds, dtype=float)
         box[0, 2] = max(box[0, 2], 0.0)
-        return cls(box, motion, particulars)
+        return cls(box, motion, particulars, wind_speed_10m_m_s)
 
 
 def view_depths(path, box: np.ndarray | None) -> np.ndarray:
@@ -78,7 +80,7 @@ class Onboard:
         self.navigation = NavigationEstimator(navigation_params(sec.navigation), [s[0] for s in streams], batch, dt_s)
         self.box = None if ship is None else np.asarray(ship.box, dtype=float)
         self.motion: ShipMotion | None = None if ship is None else ship_motion(
-            ship.motion, ship.particulars, [s[1] for s in streams], batch)
+            ship.motion, ship.particulars, [s[1] for s in streams], batch, ship.wind_speed_10m_m_s)
         self.battery = Battery(sec.battery, batch)
         self.home = targets.body[:, 0].copy()
         self.gimbal_params = GimbalParams.of(sec.gimbal)
