@@ -102,3 +102,12 @@ def test_sample_mean_field_on_the_grid_nodes_above_the_sea():
     assert x.tolist() == [-40, -20, 0, 20, 40] and y.tolist() == [-20, 0, 20] and z.tolist() == [10, 50]
     assert velocity.shape == (5, 3, 2, 3)
     np.testing.assert_allclose(np.linalg.norm(velocity[..., 0, :], axis=-1), 7.0, rtol=1e-9)  # U10 at 10 m
+
+
+def test_each_flights_sea_wind_is_its_own_mean_wind_at_10_m_over_the_ship():
+    # what raises the sea under each flight (ship.motion from_wind): the mean field, not the turbulence
+    from wrp_eval.wind.config import TurbulenceSection
+    sections = [WindSection(speed_10m_mps=s, direction_deg=d, turbulence=TurbulenceSection(severity="severe"))
+                for s, d in ((4.0, 0.0), (11.0, 135.0))]
+    field = build_wind_field(sections, (0.0, 0.0, 30.0), 0, 0.05)
+    np.testing.assert_allclose(field.speed_10m_at_ship(2), [4.0, 11.0], rtol=1e-9)

@@ -70,7 +70,7 @@ class FlightEvaluator:
         wind = build_wind_field([trial_wind_section(self.config.wind, t.wind) for t in batch], self.ship.particulars,
                                 [trial_wind_rng(t.wind) for t in batch], self.dt_s, self.config_dir)
         commanded = np.stack([t.commanded_offsets for t in batch])           # (b, n, 4)
-        ship = replace(self.in_scene, wind_speed_10m_m_s=np.array([t.wind.speed_10m_m_s for t in batch]))
+        ship = replace(self.in_scene, wind_speed_10m_m_s=wind.speed_10m_at_ship(len(batch)))
         result = self.sim.fly(self.path, wind, len(batch), view_offsets=commanded, ship=ship,
                               flight_rngs=[np.random.default_rng(t.flight_seed) for t in batch])
         flight_s = (time.perf_counter() - start) / len(batch)

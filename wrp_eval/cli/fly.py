@@ -75,7 +75,7 @@ def _fly(args: argparse.Namespace) -> int:
     dt = config.sim.timestep_s * config.sim.chunk_steps          # the wind is stepped at the controller rate
     wind_seed, flight_seed = np.random.SeedSequence(seed).spawn(2)
     wind = build_wind_field([section] * args.trials, ctx.particulars, wind_seed, dt, config_dir)
-    ship = ShipInScene.of(ctx.ship.mesh, config.ship.motion, ctx.particulars, section.speed_10m_mps)
+    ship = ShipInScene.of(ctx.ship.mesh, config.ship.motion, ctx.particulars, wind.speed_10m_at_ship(args.trials))
     with FlightSimulator(config.sim) as sim:
         result = sim.fly(path, wind, args.trials, ship=ship, flight_rngs=flight_seed)
     out = FsPath(args.out)

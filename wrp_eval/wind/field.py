@@ -55,6 +55,12 @@ class WindField:
     gusts: OneMinusCosineGusts | None = None
     wake: ShipAirWake | None = None
 
+    def speed_10m_at_ship(self, n_flights: int) -> np.ndarray:
+        """(n_flights,) m/s: each flight's mean horizontal wind 10 m above the sea at the ship (the origin), from
+        its own mean field (synthetic or mesoscale): what raises the sea it flies over."""
+        mean = self.mean.velocity(np.tile([0.0, 0.0, 10.0], (n_flights, 1)), 0.0)
+        return np.hypot(mean[:, 0], mean[:, 1])
+
     def velocity(self, points: np.ndarray, t: float) -> np.ndarray:
         points = np.asarray(points, dtype=float)
         wind = self.mean.velocity(points, t)
