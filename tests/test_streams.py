@@ -27,3 +27,16 @@ def test_block_normals_do_not_depend_on_the_chunking():
     assert np.array_equal(whole, chunked)
     alone = BlockNormals([np.random.default_rng(s) for s in np.random.SeedSequence(3).spawn(2)][1:], 1, 4, 8)
     assert np.array_equal(whole[1:], alone.draw(20))
+
+
+def test_children_continue_after_spawned_ones_keep_the_bit_generator_and_refuse_legacy_sources():
+    import pytest
+    seq = np.random.SeedSequence(9)
+    spawned = seq.spawn(1)[0]
+    nxt = children(seq, 1)[0].standard_normal(3)
+    assert not np.array_equal(nxt, np.random.default_rng(spawned).standard_normal(3))
+    assert np.array_equal(nxt, np.random.default_rng(np.random.SeedSequence(9).spawn(2)[1]).standard_normal(3))
+    mt = np.random.Generator(np.random.MT19937(4))
+    assert isinstance(children(mt, 1)[0].bit_generator, np.random.MT19937)
+    with pytest.raises(TypeError):
+        children(np.random.RandomState(1), 1)             # a legacy source has no SeedSequence

@@ -11,12 +11,17 @@ import numpy as np
 
 
 def children(source, n: int) -> list[np.random.Generator]:
-    """n Generators derived from ``source`` (a SeedSequence or a Generator) as its first n spawned children
-    (``SeedSequence.spawn``'s numbers, spawn keys ``(..., i)``), without spawning: the caller's object is left as
-    it was, so passing the same object twice gives the same numbers twice."""
-    seq = source.bit_generator.seed_seq if isinstance(source, np.random.Generator) else source
-    return [np.random.default_rng(np.random.SeedSequence(seq.entropy, spawn_key=tuple(seq.spawn_key) + (i,),
-                                                         pool_size=seq.pool_size)) for i in range(n)]
+    """The n Generators ``source`` (a SeedSequence or a Generator) would spawn next (``spawn``'s numbers and bit
+    generator), without spawning them: the caller's object is left as it was, so passing the same object twice
+    gives the same numbers twice (a caller that wants other streams spawns them itself)."""
+    generator = isinstance(source, np.random.Generator)
+    seq = source.bit_generator.seed_seq if generator else source
+    if not isinstance(seq, np.random.SeedSequence):
+        raise TypeError(f"children() needs a SeedSequence or a Generator seeded by one, got {type(seq).__name__}")
+    bit_generator = type(source.bit_generator) if generator else np.random.PCG64
+    first = seq.n_children_spawned
+    return [np.random.Generator(bit_generator(np.random.SeedSequence(
+        seq.entropy, spawn_key=tuple(seq.spawn_key) + (first + i,), pool_size=seq.pool_size))) for i in range(n)]
 
 
 def flight_generators(rngs, n_flights: int) -> list[np.random.Generator]:

@@ -208,6 +208,7 @@ def test_from_wind_each_flight_swings_in_the_sea_of_its_own_wind():
     assert hs == pytest.approx(0.21 * (1.06 * speeds) ** 2 / 9.81)
     assert wmo_sea_state(hs).tolist() == [0, 3, 5]
     motion = ship_motion(ShipMotionSection(), None, 4, 3, speeds)   # the default section: from_wind
+    assert motion.sea_state.tolist() == [0, 3, 5] and motion.flights(np.array([2])).sea_state.tolist() == [5]
     row4, freqs = sea_state_figures(4)
     assert motion.amplitudes() == pytest.approx(hs[:, None] / 2.5 * row4[None, :])
     assert motion.frequencies()[1:] == pytest.approx(np.tile(freqs, (2, 1)))            # the table's, in a wind

@@ -157,11 +157,12 @@ def _euler_zyx(roll, pitch, yaw) -> np.ndarray:
 class ShipMotion:
     """The motion of n flights' ships: per flight, degree of freedom and component, (n, 4, K) arrays.
 
-    amplitude (m or rad), frequency_rad_s and phase_rad of every sinusoid; ``sea_state`` the WMO code.
+    amplitude (m or rad), frequency_rad_s and phase_rad of every sinusoid; ``sea_state`` (n,) int: each
+    flight's WMO code.
     Build with :func:`ship_motion`. Times are seconds from the flight's start (t = 0).
     """
 
-    sea_state: int
+    sea_state: np.ndarray
     amplitude: np.ndarray
     frequency_rad_s: np.ndarray
     phase_rad: np.ndarray
@@ -189,7 +190,7 @@ class ShipMotion:
 
     def flights(self, rows: np.ndarray) -> ShipMotion:
         """The motion of flights ``rows`` (m,) int alone (their own sinusoids)."""
-        return ShipMotion(self.sea_state, self.amplitude[rows], self.frequency_rad_s[rows], self.phase_rad[rows])
+        return ShipMotion(self.sea_state[rows], self.amplitude[rows], self.frequency_rad_s[rows], self.phase_rad[rows])
 
     def amplitudes(self) -> np.ndarray:
         """(n, 4) nominal amplitude of each flight's motion: sqrt(sum_k a_k^2) = sqrt(2) x RMS over a long
@@ -249,10 +250,10 @@ def ship_motion(section: ShipMotionSection, particulars: ShipParticulars | None,
         row4, freqs = sea_state_figures(4)
         hs = np.broadcast_to(wind_wave_height_m(wind_speed_10m_m_s), (n_flights,))
         amps = hs[:, None] / WMO_HS_UPPER_M[4] * row4[None, :]        # (n, 4): linear response, as rows 1-3
-        sea_state = int(wmo_sea_state(hs.max()))
+        sea_state = wmo_sea_state(hs)
     else:
         amps, freqs = sea_state_figures(section.sea_state)
-        sea_state = section.sea_state
+        sea_state = np.full(n_flights, section.sea_state)
     amps = amps * np.asarray(section.amplitude_scale)
     gens = flight_generators(rngs, n_flights)
     phases = np.stack([g.uniform(0.0, 2.0 * np.pi, (4, k)) for g in gens])
