@@ -7,7 +7,6 @@ from pydantic import ValidationError
 
 from wrp_eval.sim.capture_mode import (
     CaptureSection,
-    crossed,
     shutter_offset,
     through_profile,
     vertex_speeds,
@@ -146,14 +145,6 @@ def test_the_shutter_opens_the_latency_after_the_interpolated_crossing():
     x_now = np.array([0.0, 0.04, 0.11, 0.2499])
     at_shutter = x_now + 5.0 * shutter_offset(x_now, np.full(4, 5.0), chunk, latency)
     assert at_shutter == pytest.approx(np.full(4, 5.0 * latency))
-
-
-def test_crossing_the_views_plane_perpendicular_to_the_arriving_leg():
-    target = np.array([[10.0, 0.0, 20.0]] * 3)
-    previous = np.array([[0.0, 0.0, 20.0]] * 3)
-    position = np.array([[9.5, 3.0, 18.0], [10.2, -1.0, 25.0], [10.0, 0.0, 20.0]])
-    hit, past = crossed(position, target, previous)
-    assert hit.tolist() == [False, True, True] and past == pytest.approx([-0.5, 0.2, 0.0])
 
 
 def test_the_capture_section_rejects_bad_values():

@@ -33,8 +33,7 @@ def test_a_level_airframe_gets_the_wanted_pitch_and_no_roll():
     rot = np.concatenate([_airframe(40.0), _airframe(-120.0)])
     wanted = np.radians([-20.0, -90.0])
     gimbal = Gimbal(params, rot, wanted, DT)
-    gimbal.step(rot, wanted)
-    att = gimbal.attitude(rot, np.radians([40.0, -120.0]), wanted)
+    att = gimbal.step(rot, np.radians([40.0, -120.0]), wanted)
     assert att.pitch == pytest.approx(wanted, abs=1e-12)
     assert att.roll == pytest.approx([0.0, 0.0], abs=1e-12)
     assert att.yaw == pytest.approx(np.radians([40.0, -120.0]))      # follow mode: the airframe's heading
@@ -45,7 +44,7 @@ def test_a_nose_down_airframe_is_compensated_by_the_pitch_joint():
     rot = _airframe(0.0, 15.0, 0.0)                                    # nose 15 deg down (forward flight)
     gimbal = Gimbal(_params(), rot, np.radians([-30.0]), DT)
     assert np.degrees(gimbal.joint[0]) == pytest.approx([-15.0, 0.0])  # joint -30 + 15
-    assert np.degrees(gimbal.attitude(rot, np.zeros(1), np.radians([-30.0])).pitch) == pytest.approx([-30.0])
+    assert np.degrees(gimbal.step(rot, np.zeros(1), np.radians([-30.0]), advance=False).pitch) == pytest.approx([-30.0])
 
 
 def test_the_residual_roll_decays_as_the_first_order_loop_once_below_the_rate_limit():
@@ -56,8 +55,7 @@ def test_the_residual_roll_decays_as_the_first_order_loop_once_below_the_rate_li
     gimbal = Gimbal(params, level, wanted, DT)                       # settled on the level airframe
     roll = []
     for _ in range(12):                                               # the airframe rolls 20 deg and stays
-        gimbal.step(rolled, wanted)
-        roll.append(gimbal.attitude(rolled, np.zeros(1), wanted).roll[0])
+        roll.append(gimbal.step(rolled, np.zeros(1), wanted).roll[0])
     roll = np.degrees(np.array(roll))
     gain = 1.0 - np.exp(-2.0 * np.pi * f_hz * DT)
     max_step = 90.0 * DT                                              # 90 deg/s
@@ -80,8 +78,7 @@ def test_without_rate_limit_the_roll_follows_the_closed_form_exponential():
     k = np.arange(1, 9)
     roll = []
     for _ in k:
-        gimbal.step(rolled, wanted)
-        roll.append(np.degrees(gimbal.attitude(rolled, np.zeros(1), wanted).roll[0]))
+        roll.append(np.degrees(gimbal.step(rolled, np.zeros(1), wanted).roll[0]))
     assert np.array(roll) == pytest.approx(20.0 * np.exp(-2.0 * np.pi * f_hz * DT * k), rel=1e-9)
 
 
@@ -91,7 +88,7 @@ def test_the_rate_limit_bounds_every_joint_move():
     gimbal = Gimbal(params, rot, np.radians([0.0]), DT)
     joints = []
     for _ in range(10):                                               # a new view 60 deg lower
-        gimbal.step(rot, np.radians([-60.0]))
+        gimbal.step(rot, np.zeros(1), np.radians([-60.0]))
         joints.append(gimbal.joint[0, 0])
     steps = np.degrees(np.diff(np.concatenate([[0.0], joints])))
     assert steps[:5] == pytest.approx(np.full(5, -30.0 * DT))         # slewing at the limit
@@ -102,14 +99,13 @@ def test_the_joints_stop_at_their_mechanical_range():
     params = _params()                                                # pitch -90..+30, roll +-35 (DJI)
     level = _airframe()
     gimbal = Gimbal(params, level, np.radians([40.0]), DT)
-    att = gimbal.attitude(level, np.zeros(1), np.radians([40.0]))
+    att = gimbal.step(level, np.zeros(1), np.radians([40.0]), advance=False)
     assert np.degrees(att.pitch) == pytest.approx([30.0]) and att.saturated.tolist() == [True]
     # rolled 45 deg: the roll joint stops at -35 deg, 10 deg of roll reach the camera
     rolled = _airframe(roll_right_deg=45.0)
     gimbal = Gimbal(params, level, np.radians([-20.0]), DT)
     for _ in range(30):
-        gimbal.step(rolled, np.radians([-20.0]))
-    att = gimbal.attitude(rolled, np.zeros(1), np.radians([-20.0]))
+        att = gimbal.step(rolled, np.zeros(1), np.radians([-20.0]))
     assert np.degrees(gimbal.joint[0, 1]) == pytest.approx(-35.0)
     assert np.degrees(att.roll) == pytest.approx([10.0]) and att.saturated.tolist() == [True]
 

@@ -51,14 +51,20 @@ def segments_intrude(starts: np.ndarray, ends: np.ndarray, box: np.ndarray) -> n
     inside for every t or for none. A segment of zero length intrudes when its point is inside."""
     lo, hi = _shrunk(box)
     a = np.asarray(starts, dtype=float)
-    d = np.asarray(ends, dtype=float) - a
+    enter, leave = _slabs(a, np.asarray(ends, dtype=float) - a, lo, hi, (a > lo) & (a < hi))
+    return np.maximum(enter, 0.0) < np.minimum(leave, 1.0)
+
+
+def _slabs(a: np.ndarray, d: np.ndarray, lo: np.ndarray, hi: np.ndarray, inside_slab: np.ndarray):
+    """(enter, leave) (...,): the parameters t at which a + t d (..., 3) enters and leaves the box lo..hi (3,),
+    the intersection of its three slabs; ``inside_slab`` (..., 3): whether a is within each slab (what decides
+    an axis the line does not move along: inside for every t, or for none)."""
     flat = d == 0
-    inside_slab = (a > lo) & (a < hi)
     with np.errstate(divide="ignore", invalid="ignore"):
         t1, t2 = (lo - a) / d, (hi - a) / d
     enter = np.where(flat, np.where(inside_slab, -np.inf, np.inf), np.minimum(t1, t2)).max(axis=-1)
     leave = np.where(flat, np.where(inside_slab, np.inf, -np.inf), np.maximum(t1, t2)).min(axis=-1)
-    return np.maximum(enter, 0.0) < np.minimum(leave, 1.0)
+    return enter, leave
 
 
 def above_min_altitude(points: np.ndarray, min_altitude_m: float) -> np.ndarray:
@@ -97,13 +103,7 @@ def ray_box_distance(origins: np.ndarray, directions: np.ndarray, box: np.ndarra
     """(...,) m: distance along unit rays origins + t directions (..., 3) to where they enter the box (2, 3);
     NaN where a ray misses it or starts inside (the slab test of :func:`segments_intrude`, on a ray)."""
     a = np.asarray(origins, dtype=float)
-    d = np.asarray(directions, dtype=float)
     box = np.asarray(box, dtype=float)
-    with np.errstate(divide="ignore", invalid="ignore"):
-        t1, t2 = (box[0] - a) / d, (box[1] - a) / d
-    flat = d == 0
-    inside_slab = (a >= box[0]) & (a <= box[1])
-    enter = np.where(flat, np.where(inside_slab, -np.inf, np.inf), np.minimum(t1, t2)).max(axis=-1)
-    leave = np.where(flat, np.where(inside_slab, np.inf, -np.inf), np.maximum(t1, t2)).min(axis=-1)
+    enter, leave = _slabs(a, np.asarray(directions, dtype=float), box[0], box[1], (a >= box[0]) & (a <= box[1]))
     hit = (enter > 0.0) & (enter <= leave)
     return np.where(hit, enter, np.nan)

@@ -121,16 +121,6 @@ def through_profile(length, tau, v0, v1, v_max, accel):
     return np.minimum(s, length), v, a, duration
 
 
-def crossed(position: np.ndarray, target: np.ndarray, previous_target: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """(crossed (n,) bool, distance past the plane (n,) m): ``position`` (n, 3) is on or past the plane through
-    ``target`` (n, 3) perpendicular to the leg from ``previous_target`` (n, 3); the leg's unit direction is
-    returned implicitly through the distance (along it)."""
-    leg = target - previous_target
-    unit = leg / np.maximum(np.linalg.norm(leg, axis=1), 1e-12)[:, None]
-    past = ((position - target) * unit).sum(axis=1)
-    return past >= 0.0, past
-
-
 def shutter_offset(past_m: np.ndarray, speed_along_m_s: np.ndarray, chunk_s: float, latency_s: float) -> np.ndarray:
     """(n,) s from now to the shutter of views whose plane was crossed ``past_m`` (n,) m ago at ``speed_along_m_s``
     (n,): the crossing time interpolated within the last chunk, plus the trigger latency."""

@@ -149,42 +149,45 @@ def _nan(*shape) -> np.ndarray:
     return np.full(shape, np.nan)
 
 
+# per-view width of the Shot fields that are vectors (the rest: one value per view)
+_SHOT_WIDTH = {"position": 3, "estimated_position": 3, "ship_motion": 4}
+
+
 @dataclass(slots=True)
 class CaptureLog:
-    """The photos of a batch of flights, (batch, n_views, ...); NaN (False) where not (yet) taken.
+    """The photos of a batch of flights; NaN (False) where not (yet) taken.
 
-    The :class:`Shot` fields per view (position (batch, n_views, 3) etc.), plus offsets (batch, n_views, 4):
-    (dx, dy, dz m, dyaw rad) of the true pose against the plan; estimated_offsets (batch, n_views, 4): the
-    same for the navigation's record; taken (batch, n_views) bool.
+    shots: a :class:`Shot` of (batch, n_views, ...) arrays, its fields also read directly (``log.time``,
+    ``log.position`` ...); offsets (batch, n_views, 4): (dx, dy, dz m, dyaw rad) of the true pose against the
+    plan; estimated_offsets (batch, n_views, 4): the same for the navigation's record; taken (batch, n_views)
+    bool.
     """
 
-    time: np.ndarray
-    position: np.ndarray
-    yaw: np.ndarray
-    pitch: np.ndarray
-    roll: np.ndarray
-    saturated: np.ndarray
-    estimated_position: np.ndarray
-    estimated_yaw: np.ndarray
-    blur_px: np.ndarray
-    charge: np.ndarray
-    ship_motion: np.ndarray
+    shots: Shot
     offsets: np.ndarray
     estimated_offsets: np.ndarray
     taken: np.ndarray
 
     @classmethod
     def empty(cls, batch: int, n_views: int) -> CaptureLog:
-        b, n = batch, n_views
-        return cls(_nan(b, n), _nan(b, n, 3), _nan(b, n), _nan(b, n), _nan(b, n), np.zeros((b, n), dtype=bool),
-                   _nan(b, n, 3), _nan(b, n), _nan(b, n), _nan(b, n), _nan(b, n, 4), _nan(b, n, 4),
-                   _nan(b, n, 4), np.zeros((b, n), dtype=bool))
+        def blank(name: str) -> np.ndarray:
+            if name == "saturated":
+                return np.zeros((batch, n_views), dtype=bool)
+            width = _SHOT_WIDTH.get(name)
+            return _nan(batch, n_views, *((width,) if width else ()))
+        return cls(Shot(*(blank(name) for name in Shot._fields)), _nan(batch, n_views, 4), _nan(batch, n_views, 4),
+                   np.zeros((batch, n_views), dtype=bool))
+
+    def __getattr__(self, name: str) -> np.ndarray:
+        if name in Shot._fields:                 # only called for what is not a field of the log itself
+            return getattr(self.shots, name)
+        raise AttributeError(name)
 
     def record(self, rows: np.ndarray, views: np.ndarray, shot: Shot, targets: FlightTargets) -> None:
         """Store photo ``views`` (m,) int of flights ``rows`` (m,) int; offsets are against the unperturbed
         plan."""
-        for name in Shot._fields:
-            getattr(self, name)[rows, views] = getattr(shot, name)
+        for stored, taken in zip(self.shots, shot):
+            stored[rows, views] = taken
         self.offsets[rows, views, :3] = shot.position - targets.plan_position[views]
         self.offsets[rows, views, 3] = wrap_angle(shot.yaw - targets.plan_yaw[views])
         self.estimated_offsets[rows, views, :3] = shot.estimated_position - targets.plan_position[views]

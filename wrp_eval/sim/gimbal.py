@@ -91,25 +91,25 @@ class Gimbal:
         self.params = params
         self.gain = 1.0 - np.exp(-params.bandwidth * dt_s)
         self.max_step = params.rate_limit * dt_s
-        self.joint = self._limits(self._targets(rot, wanted_pitch))
-
-    def _targets(self, rot: np.ndarray, wanted_pitch: np.ndarray) -> np.ndarray:
         nose, wing = airframe_angles(rot)
+        self.joint = self._limits(self._targets(nose, wing, wanted_pitch))
+
+    @staticmethod
+    def _targets(nose: np.ndarray, wing: np.ndarray, wanted_pitch: np.ndarray) -> np.ndarray:
         return np.stack([wanted_pitch - nose, -wing], axis=1)
 
     def _limits(self, joint: np.ndarray) -> np.ndarray:
         p = self.params
         return np.stack([np.clip(joint[:, 0], *p.pitch_range), np.clip(joint[:, 1], *p.roll_range)], axis=1)
 
-    def step(self, rot: np.ndarray, wanted_pitch: np.ndarray) -> None:
-        """Advance every joint one chunk towards its target for airframes ``rot`` (n, 3, 3)."""
-        move = np.clip(self.gain * (self._targets(rot, wanted_pitch) - self.joint), -self.max_step, self.max_step)
-        self.joint = self._limits(self.joint + move)
-
-    def attitude(self, rot: np.ndarray, yaw: np.ndarray, wanted_pitch: np.ndarray) -> CameraAttitude:
-        """The cameras' world attitude now, airframes ``rot`` (n, 3, 3), headings ``yaw`` (n,) rad; saturated
-        where a joint's target lies beyond its stop."""
+    def step(self, rot: np.ndarray, yaw: np.ndarray, wanted_pitch: np.ndarray, advance: bool = True) -> CameraAttitude:
+        """The cameras' world attitude for airframes ``rot`` (n, 3, 3) with headings ``yaw`` (n,) rad, after
+        moving every joint one chunk towards its target (``advance``; False: as they are); saturated where a
+        joint's target lies beyond its stop."""
         nose, wing = airframe_angles(rot)
-        target = self._targets(rot, wanted_pitch)
+        target = self._targets(nose, wing, wanted_pitch)
+        if advance:
+            move = np.clip(self.gain * (target - self.joint), -self.max_step, self.max_step)
+            self.joint = self._limits(self.joint + move)
         saturated = np.any(np.abs(self._limits(target) - target) > 1e-12, axis=1)
         return CameraAttitude(yaw, nose + self.joint[:, 0], wing + self.joint[:, 1], saturated)

@@ -100,11 +100,10 @@ class Onboard:
     def point_camera(self, rot: np.ndarray, yaw: np.ndarray, wanted_pitch: np.ndarray) -> CameraAttitude:
         """Advance the gimbal one chunk (airframes ``rot`` (batch, 3, 3), planned pitch of each flight's next
         view (batch,) rad) and return the cameras' attitude; the previous chunk's is kept for the blur."""
-        if self.gimbal is None:
+        start = self.gimbal is None
+        if start:
             self.gimbal = Gimbal(self.gimbal_params, rot, wanted_pitch, self.dt_s)
-        else:
-            self.gimbal.step(rot, wanted_pitch)
-        attitude = self.gimbal.attitude(rot, yaw, wanted_pitch)
+        attitude = self.gimbal.step(rot, yaw, wanted_pitch, advance=not start)
         self._previous = attitude if self.attitude is None else self.attitude
         self.attitude = attitude
         return attitude
