@@ -94,7 +94,8 @@ def register(sub: argparse._SubParsersAction) -> None:
     p.add_argument("config", help="experiment YAML (its sim:, wind: and ship: sections)")
     p.add_argument("--path", help="path.json to fly")
     p.add_argument("--trials", type=int, default=1, help="number of flights (batched)")
-    p.add_argument("--seed", type=int, default=None, help="seed of the turbulence (default: run.seed)")
+    p.add_argument("--seed", type=int, default=None,
+                   help="seed of the turbulence, the navigation errors and the ship's motion (default: run.seed)")
     p.add_argument("--out", help="output folder for captures.parquet and trials.parquet")
     p.add_argument("--rerun", help="write a rerun .rrd recording here")
     p.add_argument("--hover", action="store_true", help="hold a hover instead and print statistics")
