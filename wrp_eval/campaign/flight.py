@@ -88,7 +88,8 @@ class FlightEvaluator:
             pose = planned[taken] + flown[i, taken]
             prior = self.path.positions[taken] + result.estimated_offsets[i, taken, :3]
             captures = CaptureSet(pose[:, :3], pose[:, 3], result.camera_pitch[i, taken], np.flatnonzero(taken),
-                                  self.path.camera, roll=result.camera_roll[i, taken], prior_positions=prior)
+                                  self.path.camera, roll=result.camera_roll[i, taken], prior_positions=prior,
+                                  blur_px=result.blur_px[i, taken])
             recon = self.ship.score(captures, inputs.oracle_seed)
             reasons = []
             if result.failed[i]:

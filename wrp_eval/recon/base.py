@@ -146,12 +146,16 @@ def check_inputs(capture_set: CaptureSet, mesh: trimesh.Trimesh) -> None:
         shapes["roll"] = (capture_set.roll, (n,))
     if capture_set.prior_positions is not None:
         shapes["prior_positions"] = (capture_set.prior_positions, (n, 3))
+    if capture_set.blur_px is not None:
+        shapes["blur_px"] = (capture_set.blur_px, (n,))
     for name, (arr, shape) in shapes.items():
         arr = np.asarray(arr)
         if arr.shape != shape:
             raise InputError("capture set", f"{name} has shape {arr.shape}, expected {shape}")
         if arr.dtype.kind == "f" and not np.all(np.isfinite(arr)):
             raise InputError("capture set", f"{name} is not all finite")
+    if capture_set.blur_px is not None and np.any(np.asarray(capture_set.blur_px) < 0):
+        raise InputError("capture set", "blur_px is negative")
 
 
 def _fibonacci_sphere(count: int) -> np.ndarray:

@@ -9,19 +9,21 @@ import pyarrow.parquet as pq
 
 from wrp_eval.errors import InputError
 from wrp_eval.planning.path import Path
-from wrp_eval.sim.captures import PRIOR_COLUMNS, ROLL_COLUMN, CaptureSet
+from wrp_eval.sim.captures import BLUR_COLUMN, PRIOR_COLUMNS, ROLL_COLUMN, CaptureSet
 
 CAPTURE_COLUMNS = ("trial", "view", "taken", "x_m", "y_m", "z_m", "yaw_deg", "pitch_deg")
-# optional columns (files written before them still load): camera roll, recorded (GNSS) positions
-OPTIONAL_COLUMNS = (ROLL_COLUMN, *PRIOR_COLUMNS)
+# optional columns (files written before them still load): camera roll, recorded (GNSS) positions, motion blur
+OPTIONAL_COLUMNS = (ROLL_COLUMN, *PRIOR_COLUMNS, BLUR_COLUMN)
 
 
 def captures_from_path(path: Path, offsets: np.ndarray | None = None, pitch: np.ndarray | None = None,
-                       roll: np.ndarray | None = None, prior_positions: np.ndarray | None = None) -> CaptureSet:
+                       roll: np.ndarray | None = None, prior_positions: np.ndarray | None = None,
+                       blur_px: np.ndarray | None = None) -> CaptureSet:
     """Every view of a path as a capture set: the planned poses (a windless, perfectly flown trial), moved by
     ``offsets`` (n, 4: dx, dy, dz m, dyaw rad) when given; the gimbal at ``pitch`` (n,) rad where given and
     finite (an achieved pitch from a campaign), else at its planned pitch; ``roll`` (n,) rad and the recorded
-    ``prior_positions`` (n, 3) m passed through (None: level camera, priors = true positions)."""
+    ``prior_positions`` (n, 3) m and the motion ``blur_px`` (n,) passed through (None: level camera, priors =
+    true positions, sharp images)."""
     pose = np.concatenate([np.asarray(path.positions, dtype=float), np.asarray(path.yaw, dtype=float)[:, None]],
                           axis=1)
     if offsets is not None:
@@ -34,8 +36,10 @@ def captures_from_path(path: Path, offsets: np.ndarray | None = None, pitch: np.
         roll = np.asarray(roll, dtype=float).reshape(planned_pitch.shape)
     if prior_positions is not None:
         prior_positions = np.asarray(prior_positions, dtype=float).reshape(pose[:, :3].shape)
+    if blur_px is not None:
+        blur_px = np.asarray(blur_px, dtype=float).reshape(planned_pitch.shape)
     return CaptureSet(pose[:, :3], pose[:, 3], planned_pitch, np.arange(len(path)), path.camera, roll,
-                      prior_positions)
+                      prior_positions, blur_px)
 
 
 def _read_columns(file: FsPath) -> dict[str, np.ndarray]:
@@ -58,7 +62,8 @@ def captures_from_parquet(file: str | FsPath, trial: int, path: Path) -> Capture
     """The views actually taken in ``trial`` of a ``captures.parquet`` (the simulator's table; one row per
     trial x view, degrees at the edge); the camera comes from ``path``. The optional ``roll_deg`` and
     ``prior_x_m`` / ``prior_y_m`` / ``prior_z_m`` columns (:func:`wrp_eval.sim.captures.pose_columns`) become
-    the capture set's roll and position priors; a file without them gives None (level camera, exact priors)."""
+    the capture set's roll and position priors, ``blur_px`` its motion blur; a file without them gives None
+    (level camera, exact priors, sharp images: a record from before these columns is still scored)."""
     file = FsPath(file)
     cols = _read_columns(file)
     rows = (cols["trial"] == trial) & cols["taken"].astype(bool)
@@ -74,7 +79,8 @@ def captures_from_parquet(file: str | FsPath, trial: int, path: Path) -> Capture
     roll = np.radians(cols[ROLL_COLUMN][rows].astype(float)) if ROLL_COLUMN in cols else None
     prior = (np.column_stack([cols[c][rows] for c in PRIOR_COLUMNS]).astype(float) if PRIOR_COLUMNS[0] in cols
              else None)
-    values = [pos, yaw, pitch] + [a for a in (roll, prior) if a is not None]
+    blur = cols[BLUR_COLUMN][rows].astype(float) if BLUR_COLUMN in cols else None
+    values = [pos, yaw, pitch] + [a for a in (roll, prior, blur) if a is not None]
     if not all(np.all(np.isfinite(a)) for a in values):
         raise InputError(file, f"trial {trial}: a taken view has non-finite pose values")
-    return CaptureSet(pos, yaw, pitch, view, path.camera, roll, prior)
+    return CaptureSet(pos, yaw, pitch, view, path.camera, roll, prior, blur)

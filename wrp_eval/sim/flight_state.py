@@ -198,7 +198,7 @@ class CaptureLog:
         """One :class:`CaptureSet` per flight, holding only the views it took."""
         return tuple(CaptureSet(self.position[i, taken], self.yaw[i, taken], self.pitch[i, taken],
                                 np.flatnonzero(taken), camera, roll=self.roll[i, taken],
-                                prior_positions=self.estimated_position[i, taken])
+                                prior_positions=self.estimated_position[i, taken], blur_px=self.blur_px[i, taken])
                      for i, taken in enumerate(self.taken))
 
 
