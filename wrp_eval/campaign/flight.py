@@ -96,7 +96,8 @@ class FlightEvaluator:
                 reasons.append(f"flight: {result.failure_reason[i]}")
             if recon.failed:
                 reasons.append(f"reconstruction: {recon.reason}")
-            metrics = {"error_m": recon.error_m, "accuracy_m": recon.accuracy_m,
+            metrics = {"error_m": recon.error_m, "hole_part_m": recon.hole_part_m,
+                       "accuracy_part_m": recon.accuracy_part_m, "accuracy_m": recon.accuracy_m,
                        "completeness": recon.completeness, "precision": recon.precision, "fscore": recon.fscore,
                        "registered_fraction": recon.registered_views / max(1, len(self.path))}
             outcomes.append(TrialOutcome(

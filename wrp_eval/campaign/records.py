@@ -13,7 +13,8 @@ import numpy as np
 import pyarrow as pa
 import pyarrow.compute as pc
 
-METRIC_NAMES = ("error_m", "accuracy_m", "completeness", "precision", "fscore", "registered_fraction")
+METRIC_NAMES = ("error_m", "hole_part_m", "accuracy_part_m", "accuracy_m", "completeness", "precision", "fscore",
+                "registered_fraction")
 
 
 @dataclass

@@ -39,7 +39,10 @@ class ReconResult:
     (NaN when nothing was reconstructed); accuracy_m: mean distance (m) from the aligned reconstruction to the
     ground-truth mesh; completeness, precision, fscore: fractions in [0, 1] at ``tau_m``;
     registered_views / total_views: views in the reconstruction; failed with ``reason`` ("" when not failed);
-    time_s: wall time of the evaluation; scale: the ICP scale factor; n_points: reconstructed points.
+    time_s: wall time of the evaluation; scale: the ICP scale factor; n_points: reconstructed points;
+    hole_part_m + accuracy_part_m = error_m: what missing surface and what inaccurate surface contribute
+    (each oracle's split is in its docstring: the synthetic oracle's by reconstruction probability, a point
+    cloud's by tau).
     """
 
     error_m: float
@@ -57,6 +60,8 @@ class ReconResult:
     n_points: int = 0
     oracle: str = ""
     extra: dict = field(default_factory=dict)
+    hole_part_m: float = float("nan")
+    accuracy_part_m: float = float("nan")
 
     @property
     def registered_fraction(self) -> float:
@@ -65,14 +70,16 @@ class ReconResult:
 
     def metrics(self) -> dict[str, float]:
         """The figures by name (error_m, accuracy_m, completeness, precision, fscore, registered_fraction)."""
-        return {"error_m": self.error_m, "accuracy_m": self.accuracy_m, "completeness": self.completeness,
+        return {"error_m": self.error_m, "hole_part_m": self.hole_part_m, "accuracy_part_m": self.accuracy_part_m,
+                "accuracy_m": self.accuracy_m, "completeness": self.completeness,
                 "precision": self.precision, "fscore": self.fscore,
                 "registered_fraction": self.registered_fraction}
 
     def to_json_dict(self) -> dict:
         def num(x):
             return None if x is None or not np.isfinite(x) else float(x)
-        return {"oracle": self.oracle, "error_m": num(self.error_m), "accuracy_m": num(self.accuracy_m),
+        return {"oracle": self.oracle, "error_m": num(self.error_m), "hole_part_m": num(self.hole_part_m),
+                "accuracy_part_m": num(self.accuracy_part_m), "accuracy_m": num(self.accuracy_m),
                 "completeness": num(self.completeness), "precision": num(self.precision),
                 "fscore": num(self.fscore), "tau_m": self.tau_m, "registered_views": self.registered_views,
                 "total_views": self.total_views,
@@ -100,6 +107,11 @@ class Surfels:
 
     def __len__(self) -> int:
         return int(self.points.shape[0])
+
+    def score(self, gt: "GroundTruth", section, seed: int = 0) -> "Scores":
+        """Align to ``gt`` and compute the metrics (:func:`score_reconstruction`) with ``section``'s settings."""
+        return score_reconstruction(self, gt, section.tau_m, section.icp_max_correspondence_m,
+                                    section.icp_max_iterations, seed)
 
 
 @dataclass(frozen=True)
@@ -254,9 +266,9 @@ class MeshOracle:
         """The prepared ground truth of ``ship_mesh``."""
         return self._gt_cache.get(ship_mesh)
 
-    def reconstruct(self, capture_set: CaptureSet, gt: GroundTruth,
-                    seed: int = 0) -> tuple["Surfels", int, str, dict]:
-        """(reconstruction, registered views, failure reason or "", extra diagnostics): the oracle's own part."""
+    def reconstruct(self, capture_set: CaptureSet, gt: GroundTruth, seed: int = 0) -> tuple:
+        """(reconstruction, registered views, failure reason or "", extra diagnostics): the oracle's own part.
+        The reconstruction has ``len`` (points) and ``score(gt, section, seed) -> Scores``."""
         raise NotImplementedError
 
     def evaluate(self, capture_set: CaptureSet, ship_mesh: trimesh.Trimesh, seed: int = 0) -> ReconResult:
@@ -264,13 +276,13 @@ class MeshOracle:
         start = time.perf_counter()
         check_inputs(capture_set, ship_mesh)
         gt = self.ground_truth(ship_mesh)
-        surfels, registered, reason, extra = self.reconstruct(capture_set, gt, seed)
+        recon, registered, reason, extra = self.reconstruct(capture_set, gt, seed)
         s = self.section
-        scores = score_reconstruction(surfels, gt, s.tau_m, s.icp_max_correspondence_m, s.icp_max_iterations,
-                                      seed)
+        scores = recon.score(gt, s, seed)
         return ReconResult(scores.error_m, scores.accuracy_m, scores.completeness, scores.precision,
                            scores.fscore, s.tau_m, registered, len(capture_set), bool(reason), reason,
-                           time.perf_counter() - start, scores.scale, len(surfels), self.name, extra)
+                           time.perf_counter() - start, scores.scale, len(recon), self.name, extra,
+                           scores.hole_part_m, scores.accuracy_part_m)
 
 
 def align_to_ground_truth(points: np.ndarray, gt: GroundTruth, max_correspondence_m: float,
@@ -344,12 +356,16 @@ def surfel_distances(queries: np.ndarray, surfels: Surfels, k: int = 4) -> np.nd
 
 @dataclass(frozen=True)
 class Scores:
+    """The metrics of :class:`ReconResult` (see there), as a reconstruction's ``score`` returns them."""
+
     error_m: float
     accuracy_m: float
     completeness: float
     precision: float
     fscore: float
     scale: float
+    hole_part_m: float = float("nan")
+    accuracy_part_m: float = float("nan")
 
 
 def score_reconstruction(surfels: Surfels, gt: GroundTruth, tau_m: float, max_correspondence_m: float,
@@ -357,7 +373,8 @@ def score_reconstruction(surfels: Surfels, gt: GroundTruth, tau_m: float, max_co
     """Align the reconstruction to the ground truth (ICP with scale) and compute the paper-style metrics.
 
     Accuracy and precision are means over at most ``max_accuracy_points`` reconstructed points (a seeded
-    subset; the sampling error of the mean is far below the metric's resolution).
+    subset; the sampling error of the mean is far below the metric's resolution). The split of error_m: the
+    hole part sums the visible samples farther than tau from the reconstruction, the accuracy part the rest.
     """
     if len(surfels) == 0:
         return Scores(float("nan"), float("nan"), 0.0, 0.0, 0.0, 1.0)
@@ -376,4 +393,6 @@ def score_reconstruction(surfels: Surfels, gt: GroundTruth, tau_m: float, max_co
     completeness = float((comp <= tau_m).mean())
     precision = float((acc <= tau_m).mean())
     f = 0.0 if completeness + precision == 0 else 2 * completeness * precision / (completeness + precision)
-    return Scores(float(comp.mean()), float(acc.mean()), completeness, precision, f, scale)
+    far = comp > tau_m
+    return Scores(float(comp.mean()), float(acc.mean()), completeness, precision, f, scale,
+                  float(np.sum(comp[far]) / len(comp)), float(np.sum(comp[~far]) / len(comp)))

@@ -24,8 +24,19 @@ class SyntheticOracleSection(StrictModel):
                                     "matches: SIFT's limited affine invariance (Lowe 2004; Morel & Yu 2009)")
     incidence_max_deg: float = Field(80.0, gt=0, lt=90, description="largest angle between a ray and the surface "
                                      "normal at which a view can match")
-    sigma_px: float = Field(0.5, gt=0, description="image matching noise (px) driving stereo depth noise")
-    noise_floor_gsd: float = Field(0.5, ge=0, description="depth-noise floor as a fraction of the GSD")
+    sigma_px: float = Field(0.5, gt=0, description="matching noise (px) of a feature in a sharp image; blur scales "
+                            "it (wrp_eval/recon/image_effects.py)")
+    noise_floor_gsd: float = Field(0.5, ge=0, description="model noise of a fused point along the surface normal, as "
+                                   "a fraction of the GSD, added in quadrature to the triangulation noise")
+    texture_m: float = Field(0.005, gt=0, description="finest scale (m) of the ship surface's texture (paint grain, "
+                             "rust, welds): views whose features would be finer (sigma_0 x GSD < texture_m, i.e. "
+                             "closer than ~23 m with the default camera) find fewer keypoints")
+    keypoints_per_mpx: float = Field(100.0, gt=0, description="matched keypoints per megapixel of a sharp, fully "
+                                     "textured image (2000 on a 20 MP frame): the count behind each view's pose "
+                                     "uncertainty")
+    prior_position_sigma_m: float | None = Field(
+        1.0, gt=0, description="the bundle adjustment's position prior (the recorded GNSS position of each photo, "
+                               "CaptureSet.prior_positions), standard deviation in m; null = no priors")
     min_overlap: float = Field(0.1, gt=0, le=1, description="two views are linked (registered together) when "
                                "their overlap (Hepp et al. 2018: shared / mean observed) reaches this")
     min_matched_rays: int = Field(8, ge=1, description="... and they share at least this many matchable rays")

@@ -29,20 +29,20 @@ For one capture set on the true ship mesh:
    share at least ``min_matched_rays`` matchable rays on average, and keeps the largest connected component
    (``scipy.sparse.csgraph.connected_components``). Fewer than 3 views, or fewer than half the views,
    registered = failed (ContextCapture / COLMAP leave unregistered images out; the paper's "Failed").
-5. **Reconstruct.** A hit of a registered view is reconstructed when a registered partner triangulates it;
-   its depth gets Gaussian noise from the best partner (smallest sigma):
-   sigma = d_m * sigma_px / (f_px * sin(alpha)), the stereo depth error z^2 sigma_d / (f B) (e.g. Gallup
-   et al. 2008, "Variable baseline/resolution stereo") written for a verging pair (B/z ~ sin alpha),
-   d_m the larger of the two distances, floored at ``noise_floor_gsd`` x the GSD.
-6. **Score.** Surfels (hit, normal, footprint radius) -> ICP with scale -> metrics (:mod:`base`).
+5. **Reconstruct and score** (:mod:`wrp_eval.recon.fusion`): on the fixed ground-truth samples, the registered
+   views' observations (soft border, incidence, parallax; blur, GSD and texture from
+   :mod:`wrp_eval.recon.image_effects`), each view's estimated pose (uncertainty from its correspondences, pulled
+   towards its recorded position prior), the fused least-squares point per sample with the pose and pixel
+   errors it inherits; ICP with scale as the paper aligns; error_m = accuracy part + hole part.
+   Registration (step 4) counts a ray as the share of a keypoint its view keeps (blur, texture).
 
 Every random draw comes from ``numpy.random.default_rng(seed)``: same inputs and seed, same result.
 
-Poses: every step uses the true camera poses, roll included (:meth:`CaptureSet.rotations`). The oracle has no
-notion of a pose prior: it models which surface points an SfM + MVS pipeline matches and triangulates, which
-depends on where the cameras really were, not on their recorded (GNSS) positions
-(``CaptureSet.prior_positions``, used by the COLMAP oracle's pose priors); the score is taken after a
-similarity ICP to the ground truth, which removes any georeferencing offset.
+Poses: what is seen is decided by the true camera poses, roll included (:meth:`CaptureSet.rotations`); what
+is reconstructed carries each view's *estimated* pose (fusion.py), which a bundle adjustment with position
+priors pulls towards the recorded (GNSS) positions (``CaptureSet.prior_positions``) where the images
+constrain it weakly. The score is taken after a similarity ICP to the ground truth (the paper's alignment),
+which removes the common part of any georeferencing offset.
 """
 
 from __future__ import annotations
@@ -55,11 +55,12 @@ import scipy.sparse as sp
 from scipy.sparse.csgraph import connected_components, minimum_spanning_tree
 
 from wrp_eval.camera import Camera, optical_axes
-from wrp_eval.recon.base import GroundTruth, MeshOracle, Surfels
+from wrp_eval.recon.base import GroundTruth, MeshOracle
 from wrp_eval.recon.config import OracleSection
+from wrp_eval.recon.fusion import FusedReconstruction, fuse
+from wrp_eval.recon.image_effects import blur_keypoint_fraction, texture_keypoint_fraction
 from wrp_eval.sim.captures import CaptureSet
 
-_SURFEL_MIN_COS = np.cos(np.radians(70.0))  # cap on the footprint stretch 1/cos(incidence) of a surfel
 
 
 @dataclass(frozen=True)
@@ -207,7 +208,8 @@ def _ranges(ptr: np.ndarray, rows: np.ndarray) -> np.ndarray:
 
 def register_incremental(n_views: int, n_hits: int, hit_view: np.ndarray, hit: np.ndarray, partner: np.ndarray,
                          matchable: np.ndarray, triangulates: np.ndarray, grid_index: np.ndarray,
-                         rays_per_view: int, min_rays: int) -> tuple[np.ndarray, list[int]]:
+                         rays_per_view: int, min_rays: int, hit_ray: np.ndarray | None = None,
+                         ray_weight: np.ndarray | None = None) -> tuple[np.ndarray, list[int]]:
     """Registration as an incremental SfM mapper does it (Schoenberger & Frahm 2016, "Structure-from-Motion
     Revisited", Sec. 4.2-4.3; COLMAP's IncrementalMapper).
 
@@ -227,6 +229,9 @@ def register_incremental(n_views: int, n_hits: int, hit_view: np.ndarray, hit: n
 
     hit_view (h,) view of every hit; hit, partner, matchable, triangulates, grid_index (k,): candidate pairs
     sorted by hit, with the partner's flat ray index (partner * rays_per_view + ray) at the hit's image cell.
+    ray_weight (n * rays_per_view,): the expected share of a keypoint behind each ray (blur, texture;
+    :mod:`wrp_eval.recon.image_effects`) with hit_ray (h,) each hit's own flat ray index: counts become sums
+    of these weights (a pair's count the product of its two rays'); None = every ray counts 1.
     Returns the registered mask (n,) and the registration order.
     """
     n = n_views
@@ -238,7 +243,11 @@ def register_incremental(n_views: int, n_hits: int, hit_view: np.ndarray, hit: n
     if len(mi) == 0:
         return registered, order
     # seed: most triangulating rays over both directions of a pair; ties -> lowest (i, j)
-    tri = np.bincount(v_m[t_m] * n + p_m[t_m], minlength=n * n).reshape(n, n)
+    if ray_weight is None:
+        ray_weight = np.ones(n * rays_per_view)
+        hit_ray = np.zeros(n_hits, dtype=np.int64)  # with unit weights any ray index gives weight 1
+    pair_weight = ray_weight[hit_ray[h_m]] * ray_weight[g_m]
+    tri = np.bincount(v_m[t_m] * n + p_m[t_m], weights=pair_weight[t_m], minlength=n * n).reshape(n, n)
     tri = np.triu(tri + tri.T, k=1)
     seed = int(np.argmax(tri))
     if tri.flat[seed] < min_rays:
@@ -252,7 +261,7 @@ def register_incremental(n_views: int, n_hits: int, hit_view: np.ndarray, hit: n
     partner_ptr = np.searchsorted(p_m[by_partner], np.arange(n + 1))
     tri_hit = np.zeros(n_hits, dtype=bool)          # hit triangulated by two registered views
     corr_ray = np.zeros(n * rays_per_view, dtype=bool)  # ray of a view matches a triangulated hit
-    corr_count = np.zeros(n, dtype=np.int64)
+    corr_count = np.zeros(n)
     stamp_hit = np.zeros(n_hits, dtype=np.int64)           # scratch for duplicate removal without sorting
     stamp_ray = np.zeros(n * rays_per_view, dtype=np.int64)
 
@@ -277,7 +286,7 @@ def register_incremental(n_views: int, n_hits: int, hit_view: np.ndarray, hit: n
         g = g_m[_ranges(hit_ptr, new)]  # every view's ray that matches a newly triangulated hit
         g = distinct(g[~corr_ray[g]], stamp_ray)
         corr_ray[g] = True
-        corr_count[:] += np.bincount(g // rays_per_view, minlength=n)
+        corr_count[:] += np.bincount(g // rays_per_view, weights=ray_weight[g], minlength=n)
 
     i, j = divmod(seed, n)
     register(i)
@@ -300,13 +309,14 @@ class SyntheticOracle(MeshOracle):
         super().__init__(section)
 
     def reconstruct(self, capture_set: CaptureSet, gt: GroundTruth,
-                    seed: int = 0) -> tuple[Surfels, int, str, dict]:
-        """Surfels of the largest registered component, the registered count, failure reason ("" if none)
-        and diagnostics."""
+                    seed: int = 0) -> tuple[FusedReconstruction, int, str, dict]:
+        """The fused reconstruction from the registered views, the registered count, failure reason ("" if
+        none) and diagnostics."""
         p = self.section.synthetic
         cam = capture_set.camera
         n = len(capture_set)
-        empty = Surfels(np.zeros((0, 3)), np.zeros((0, 3)), np.zeros(0))
+        empty = FusedReconstruction(gt.samples, np.zeros(len(gt.samples)), np.full(len(gt.samples), np.nan),
+                                    np.zeros((n, 2)))
         if n == 0:
             return empty, 0, "no views captured", {}
         f = cam.focal_px
@@ -367,9 +377,15 @@ class SyntheticOracle(MeshOracle):
             detail = f"{n_comp} disconnected view groups, largest kept"
             reg_extra = {"view_groups": int(n_comp)}
         else:
+            # a blurred or under-textured view has fewer keypoints behind its rays (image_effects.py)
+            hit_weight = (blur_keypoint_fraction(capture_set.blur()[obs.view])
+                          * texture_keypoint_fraction(cam.gsd_m(obs.dist), p.texture_m))
+            ray_weight = np.zeros(n * rays_per_view)
+            hit_ray = obs.view * rays_per_view + obs.ray
+            ray_weight[hit_ray] = hit_weight
             registered_mask, order = register_incremental(n, len(obs.points), obs.view, hit, partner, matchable,
                                                           triangulates, grid_index, rays_per_view,
-                                                          p.min_registration_rays)
+                                                          p.min_registration_rays, hit_ray, ray_weight)
             detail = (f"incremental registration stopped: no other view sees >= {p.min_registration_rays} "
                       f"triangulated points")
             reg_extra = {"registration_order": [int(v) for v in order]}
@@ -380,23 +396,13 @@ class SyntheticOracle(MeshOracle):
         elif 2 * n_registered < n:
             reason = f"only {n_registered} of {n} views registered ({detail})"
 
-        # --- reconstruct: best triangulating registered partner per hit ---
-        ok = triangulates & registered_mask[partner] & registered_mask[obs.view[hit]]
-        d_m = np.maximum(obs.dist[hit], dist_j)
-        with np.errstate(divide="ignore"):
-            sigma = np.where(ok, d_m * p.sigma_px / (f * np.sin(alpha)), np.inf)
-        best = np.full(len(obs.points), np.inf)
-        if len(hit):
-            starts = np.flatnonzero(np.r_[True, hit[1:] != hit[:-1]])
-            best[hit[starts]] = np.minimum.reduceat(sigma, starts)
-        recon = np.flatnonzero(np.isfinite(best))
-        sigma_r = np.maximum(best[recon], p.noise_floor_gsd * np.asarray(cam.gsd_m(obs.dist[recon])))
-        rng = np.random.default_rng(seed)
-        noisy = (obs.points[recon].astype(np.float64)
-                 + (rng.standard_normal(len(recon)) * sigma_r)[:, None] * obs.dirs[recon])
-        cos_i = np.abs(np.einsum("kj,kj->k", obs.normals[recon], obs.dirs[recon]))
-        radii = 0.71 * spacing[recon] / np.maximum(cos_i, _SURFEL_MIN_COS)
+        # --- reconstruct (fusion.py): estimated poses, triangulated and fused points on the visible truth ---
+        fused = fuse(capture_set, gt, registered_mask, self.section, seed)
+        registered_sigma = fused.pose_sigma[registered_mask]
         extra = {"hits": int(len(obs.points)), "candidate_pairs": int(len(hit)), **reg_extra, "cell_m": cell_m,
-                 "median_sigma_m": float(np.median(sigma_r)) if len(recon) else None}
-        return (Surfels(noisy, obs.normals[recon].astype(np.float64), radii.astype(np.float64)),
-                n_registered, reason, extra)
+                 "median_sigma_n_m": float(np.nanmedian(fused.sigma_n)) if np.any(fused.existence > 0) else None,
+                 "mean_existence": float(fused.existence.mean()), "observations": fused.observations,
+                 "median_pose_sigma_deg": float(np.degrees(np.median(registered_sigma[:, 0])))
+                 if n_registered else None,
+                 "median_pose_sigma_m": float(np.median(registered_sigma[:, 1])) if n_registered else None}
+        return fused, n_registered, reason, extra

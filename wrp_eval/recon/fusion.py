@@ -1,0 +1,302 @@
+"""The synthetic oracle's reconstruction: estimated poses, triangulated and fused points on the visible truth.
+
+Given which views registered (:mod:`wrp_eval.recon.synthetic`, the SfM part), this module models what the
+photogrammetric pipeline then makes of each ground-truth sample (a patch of ``1 / gt_density_per_m2`` m^2 of
+visible surface). Working on the fixed ground-truth samples, not on each view's rays, is what makes the
+oracle's response smooth: a small pose change moves every weight a little instead of re-drawing which surface
+the rays happen to hit, and every random draw is attached to a sample or a view (common random numbers).
+
+1. **Observations.** Sample s is observed by registered view v when it projects into v's image in front of it,
+   within range, and an occlusion ray from the sample to the camera (one batched open3d call on ship + sea)
+   is free. Weight w_sv in 0..1 = image border ramp x incidence ramp x keypoint fraction (blur of the view,
+   GSD against the surface texture) (:mod:`wrp_eval.recon.image_effects`); pixel noise sigma_v from the
+   view's blur.
+2. **Matching and triangulation.** Every pair of observations of a sample matches with probability
+   w_sv w_sv' m(alpha) and triangulates with w_sv w_sv' t(alpha) (parallax ramps). The sample is reconstructed
+   with probability e_s = 1 - prod(1 - triangulating pair probabilities) (at least one pair triangulates); an
+   observation is matched with probability m_sv = 1 - prod over its partners (1 - matching probabilities).
+3. **Pose estimation** (bundle adjustment per view, in the linear approximation). View v's 2D-3D
+   correspondences are the keypoints on the samples it matched that were reconstructed: N_sv = (keypoints per
+   px^2) x (patch area in px^2: a_s cos(incidence) / GSD^2) x m_sv x e_s. Its 6 x 6 Fisher information is
+   sum N_sv J^T J / sigma_v^2, J the 2 x 6 Jacobian of the projection with respect to a small rotation and a
+   shift of the camera centre (so count, image spread, depth and pixel noise all enter), plus the position
+   prior (the recorded GNSS position, sigma ``prior_position_sigma_m``) where configured. The estimate =
+   the prior's pull (covariance x prior information x (recorded - true position)) + a seeded Gaussian draw
+   with the posterior covariance.
+4. **Points.** The fused estimate of sample s is the weighted least-squares intersection of the matched rays
+   (each weighted m_sv f^2 / (d^2 sigma_v^2) across its ray): its covariance C_s = (sum of those
+   information matrices)^-1 gives the depth noise along the surface normal, sigma_n^2 = n^T C_s n, plus a
+   model floor ``noise_floor_gsd`` x GSD in quadrature; each view's pose error moves its ray and so the
+   point by C_s sum(info_sv (dc_v + phi_v x (p_s - c_v))). One seeded normal draw per sample scales sigma_n.
+
+Scoring (:func:`score_fused`): the reconstructed samples (e_s > 0) are aligned to the truth as the paper
+aligns (ICP with scale, :func:`wrp_eval.recon.base.align_to_ground_truth`); then each visible ground-truth
+sample contributes e_s |n_s . (aligned estimate - truth)| (the accuracy part: the distance to the fused
+surface) + (1 - e_s) h_s (the hole part: the distance to the nearest reconstructed patch, each reconstructed
+sample standing for a disc of the area it represents in its tangent plane, a partly reconstructed neighbour j
+counting as HOLE_PENALTY_M x (1 - e_j) farther away), and ``error_m`` is their mean: CloudCompare's
+cloud-to-reconstruction distance of the visible truth, resolved at the ground-truth spacing (0.71 m at the
+default 2 samples / m^2).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+import open3d as o3d
+import scipy.sparse as sp
+from scipy.spatial import cKDTree
+
+from wrp_eval.recon.base import GroundTruth, Scores, align_to_ground_truth
+from wrp_eval.recon.config import OracleSection
+from wrp_eval.recon.image_effects import (border_weight, incidence_weight, keypoint_fraction, parallax_weights,
+                                          pixel_noise_px)
+from wrp_eval.sim.captures import CaptureSet
+
+OCCLUSION_OFFSET_M = 0.01    # occlusion rays start this far off the surface (no self-hits on shared edges)
+MAX_POINT_SIGMA_M = 10.0     # weak-information cap: a sample seen along one ray only has this depth sigma
+NO_PRIOR_POSITION_M = 100.0  # without priors, a weak regulariser of each camera centre (keeps the solve finite)
+NO_PRIOR_ROTATION_RAD = 1.0
+HOLE_PENALTY_M = 1.0         # a neighbour reconstructed with probability e counts (1 - e) x this farther away
+HOLE_NEIGHBOURS = 16
+MIN_EXISTENCE = 0.01         # samples less likely reconstructed than this are not part of the reconstruction
+
+
+@dataclass(frozen=True)
+class SampleObservations:
+    """Registered views that see ground-truth samples: k observations flattened, sorted by sample.
+
+    sample (k,) index into the ground truth; view (k,) index into the capture set; rel (k, 3) m, sample minus
+    camera centre; dist (k,) m; cam (k, 3) m, the sample in the camera frame; weight (k,) 0..1; sigma_px (k,);
+    patch_px2 (k,) the sample's patch area in the image x keypoint fraction (keypoints = density x this).
+    """
+
+    sample: np.ndarray
+    view: np.ndarray
+    rel: np.ndarray
+    dist: np.ndarray
+    cam: np.ndarray
+    weight: np.ndarray
+    sigma_px: np.ndarray
+    patch_px2: np.ndarray
+    gsd_m: np.ndarray
+
+
+def observe_samples(capture_set: CaptureSet, gt: GroundTruth, registered: np.ndarray, section: OracleSection,
+                    sample_area_m2: float) -> SampleObservations:
+    """The observations of step 1 (module docstring) of every ground-truth sample by the registered views."""
+    p = section.synthetic
+    cam_model = capture_set.camera
+    f = cam_model.focal_px
+    views = np.flatnonzero(registered)
+    centres = np.asarray(capture_set.positions, dtype=float)[views]
+    rot = capture_set.rotations()[views]
+    rel = gt.samples[:, None, :] - centres[None, :, :]                       # (S, nv, 3), sample-major
+    cam = np.matmul(rel.transpose(1, 0, 2), rot).transpose(1, 0, 2)         # R^T (p - c), batched per view
+    z = cam[..., 2]
+    zs = np.where(z > 1e-9, z, 1e-9)
+    u = f * cam[..., 0] / zs + cam_model.image_width_px / 2
+    v = f * cam[..., 1] / zs + cam_model.image_height_px / 2
+    dist = np.sqrt(np.sum(rel * rel, axis=2))
+    cos_inc = np.abs(np.matmul(rel, gt.sample_normals[:, :, None])[..., 0]) / np.maximum(dist, 1e-9)
+    inc_max = np.radians(p.incidence_max_deg)
+    candidate = ((z > 1e-9) & (u > 0) & (u < cam_model.image_width_px) & (v > 0)
+                 & (v < cam_model.image_height_px) & (dist <= cam_model.distance_for_gsd(p.max_gsd_m))
+                 & (incidence_weight(cos_inc, inc_max) > 0))
+    s_idx, v_idx = np.nonzero(candidate)
+    rel_k, dist_k = rel[s_idx, v_idx], dist[s_idx, v_idx]
+    # occlusion: is the segment from the sample (just off the surface) to the camera free?
+    toward = -rel_k / dist_k[:, None]
+    origins = gt.samples[s_idx] + OCCLUSION_OFFSET_M * toward
+    rays = np.concatenate([origins, toward], axis=1).astype(np.float32)
+    t_hit = gt.occluder_scene.cast_rays(o3d.core.Tensor(rays))["t_hit"].numpy()
+    free = t_hit >= dist_k - 2 * OCCLUSION_OFFSET_M
+    s_idx, v_idx, rel_k, dist_k = s_idx[free], v_idx[free], rel_k[free], dist_k[free]
+    view = views[v_idx]
+    blur = capture_set.blur()[view]
+    gsd = np.asarray(cam_model.gsd_m(dist_k))
+    keep_frac = keypoint_fraction(blur, gsd, p.texture_m)
+    c_inc = cos_inc[s_idx, v_idx]
+    weight = (border_weight(u[s_idx, v_idx], v[s_idx, v_idx], cam_model.image_width_px, cam_model.image_height_px)
+              * incidence_weight(c_inc, inc_max) * keep_frac)
+    patch_px2 = sample_area_m2 * c_inc / gsd ** 2 * keep_frac
+    return SampleObservations(s_idx, view, rel_k, dist_k, cam[s_idx, v_idx], weight,
+                              pixel_noise_px(p.sigma_px, blur), patch_px2, gsd)
+
+
+def sample_pairs(sample: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Every unordered pair (a, b), a < b, of observations of the same sample (``sample`` sorted, (k,))."""
+    k = len(sample)
+    if k == 0:
+        return np.zeros(0, dtype=np.int64), np.zeros(0, dtype=np.int64)
+    starts = np.flatnonzero(np.r_[True, sample[1:] != sample[:-1]])
+    ends = np.r_[starts[1:], k]
+    group_end = np.repeat(ends, ends - starts)
+    counts = group_end - np.arange(k) - 1
+    a = np.repeat(np.arange(k), counts)
+    b = a + 1 + np.arange(len(a)) - np.repeat(np.cumsum(counts) - counts, counts)
+    return a, b
+
+
+def _any_of(prob: np.ndarray, groups: np.ndarray, n_groups: int) -> np.ndarray:
+    """1 - prod(1 - prob) per group: the probability that at least one of independent events happens."""
+    logs = np.log1p(-np.minimum(prob, 1.0 - 1e-12))
+    return 1.0 - np.exp(np.bincount(groups, weights=logs, minlength=n_groups))
+
+
+def _cross_matrices(q: np.ndarray) -> np.ndarray:
+    """(k, 3, 3) skew matrices [q]x with [q]x y = q x y."""
+    z = np.zeros(len(q))
+    return np.stack([np.stack([z, -q[:, 2], q[:, 1]], 1), np.stack([q[:, 2], z, -q[:, 0]], 1),
+                     np.stack([-q[:, 1], q[:, 0], z], 1)], 1)
+
+
+def _sum_by(groups: np.ndarray, values: np.ndarray, n_groups: int) -> np.ndarray:
+    """Sum the rows of ``values`` (k, ...) by ``groups`` (k,) -> (n_groups, ...) (one sparse product)."""
+    k = len(groups)
+    one_hot = sp.csr_matrix((np.ones(k), (groups, np.arange(k))), shape=(n_groups, k))
+    width = int(np.prod(values.shape[1:]))
+    return np.asarray(one_hot @ values.reshape(k, width)).reshape((n_groups,) + values.shape[1:])
+
+
+def pose_errors(obs: SampleObservations, matched: np.ndarray, existence: np.ndarray, capture_set: CaptureSet,
+                section: OracleSection, rng_views: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Step 3: each view's estimated-pose error. Returns rotation errors phi (n, 3) rad (world frame: the
+    estimated camera is exp([phi]x) R), centre errors dc (n, 3) m and their standard deviations (n, 2): the
+    RMS rotation (rad) and position (m) sigma per axis. ``rng_views`` (n, 6): the views' standard normals."""
+    p = section.synthetic
+    n = len(capture_set)
+    f = capture_set.camera.focal_px
+    rot = capture_set.rotations()[obs.view]
+    x, y, z = obs.cam[:, 0], obs.cam[:, 1], obs.cam[:, 2]
+    d_proj = (f / z)[:, None, None] * np.stack([np.stack([np.ones_like(x), np.zeros_like(x), -x / z], 1),
+                                                np.stack([np.zeros_like(x), np.ones_like(x), -y / z], 1)], 1)
+    rot_t = np.transpose(rot, (0, 2, 1))
+    # X = R^T (p - c): dX/dphi = R^T [p - c]x, dX/dc = -R^T
+    proj_rot = np.matmul(d_proj, rot_t)
+    jac = np.concatenate([np.matmul(proj_rot, _cross_matrices(obs.rel)), -proj_rot], axis=2)  # (k, 2, 6)
+    keypoints = p.keypoints_per_mpx * 1e-6 * obs.patch_px2 * matched * existence[obs.sample]
+    jac = jac * np.sqrt(keypoints / obs.sigma_px ** 2)[:, None, None]
+    info = _sum_by(obs.view, np.matmul(jac.transpose(0, 2, 1), jac), n)
+    true_c = np.asarray(capture_set.positions, dtype=float)
+    pull = np.zeros((n, 6))
+    if p.prior_position_sigma_m is None:
+        prior = np.r_[np.full(3, NO_PRIOR_ROTATION_RAD ** -2), np.full(3, NO_PRIOR_POSITION_M ** -2)]
+    else:
+        prior = np.r_[np.full(3, NO_PRIOR_ROTATION_RAD ** -2), np.full(3, p.prior_position_sigma_m ** -2)]
+        pull[:, 3:] = (capture_set.position_priors() - true_c) * p.prior_position_sigma_m ** -2
+    info = info + np.diag(prior)[None]
+    cov = np.linalg.inv(info)
+    cov = 0.5 * (cov + np.transpose(cov, (0, 2, 1)))
+    mean = np.einsum("nij,nj->ni", cov, pull)
+    # scale by the diagonal before the Cholesky factor: rotations (~1e-6 rad) and positions (~1e-3 m) differ
+    scale = np.sqrt(np.einsum("nii->ni", cov))
+    corr = cov / (scale[:, :, None] * scale[:, None, :]) + 1e-12 * np.eye(6)
+    draw = mean + scale * np.einsum("nij,nj->ni", np.linalg.cholesky(corr), rng_views)
+    sigmas = np.stack([np.sqrt((scale[:, :3] ** 2).mean(1)), np.sqrt((scale[:, 3:] ** 2).mean(1))], 1)
+    return draw[:, :3], draw[:, 3:], sigmas
+
+
+@dataclass(frozen=True)
+class FusedReconstruction:
+    """The reconstructed visible truth. estimates (S, 3) m: each ground-truth sample's fused estimate (its
+    truth where not reconstructed); existence (S,) 0..1: the probability it is reconstructed; sigma_n (S,) m:
+    its depth noise along the normal; pose_sigma (n, 2): per view the rotation (rad) and position (m) sigma;
+    observations: how many (sample, registered view) observations it was made from."""
+
+    estimates: np.ndarray
+    existence: np.ndarray
+    sigma_n: np.ndarray
+    pose_sigma: np.ndarray
+    observations: int = 0
+
+    def __len__(self) -> int:
+        return int(round(float(self.existence.sum())))
+
+    def score(self, gt: GroundTruth, section: OracleSection, seed: int = 0) -> Scores:
+        return score_fused(self, gt, section, seed)
+
+
+def fuse(capture_set: CaptureSet, gt: GroundTruth, registered: np.ndarray, section: OracleSection,
+         seed: int = 0) -> FusedReconstruction:
+    """Steps 1-4 of the module docstring on the registered views of ``capture_set``. Seeded: one standard
+    normal per ground-truth sample, then six per planned view index (common random numbers: a pose change or
+    a missing view leaves every other draw where it was)."""
+    p = section.synthetic
+    n_samples = len(gt.samples)
+    rng = np.random.default_rng(seed)
+    z_samples = rng.standard_normal(n_samples)
+    planned = np.asarray(capture_set.planned_index, dtype=int)
+    z_views = rng.standard_normal((int(planned.max(initial=-1)) + 1, 6))[planned]
+    # each sample stands for the patch 1 / density of the surface it was drawn on
+    obs = observe_samples(capture_set, gt, registered, section, 1.0 / section.gt_density_per_m2)
+    f = capture_set.camera.focal_px
+    a, b = sample_pairs(obs.sample)
+    cos_alpha = np.einsum("kj,kj->k", obs.rel[a], obs.rel[b]) / (obs.dist[a] * obs.dist[b])
+    alpha = np.arccos(np.clip(cos_alpha, -1.0, 1.0))
+    m_pair, t_pair = parallax_weights(alpha, np.radians(p.parallax_min_deg), np.radians(p.parallax_max_deg))
+    both = obs.weight[a] * obs.weight[b]
+    existence = _any_of(both * t_pair, obs.sample[a], n_samples)
+    k = len(obs.sample)
+    matched = _any_of(np.r_[both * m_pair, both * m_pair], np.r_[a, b], k)
+    phi, dc, pose_sigma = pose_errors(obs, matched, existence, capture_set, section, z_views)
+
+    # step 4: weighted least-squares intersection of the matched rays
+    ray = obs.rel / obs.dist[:, None]
+    coef = matched * (f / (obs.dist * obs.sigma_px)) ** 2
+    across = np.eye(3)[None] - ray[:, :, None] * ray[:, None, :]
+    info = _sum_by(obs.sample, coef[:, None, None] * across, n_samples) + np.eye(3)[None] * MAX_POINT_SIGMA_M ** -2
+    cov = np.linalg.inv(info)
+    shift = dc[obs.view] + np.cross(phi[obs.view], obs.rel)
+    moved = coef[:, None] * (shift - ray * np.einsum("kj,kj->k", ray, shift)[:, None])
+    point_shift = np.einsum("sij,sj->si", cov, _sum_by(obs.sample, moved, n_samples))
+    normals = gt.sample_normals
+    sigma_geo2 = np.einsum("si,sij,sj->s", normals, cov, normals)
+    weight_sum = np.bincount(obs.sample, weights=matched, minlength=n_samples)
+    gsd = np.bincount(obs.sample, weights=matched * obs.gsd_m, minlength=n_samples) / np.maximum(weight_sum, 1e-12)
+    sigma_n = np.sqrt(sigma_geo2 + (p.noise_floor_gsd * gsd) ** 2)
+    estimates = gt.samples + point_shift + (sigma_n * z_samples)[:, None] * normals
+    estimates = np.where((existence > 0)[:, None], estimates, gt.samples)
+    return FusedReconstruction(estimates, existence, np.where(existence > 0, sigma_n, np.nan), pose_sigma,
+                               int(len(obs.sample)))
+
+
+def score_fused(recon: FusedReconstruction, gt: GroundTruth, section: OracleSection, seed: int = 0) -> Scores:
+    """ICP with scale on the reconstructed samples, then error_m = accuracy part + hole part (module
+    docstring), accuracy_m / precision over the reconstruction weighted by existence, completeness at tau."""
+    e = recon.existence
+    present = np.flatnonzero(e > MIN_EXISTENCE)
+    if len(present) == 0:
+        return Scores(float("nan"), float("nan"), 0.0, 0.0, 0.0, 1.0)
+    core = recon.estimates[e >= 0.5] if np.count_nonzero(e >= 0.5) >= 3 else recon.estimates[present]
+    transform = align_to_ground_truth(core, gt, section.icp_max_correspondence_m, section.icp_max_iterations,
+                                      seed=seed)
+    aligned = recon.estimates @ transform[:3, :3].T + transform[:3, 3]
+    scale = float(np.cbrt(np.linalg.det(transform[:3, :3])))
+    along = np.abs(np.einsum("sj,sj->s", aligned - gt.samples, gt.sample_normals))
+    tree = cKDTree(aligned[present], balanced_tree=False, compact_nodes=False)
+    k = min(HOLE_NEIGHBOURS, len(present))
+    dist, idx = tree.query(gt.samples, k=k)
+    dist, idx = dist.reshape(len(e), k), idx.reshape(len(e), k)
+    # point-to-disc distance to each neighbour's patch (radius sqrt(a / pi), in its tangent plane), as
+    # base.surfel_distances measures a point cloud's surfels
+    radius = np.sqrt(1.0 / (np.pi * section.gt_density_per_m2))
+    rel = gt.samples[:, None, :] - aligned[present][idx]
+    dn = np.einsum("skj,skj->sk", rel, gt.sample_normals[present][idx])
+    dt = np.sqrt(np.maximum(dist * dist - dn * dn, 0.0))
+    cost = np.sqrt(dn * dn + np.maximum(dt - radius, 0.0) ** 2) + HOLE_PENALTY_M * (1.0 - e[present][idx])
+    cost[present[idx] == np.arange(len(e))[:, None]] = np.inf  # a sample's own estimate is its accuracy part
+    hole = cost.min(axis=1)
+    hole = np.where(np.isfinite(hole), hole, dist.max(axis=1) + HOLE_PENALTY_M)  # only itself within reach
+    accuracy_part = float(np.mean(e * along))
+    hole_part = float(np.mean((1.0 - e) * hole))
+    tau = section.tau_m
+    completeness = float(np.mean(e * (along <= tau) + (1.0 - e) * (hole <= tau)))
+    to_mesh = gt.ship_scene.compute_distance(
+        o3d.core.Tensor(aligned[present].astype(np.float32))).numpy().astype(np.float64)
+    w = e[present]
+    precision = float(np.sum(w * (to_mesh <= tau)) / np.sum(w))
+    fscore = 0.0 if completeness + precision == 0 else 2 * completeness * precision / (completeness + precision)
+    return Scores(accuracy_part + hole_part, float(np.sum(w * to_mesh) / np.sum(w)), completeness, precision,
+                  fscore, scale, hole_part, accuracy_part)
