@@ -230,17 +230,20 @@ def test_capture_file_round_trip_with_roll_and_priors(tmp_path):
     base = captures_from_path(path)
     flown = base.subset(np.array([0, 1, 3, 4]))  # view 2 not taken
     flown = dataclasses.replace(flown, roll=rng.normal(0.0, 0.05, 4),
-                                prior_positions=flown.positions + rng.normal(0.0, 1.0, (4, 3)))
+                                prior_positions=flown.positions + rng.normal(0.0, 1.0, (4, 3)),
+                                blur_px=rng.uniform(0.0, 8.0, 4))
     file = tmp_path / "captures.parquet"
     _write_table(file, [base, flown], len(path))
     back = captures_from_parquet(file, 1, path)
     np.testing.assert_array_equal(back.planned_index, [0, 1, 3, 4])
     np.testing.assert_allclose(back.roll, flown.roll, rtol=1e-12)
     np.testing.assert_allclose(back.prior_positions, flown.prior_positions, rtol=1e-12)
+    np.testing.assert_allclose(back.blur_px, flown.blur_px, rtol=1e-12)
     np.testing.assert_allclose(back.yaw, flown.yaw, atol=1e-12)
     level = captures_from_parquet(file, 0, path)  # a trial without them: roll 0, priors = true positions
     np.testing.assert_array_equal(level.roll, np.zeros(5))
     np.testing.assert_array_equal(level.prior_positions, level.positions)
+    np.testing.assert_array_equal(level.blur_px, np.zeros(5))
 
 
 def test_capture_file_without_roll_or_prior_columns_still_loads(tmp_path):
@@ -249,7 +252,8 @@ def test_capture_file_without_roll_or_prior_columns_still_loads(tmp_path):
     _write_table(old, [captures_from_path(path)], 3)
     assert ROLL_COLUMN not in pq.read_schema(old).names
     cs = captures_from_parquet(old, 0, path)
-    assert cs.roll is None and cs.prior_positions is None and len(cs) == 3
+    assert cs.roll is None and cs.prior_positions is None and cs.blur_px is None and len(cs) == 3
+    np.testing.assert_array_equal(cs.blur(), np.zeros(3))  # a record from before blur was written: sharp
     broken = tmp_path / "broken.parquet"
     flown = dataclasses.replace(captures_from_path(path), prior_positions=np.ones((3, 3)))
     _write_table(broken, [flown], 3, drop=PRIOR_COLUMNS[1:])

@@ -8,9 +8,11 @@ the rays happen to hit, and every random draw is attached to a sample or a view 
 
 1. **Observations.** Sample s is observed by registered view v when it projects into v's image in front of it,
    within range, and an occlusion ray from the sample to the camera (one batched open3d call on ship + sea)
-   is free. Weight w_sv in 0..1 = image border ramp x incidence ramp x keypoint fraction (blur of the view,
-   GSD against the surface texture) (:mod:`wrp_eval.recon.image_effects`); pixel noise sigma_v from the
-   view's blur.
+   is free. Weight w_sv in 0..1 = image border ramp x incidence ramp x the probability that dense matching
+   finds texture on the patch (its area in the image, thinned by the view's keypoint fraction: blur, GSD
+   against the surface texture) (:mod:`wrp_eval.recon.image_effects`); pixel noise sigma_v from the view's
+   blur. Blur thus costs a view keypoints (registration, pose) and precision at once, but a sharp-enough
+   patch still reconstructs: dense matching uses every pixel, not only keypoints.
 2. **Matching and triangulation.** Every pair of observations of a sample matches with probability
    w_sv w_sv' m(alpha) and triangulates with w_sv w_sv' t(alpha) (parallax ramps). The sample is reconstructed
    with probability e_s = 1 - prod(1 - triangulating pair probabilities) (at least one pair triangulates); an
@@ -23,6 +25,10 @@ the rays happen to hit, and every random draw is attached to a sample or a view 
    prior (the recorded GNSS position, sigma ``prior_position_sigma_m``) where configured. The estimate =
    the prior's pull (covariance x prior information x (recorded - true position)) + a seeded Gaussian draw
    with the posterior covariance.
+   Only the directions the images leave open are pulled: the rotation / translation trade-off of a narrow
+   field of view is weakly constrained, and errors along it barely move the rays at the observed points.
+   The linearisation holds the true structure fixed while it estimates each pose (per-view resection), so it
+   does not model how a bundle adjustment would bend the structure with the cameras.
 4. **Points.** The fused estimate of sample s is the weighted least-squares intersection of the matched rays
    (each weighted m_sv f^2 / (d^2 sigma_v^2) across its ray): its covariance C_s = (sum of those
    information matrices)^-1 gives the depth noise along the surface normal, sigma_n^2 = n^T C_s n, plus a
@@ -51,7 +57,7 @@ from scipy.spatial import cKDTree
 from wrp_eval.recon.base import GroundTruth, Scores, align_to_ground_truth
 from wrp_eval.recon.config import OracleSection
 from wrp_eval.recon.image_effects import (border_weight, incidence_weight, keypoint_fraction, parallax_weights,
-                                          pixel_noise_px)
+                                          patch_match_probability, pixel_noise_px)
 from wrp_eval.sim.captures import CaptureSet
 
 OCCLUSION_OFFSET_M = 0.01    # occlusion rays start this far off the surface (no self-hits on shared edges)
@@ -118,9 +124,9 @@ def observe_samples(capture_set: CaptureSet, gt: GroundTruth, registered: np.nda
     gsd = np.asarray(cam_model.gsd_m(dist_k))
     keep_frac = keypoint_fraction(blur, gsd, p.texture_m)
     c_inc = cos_inc[s_idx, v_idx]
-    weight = (border_weight(u[s_idx, v_idx], v[s_idx, v_idx], cam_model.image_width_px, cam_model.image_height_px)
-              * incidence_weight(c_inc, inc_max) * keep_frac)
     patch_px2 = sample_area_m2 * c_inc / gsd ** 2 * keep_frac
+    weight = (border_weight(u[s_idx, v_idx], v[s_idx, v_idx], cam_model.image_width_px, cam_model.image_height_px)
+              * incidence_weight(c_inc, inc_max) * patch_match_probability(patch_px2))
     return SampleObservations(s_idx, view, rel_k, dist_k, cam[s_idx, v_idx], weight,
                               pixel_noise_px(p.sigma_px, blur), patch_px2, gsd)
 
@@ -203,12 +209,16 @@ class FusedReconstruction:
     """The reconstructed visible truth. estimates (S, 3) m: each ground-truth sample's fused estimate (its
     truth where not reconstructed); existence (S,) 0..1: the probability it is reconstructed; sigma_n (S,) m:
     its depth noise along the normal; pose_sigma (n, 2): per view the rotation (rad) and position (m) sigma;
-    observations: how many (sample, registered view) observations it was made from."""
+    camera_position_error (n, 3) m and camera_rotation_error (n, 3) rad (world-frame rotation vector): each
+    view's estimated pose minus its true pose (0 for views not registered); observations: how many (sample,
+    registered view) observations it was made from."""
 
     estimates: np.ndarray
     existence: np.ndarray
     sigma_n: np.ndarray
     pose_sigma: np.ndarray
+    camera_position_error: np.ndarray
+    camera_rotation_error: np.ndarray
     observations: int = 0
 
     def __len__(self) -> int:
@@ -258,8 +268,9 @@ def fuse(capture_set: CaptureSet, gt: GroundTruth, registered: np.ndarray, secti
     sigma_n = np.sqrt(sigma_geo2 + (p.noise_floor_gsd * gsd) ** 2)
     estimates = gt.samples + point_shift + (sigma_n * z_samples)[:, None] * normals
     estimates = np.where((existence > 0)[:, None], estimates, gt.samples)
+    registered = np.asarray(registered, dtype=bool)[:, None]
     return FusedReconstruction(estimates, existence, np.where(existence > 0, sigma_n, np.nan), pose_sigma,
-                               int(len(obs.sample)))
+                               np.where(registered, dc, 0.0), np.where(registered, phi, 0.0), int(len(obs.sample)))
 
 
 def score_fused(recon: FusedReconstruction, gt: GroundTruth, section: OracleSection, seed: int = 0) -> Scores:

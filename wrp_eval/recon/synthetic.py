@@ -58,7 +58,9 @@ from wrp_eval.camera import Camera, optical_axes
 from wrp_eval.recon.base import GroundTruth, MeshOracle
 from wrp_eval.recon.config import OracleSection
 from wrp_eval.recon.fusion import FusedReconstruction, fuse
-from wrp_eval.recon.image_effects import blur_keypoint_fraction, texture_keypoint_fraction
+from wrp_eval.recon.image_effects import blur_keypoint_fraction
+
+REGISTRATION_CALIBRATION_WIDTH_PX = 800  # the COLMAP renders min_registration_rays was calibrated on (README)
 from wrp_eval.sim.captures import CaptureSet
 
 
@@ -229,9 +231,10 @@ def register_incremental(n_views: int, n_hits: int, hit_view: np.ndarray, hit: n
 
     hit_view (h,) view of every hit; hit, partner, matchable, triangulates, grid_index (k,): candidate pairs
     sorted by hit, with the partner's flat ray index (partner * rays_per_view + ray) at the hit's image cell.
-    ray_weight (n * rays_per_view,): the expected share of a keypoint behind each ray (blur, texture;
+    ray_weight (n * rays_per_view,): the expected share of a keypoint behind each ray (blur;
     :mod:`wrp_eval.recon.image_effects`) with hit_ray (h,) each hit's own flat ray index: counts become sums
-    of these weights (a pair's count the product of its two rays'); None = every ray counts 1.
+    of these weights (a seed pair's ray the smaller of its two: a feature coarse enough to survive the
+    stronger blur survives both); None = every ray counts 1.
     Returns the registered mask (n,) and the registration order.
     """
     n = n_views
@@ -246,7 +249,7 @@ def register_incremental(n_views: int, n_hits: int, hit_view: np.ndarray, hit: n
     if ray_weight is None:
         ray_weight = np.ones(n * rays_per_view)
         hit_ray = np.zeros(n_hits, dtype=np.int64)  # with unit weights any ray index gives weight 1
-    pair_weight = ray_weight[hit_ray[h_m]] * ray_weight[g_m]
+    pair_weight = np.minimum(ray_weight[hit_ray[h_m]], ray_weight[g_m])
     tri = np.bincount(v_m[t_m] * n + p_m[t_m], weights=pair_weight[t_m], minlength=n * n).reshape(n, n)
     tri = np.triu(tri + tri.T, k=1)
     seed = int(np.argmax(tri))
@@ -316,7 +319,7 @@ class SyntheticOracle(MeshOracle):
         cam = capture_set.camera
         n = len(capture_set)
         empty = FusedReconstruction(gt.samples, np.zeros(len(gt.samples)), np.full(len(gt.samples), np.nan),
-                                    np.zeros((n, 2)))
+                                    np.zeros((n, 2)), np.zeros((n, 3)), np.zeros((n, 3)))
         if n == 0:
             return empty, 0, "no views captured", {}
         f = cam.focal_px
@@ -377,9 +380,11 @@ class SyntheticOracle(MeshOracle):
             detail = f"{n_comp} disconnected view groups, largest kept"
             reg_extra = {"view_groups": int(n_comp)}
         else:
-            # a blurred or under-textured view has fewer keypoints behind its rays (image_effects.py)
-            hit_weight = (blur_keypoint_fraction(capture_set.blur()[obs.view])
-                          * texture_keypoint_fraction(cam.gsd_m(obs.dist), p.texture_m))
+            # a blurred view has fewer keypoints behind its rays (image_effects.py); min_registration_rays is
+            # calibrated against COLMAP on REGISTRATION_CALIBRATION_WIDTH_PX renders, so the blur is taken
+            # at that width (where the texture law never binds: the GSD is coarse there)
+            hit_weight = blur_keypoint_fraction(capture_set.blur()[obs.view] * REGISTRATION_CALIBRATION_WIDTH_PX
+                                                / cam.image_width_px)
             ray_weight = np.zeros(n * rays_per_view)
             hit_ray = obs.view * rays_per_view + obs.ray
             ray_weight[hit_ray] = hit_weight

@@ -1,0 +1,99 @@
+"""The synthetic oracle's reconstruction: estimated poses, fused points, the two parts of the error, smoothness."""
+
+from __future__ import annotations
+
+import dataclasses
+
+import numpy as np
+import pytest
+
+from wrp_eval.recon.config import OracleSection, SyntheticOracleSection
+from wrp_eval.recon.fusion import sample_pairs
+from wrp_eval.recon.synthetic import SyntheticOracle
+
+from .conftest import ring_views
+
+
+def _ring():
+    return ring_views((0, 0, 0), 22.0, (3.0, 16.0), 16, target=(0, 0, 1.5))
+
+
+def test_sample_pairs_lists_every_pair_within_a_sample_once():
+    a, b = sample_pairs(np.array([0, 0, 0, 2, 5, 5]))
+    assert sorted(zip(a.tolist(), b.tolist())) == [(0, 1), (0, 2), (1, 2), (4, 5)]
+
+
+def test_error_is_its_hole_part_plus_its_accuracy_part(box_on_water, fast_section):
+    r = SyntheticOracle(fast_section).evaluate(_ring(), box_on_water, seed=0)
+    assert r.error_m == pytest.approx(r.hole_part_m + r.accuracy_part_m, rel=1e-12)
+    assert r.accuracy_part_m > 0 and r.hole_part_m >= 0
+
+
+def test_blur_costs_precision_and_pose_but_a_good_ring_still_registers(box_on_water, fast_section):
+    oracle = SyntheticOracle(fast_section)
+    ring = _ring()
+    sharp = oracle.evaluate(ring, box_on_water, seed=0)
+    results = [oracle.evaluate(dataclasses.replace(ring, blur_px=np.full(len(ring), b)), box_on_water, seed=0)
+               for b in (5.0, 15.0, 30.0)]
+    acc = [sharp.accuracy_part_m] + [r.accuracy_part_m for r in results]
+    pose = [sharp.extra["median_pose_sigma_m"]] + [r.extra["median_pose_sigma_m"] for r in results]
+    assert np.all(np.diff(acc) > 0) and np.all(np.diff(pose) > 0)
+    assert all(r.registered_views == len(ring) for r in results)
+
+
+def test_one_blurred_view_costs_less_than_all_blurred(box_on_water, fast_section):
+    oracle = SyntheticOracle(fast_section)
+    ring = _ring()
+    one = np.zeros(len(ring))
+    one[3] = 30.0
+    sharp = oracle.evaluate(ring, box_on_water, seed=0)
+    single = oracle.evaluate(dataclasses.replace(ring, blur_px=one), box_on_water, seed=0)
+    every = oracle.evaluate(dataclasses.replace(ring, blur_px=np.full(len(ring), 30.0)), box_on_water, seed=0)
+    assert sharp.error_m < single.error_m < every.error_m
+
+
+def test_weakly_constrained_views_follow_their_position_priors(box_on_water):
+    # with almost no keypoints the bundle adjustment keeps each camera near its GNSS prior; with the default
+    # keypoint density the images decide and a 0.5 m prior error hardly moves the estimate
+    ring = _ring()
+    offset = np.random.default_rng(3).normal(0.0, 0.5, ring.positions.shape)
+    off = dataclasses.replace(ring, prior_positions=ring.positions + offset)
+
+    def camera_errors(keypoints_per_mpx):
+        oracle = SyntheticOracle(OracleSection(synthetic=SyntheticOracleSection(
+            rays_x=40, rays_y=27, keypoints_per_mpx=keypoints_per_mpx)))
+        gt = oracle.ground_truth(box_on_water)
+        return (oracle.reconstruct(off, gt, seed=0)[0].camera_position_error
+                - oracle.reconstruct(ring, gt, seed=0)[0].camera_position_error)  # same draws: the pull alone
+
+    weak, strong = camera_errors(1e-7), camera_errors(100.0)
+    slope = np.sum(weak * offset) / np.sum(offset * offset)
+    assert 0.5 < slope <= 1.0                                   # pulled most of the way to the prior
+    assert np.abs(strong).max() < 0.05 * np.abs(offset).max()   # the images hold the camera
+
+
+def test_error_changes_smoothly_with_one_views_position(box_on_water, fast_section):
+    oracle = SyntheticOracle(fast_section)
+    ring = _ring()
+    errors = []
+    for dx in np.linspace(-2.0, 2.0, 21):
+        positions = ring.positions.copy()
+        positions[5, 0] += dx
+        errors.append(oracle.evaluate(dataclasses.replace(ring, positions=positions), box_on_water, seed=0).error_m)
+    steps = np.abs(np.diff(errors))
+    span = max(errors) - min(errors)
+    assert span > 0
+    assert steps.max() < 0.35 * span   # no jump: 20 steps of 0.2 m, none carries a third of the change
+
+
+def test_missing_view_leaves_the_other_draws_in_place(box_on_water, fast_section):
+    # common random numbers: the draws belong to ground-truth samples and planned views, not to positions
+    oracle = SyntheticOracle(fast_section)
+    ring = _ring()
+    gt = oracle.ground_truth(box_on_water)
+    full = oracle.reconstruct(ring, gt, seed=4)[0]
+    again = oracle.reconstruct(ring, gt, seed=4)[0]
+    np.testing.assert_array_equal(full.estimates, again.estimates)
+    fewer = oracle.reconstruct(ring.subset(np.arange(len(ring)) != 7), gt, seed=4)[0]
+    change = np.linalg.norm(fewer.estimates - full.estimates, axis=1)
+    assert np.median(change) < 0.2 * np.median(full.sigma_n[np.isfinite(full.sigma_n)])
