@@ -97,3 +97,17 @@ def test_missing_view_leaves_the_other_draws_in_place(box_on_water, fast_section
     fewer = oracle.reconstruct(ring.subset(np.arange(len(ring)) != 7), gt, seed=4)[0]
     change = np.linalg.norm(fewer.estimates - full.estimates, axis=1)
     assert np.median(change) < 0.2 * np.median(full.sigma_n[np.isfinite(full.sigma_n)])
+
+
+def test_colmap_conditions_coarser_pixels_and_fewer_points_raise_the_error(box_on_water, fast_section):
+    from wrp_eval.recon.calibration import at_width, colmap_equivalent
+    ring = dataclasses.replace(_ring(), blur_px=np.full(32, 6.0))
+    small = at_width(ring, 800)
+    assert small.camera.image_width_px == 800 and small.camera.image_height_px == 533
+    assert small.camera.half_fov_x == pytest.approx(ring.camera.half_fov_x)
+    np.testing.assert_allclose(small.blur_px, 0.8)
+    oracle = SyntheticOracle(fast_section)
+    full = oracle.evaluate(ring, box_on_water, seed=0)
+    eq = colmap_equivalent(oracle, ring, box_on_water, n_points=60, width_px=800)
+    assert full.error_m < eq["width_error_m"] < eq["sparse_error_m"]
+    assert eq["sparse_completeness"] < full.completeness
