@@ -46,20 +46,28 @@ def test_ceiling_is_one_without_jitter_and_below_one_with_it(campaign_dir):
 
 
 def test_stored_trials_rescore_to_their_stored_error(campaign_dir):
-    # the stored flown offsets, achieved pitch and roll and the oracle seed are the whole input of the stored error
+    # the stored flown offsets, achieved pitch, roll, blur, navigation estimate and the oracle seed are the whole
+    # input of the stored error
     from wrp_eval.campaign.records import column_array
     from wrp_eval.surrogate.diagnostics import campaign_oracle
     scorer, store = campaign_oracle(campaign_dir)
-    table = store.read_table(["n_views", "flown_offsets", "camera_pitch", "camera_roll", "error_m", "oracle_seed"])
+    table = store.read_table(["n_views", "flown_offsets", "camera_pitch", "camera_roll", "blur_px",
+                              "estimated_offsets", "error_m", "oracle_seed"])
     flown, pitch = column_array(table, "flown_offsets"), column_array(table, "camera_pitch")
     roll = column_array(table, "camera_roll")
+    blur, estimated = column_array(table, "blur_px"), column_array(table, "estimated_offsets")
     error = table.column("error_m").to_numpy(zero_copy_only=False)
     seeds = table.column("oracle_seed").to_pylist()
     complete = np.flatnonzero(np.all(np.isfinite(flown), axis=(1, 2)) & np.isfinite(error))
     assert complete.size >= 2 and np.all(np.isfinite(pitch[complete])) and np.all(np.isfinite(roll[complete]))
     assert np.abs(roll[complete]).max() > 0.0                      # a real residual roll, which the oracle sees
     for trial in complete:
-        assert scorer.error(flown[trial], seeds[trial], pitch[trial], roll[trial]) == error[trial]
+        assert scorer.error(flown[trial], seeds[trial], pitch[trial], roll[trial], blur[trial],
+                            estimated[trial]) == error[trial]
+    assert np.nanmax(blur[complete]) > 0.0                         # blur recorded, and it counts:
+    trial = complete[0]
+    assert scorer.error(flown[trial], seeds[trial], pitch[trial], roll[trial], 10 * blur[trial],
+                        estimated[trial]) > error[trial]
 
 
 def test_ceiling_refuses_a_folder_that_is_not_a_campaign(tmp_path):

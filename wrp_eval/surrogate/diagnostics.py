@@ -49,13 +49,22 @@ class CampaignOracle:
     planned: np.ndarray      # (n, 4) x, y, z m, yaw rad
 
     def error(self, offsets: np.ndarray, seed: int, pitch: np.ndarray | None = None,
-              roll: np.ndarray | None = None) -> float:
+              roll: np.ndarray | None = None, blur_px: np.ndarray | None = None,
+              estimated_offsets: np.ndarray | None = None) -> float:
         """Oracle error_m (m) of the path flown at planned + ``offsets`` (n, 4), every view taken, the gimbal at
         ``pitch`` (n,) rad where finite (a trial's achieved pitch), else at the planned pitch, with the camera's
-        residual ``roll`` (n,) rad (a trial's; None or NaN: level)."""
+        residual ``roll`` (n,) rad (a trial's; None or NaN: level), its motion ``blur_px`` (n,) (None or NaN:
+        sharp) and the navigation's ``estimated_offsets`` (n, 4) from the plan (the photos' recorded positions,
+        the position priors; None or NaN: the true positions)."""
         if roll is not None:
             roll = np.nan_to_num(np.asarray(roll, dtype=float), nan=0.0)
-        return float(self.ship.score(captures_from_path(self.path, offsets, pitch, roll=roll), seed).error_m)
+        if blur_px is not None:
+            blur_px = np.nan_to_num(np.asarray(blur_px, dtype=float), nan=0.0)
+        prior = None
+        if estimated_offsets is not None and np.all(np.isfinite(estimated_offsets)):
+            prior = self.planned[:, :3] + np.asarray(estimated_offsets, dtype=float)[:, :3]
+        captures = captures_from_path(self.path, offsets, pitch, roll=roll, prior_positions=prior, blur_px=blur_px)
+        return float(self.ship.score(captures, seed).error_m)
 
 
 def campaign_oracle(campaign_dir: str | Path, config_dir: str | Path = ".") -> tuple[CampaignOracle, object]:
@@ -85,11 +94,13 @@ def oracle_roughness(campaign_dir: str | Path, *, n_trials: int = 60, repeats: i
     if repeats < 2:
         raise InputError("oracle_roughness", f"repeats must be >= 2 to measure a variance, got {repeats}")
     scorer, store = campaign_oracle(campaign_dir, config_dir)
-    table = store.read_table(["n_views", "flown_offsets", "camera_pitch", "camera_roll", "error_m", "failed",
-                              "oracle_seed"])
+    table = store.read_table(["n_views", "flown_offsets", "camera_pitch", "camera_roll", "blur_px",
+                              "estimated_offsets", "error_m", "failed", "oracle_seed"])
     flown = column_array(table, "flown_offsets")
     pitch = column_array(table, "camera_pitch")       # NaN (-> planned pitch) in campaigns stored before the column
     roll = column_array(table, "camera_roll")         # NaN (-> level) likewise
+    blur = column_array(table, "blur_px")             # NaN (-> sharp) likewise
+    estimated = column_array(table, "estimated_offsets")  # NaN (-> priors at the true positions) likewise
     error = table.column("error_m").to_numpy(zero_copy_only=False).astype(float)
     failed = table.column("failed").to_numpy(zero_copy_only=False).astype(bool)
     oracle_seed = table.column("oracle_seed").to_numpy().astype(np.int64)
@@ -104,7 +115,8 @@ def oracle_roughness(campaign_dir: str | Path, *, n_trials: int = 60, repeats: i
         for rep in range(repeats):
             jitter = np.concatenate([rng.normal(0.0, position_jitter_m, (n, 3)),
                                      rng.normal(0.0, yaw_jitter_rad, (n, 1))], axis=1)
-            scores[row, rep] = scorer.error(flown[trial] + jitter, oracle_seed[trial], pitch[trial], roll[trial])
+            scores[row, rep] = scorer.error(flown[trial] + jitter, oracle_seed[trial], pitch[trial], roll[trial],
+                                            blur[trial], estimated[trial])
     finite = np.all(np.isfinite(scores), axis=1)
     if not finite.any():
         raise InputError(campaign_dir, "the oracle returned no finite error on the re-scored trials")
