@@ -40,3 +40,19 @@ def test_rotation_errors_measure_the_angle_after_the_similarity():
     extra = camera_rotations([0.3], [-0.4], [0.05 + np.radians(5.0)])
     off = rotation_errors_deg(np.einsum("ij,kjl->kil", q.T, extra), sim, truth[:1])
     np.testing.assert_allclose(off, 5.0, atol=1e-6)
+
+
+def test_database_fingerprint_changes_with_blur_but_not_for_a_sharp_set():
+    from dataclasses import replace
+
+    from wrp_eval.recon.colmap import database_fingerprint
+    from wrp_eval.recon.config import OracleSection
+    from wrp_eval.recon.scenarios import reference_capture_set
+
+    cs = reference_capture_set(12)
+    section = OracleSection()
+    sharp = database_fingerprint(cs, "mesh", section, 0)
+    assert database_fingerprint(replace(cs, blur_px=np.zeros(len(cs))), "mesh", section, 0) == sharp
+    blurred = database_fingerprint(replace(cs, blur_px=np.full(len(cs), 8.0)), "mesh", section, 0)
+    assert blurred != sharp
+    assert database_fingerprint(replace(cs, blur_px=np.full(len(cs), 25.0)), "mesh", section, 0) != blurred

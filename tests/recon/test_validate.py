@@ -36,3 +36,46 @@ def test_summary_rank_correlation_and_verdict_agreement():
     assert s["spearman_rho_completeness"] == pytest.approx(1.0)
     assert s["failed_verdict_agreement"] == pytest.approx(0.75) and s["disagreements"] == ["c"]
     assert np.isnan(summarize(rows[:2])["spearman_rho_error_m"])
+
+
+def _prow(name, kind, syn_err, col_err, syn_comp=0.9, col_comp=0.6):
+    return {"name": name, "kind": kind, "synthetic_error_m": syn_err, "colmap_error_m": col_err,
+            "synthetic_completeness": syn_comp, "colmap_completeness": col_comp,
+            "synthetic_failed": False, "colmap_failed": False}
+
+
+def test_perturbed_deltas_spearman_sign_agreement_and_noise():
+    from wrp_eval.recon.validate import add_deltas, summarize_perturbed
+
+    rows = [_prow("unperturbed", "reference", 0.020, 0.100, 0.90, 0.60),
+            _prow("a", "single_view", 0.021, 0.130, 0.89, 0.58),   # d syn +1e-3, d col +0.03
+            _prow("b", "single_view", 0.019, 0.110, 0.91, 0.61),   # -1e-3, +0.01 (signs differ)
+            _prow("c", "nav_drift", 0.025, 0.300, 0.85, 0.40),     # +5e-3, +0.2
+            _prow("d", "blur", 0.023, 0.050, 0.88, 0.55),          # +3e-3, -0.05 (signs differ)
+            _prow("e", "blur", None, 0.120),                       # no synthetic figure: left out
+            _prow("unperturbed_repeat1", "repeat", 0.0202, 0.104, 0.90, 0.60),
+            _prow("unperturbed_repeat2", "repeat", 0.0198, 0.096, 0.90, 0.60)]
+    add_deltas(rows)
+    assert rows[0]["synthetic_delta_error_m"] == 0.0 and rows[5]["synthetic_delta_error_m"] is None
+    assert rows[3]["colmap_delta_error_m"] == pytest.approx(0.2)
+    s = summarize_perturbed(rows)
+    e = s["error_m"]
+    assert s["perturbed_sets"] == 5 and e["pairs"] == 4
+    # synthetic deltas +1, -1, +5, +3 (e-3) rank 2, 1, 4, 3; COLMAP +0.03, +0.01, +0.2, -0.05 rank 3, 2, 4, 1
+    assert e["spearman_rho"] == pytest.approx(0.4)
+    assert e["sign_agreement"] == pytest.approx(0.5)
+    # repeat noise: std (ddof 1) over the reference and its two repeats
+    assert e["repeat_noise_synthetic"] == pytest.approx(np.std([0.020, 0.0202, 0.0198], ddof=1))
+    assert e["repeat_noise_colmap"] == pytest.approx(0.004)
+    # |d syn| < 2e-4 nowhere, |d col| < 0.004 nowhere: no set within the noise
+    assert e["below_noise_sets"] == 0 and e["sign_agreement_above_noise"] == pytest.approx(0.5)
+    assert not s["spearman_target_met"]
+    assert s["per_kind"]["single_view"]["sets"] == 2
+    assert s["per_kind"]["single_view"]["colmap_median_delta_error_m"] == pytest.approx(0.02)
+    assert s["per_kind"]["blur"]["sign_agreement_error_m"] == pytest.approx(0.0)
+    c = s["completeness"]
+    assert c["pairs"] == 5  # completeness is known for "e" as well
+    assert c["sign_agreement"] == pytest.approx(1.0)  # a-d agree in sign; e: no change in either (0 == 0)
+    # the same rows without repeats: no noise estimate, the counts are None
+    s2 = summarize_perturbed(rows[:6])
+    assert s2["error_m"]["repeat_noise_colmap"] is None and s2["error_m"]["below_noise_sets"] is None

@@ -1,7 +1,8 @@
 """Photogrammetric validation oracle: render the textured ship at the capture poses, run COLMAP (pycolmap).
 
 Pipeline (the open stand-in for the paper's ContextCapture, Sec. 4.1):
-1. render every capture pose (:mod:`wrp_eval.recon.render`, solid procedural texture, sea as occluder);
+1. render every capture pose (:mod:`wrp_eval.recon.render`, solid procedural texture, sea as occluder), a view
+   with motion blur (``CaptureSet.blur_px``) smeared horizontally by it, scaled to the render width;
 2. pycolmap SIFT feature extraction with the known pinhole intrinsics (drone images carry them in EXIF),
    exhaustive (or sequential) matching with geometric verification (RANSAC seeded);
 3. pose priors: every image's recorded position (``CaptureSet.prior_positions``, the drone's navigation /
@@ -86,7 +87,8 @@ def sparse_surfels(points: np.ndarray) -> Surfels:
 
 
 def database_fingerprint(capture_set: CaptureSet, mesh_key: str, section: OracleSection, seed: int) -> str:
-    """Hash of everything the features and matches depend on (poses, camera, ship, texture, settings, seed)."""
+    """Hash of everything the features and matches depend on (poses, roll, motion blur, camera, ship, texture,
+    settings, seed)."""
     c = section.colmap
     h = hashlib.sha256()
     for arr in (capture_set.positions, capture_set.yaw, capture_set.pitch):
@@ -95,6 +97,9 @@ def database_fingerprint(capture_set: CaptureSet, mesh_key: str, section: Oracle
     # position priors are not hashed: they are rewritten before every mapping
     if capture_set.roll is not None and np.any(np.asarray(capture_set.roll) != 0):
         h.update(b"roll" + np.ascontiguousarray(capture_set.roll, dtype=np.float64).tobytes())
+    # motion blur smears the rendered images (render.py); a sharp set hashes as before
+    if np.any(capture_set.blur() != 0):
+        h.update(b"blur" + np.ascontiguousarray(capture_set.blur(), dtype=np.float64).tobytes())
     cam = capture_set.camera
     h.update(json.dumps([cam.focal_mm, cam.sensor_width_mm, cam.image_width_px, cam.image_height_px, mesh_key,
                          section.gt_seed, c.image_width_px, c.max_num_features, c.match_exhaustive,

@@ -8,12 +8,19 @@ unlike a tiled 2-D texture, makes no false matches between, e.g., port and starb
 featureless colour (its real texture moves between photos and yields no stable matches); the sky is grey.
 MuJoCo's OSMesa renderer also works on this machine, but a mesh needs per-vertex UVs there and a tiled
 texture; ray casting was the simpler faithful choice.
+
+Motion blur (``CaptureSet.blur_px``, the smear during the exposure in pixels of the capture camera): each
+blurred view's image is convolved with a linear motion-blur kernel (:func:`motion_blur_kernel`, a normalised
+line segment) of the view's blur scaled to the render width (``blur_px * width_px / camera.image_width_px``).
+*Choice:* the smear is horizontal (along image rows): the drone's translation past the ship and its yaw, the
+motions the simulator's blur comes from, move the image mostly sideways; the true direction is not recorded.
 """
 
 from __future__ import annotations
 
 import numpy as np
 import open3d as o3d
+from scipy.ndimage import convolve1d
 
 from wrp_eval.camera import Camera
 from wrp_eval.recon.base import GroundTruth
@@ -64,11 +71,41 @@ class SolidTexture:
         return out / weight_sum
 
 
+def motion_blur_kernel(length_px: float) -> np.ndarray:
+    """A linear motion-blur kernel: the normalised box of a line segment ``length_px`` long centred on the
+    pixel, each tap weighted by the length of the segment inside that pixel (so a sub-pixel length is handled
+    by the end taps: 2 px -> [0.25, 0.5, 0.25], 3 px -> [1/3, 1/3, 1/3]); sums to 1, odd length, symmetric.
+    A length <= 1 px lies inside one pixel: [1.0] (no blur)."""
+    half = max(float(length_px), 1.0) / 2.0
+    m = int(np.ceil(half - 0.5))
+    k = np.arange(-m, m + 1, dtype=float)
+    weights = np.clip(np.minimum(k + 0.5, half) - np.maximum(k - 0.5, -half), 0.0, None)
+    return weights / weights.sum()
+
+
+def motion_blur(image: np.ndarray, length_px: float) -> np.ndarray:
+    """``image`` (h, w, c) or (h, w) uint8 smeared horizontally (along its rows) by a linear motion blur of
+    ``length_px`` render pixels (:func:`motion_blur_kernel`; edges repeat the border pixel); the input itself
+    when the kernel is a single tap."""
+    kernel = motion_blur_kernel(length_px)
+    if len(kernel) == 1:
+        return image
+    out = convolve1d(image.astype(np.float32), kernel.astype(np.float32), axis=1, mode="nearest")
+    return np.clip(np.rint(out), 0, 255).astype(np.uint8)
+
+
+def render_blur_px(capture_set: CaptureSet, width_px: int) -> np.ndarray:
+    """(n,) the views' motion blur in render pixels: ``blur_px`` of the capture camera scaled to ``width_px``."""
+    return capture_set.blur() * width_px / capture_set.camera.image_width_px
+
+
 def render_views(capture_set: CaptureSet, gt: GroundTruth, width_px: int, texture: SolidTexture,
                  max_rays_per_call: int = 2_000_000) -> tuple[np.ndarray, Camera]:
     """RGB images (n, h, w, 3) uint8 of every capture pose, and the camera they were rendered with.
 
     The capture camera's field of view is kept; the image is scaled to ``width_px`` (height in proportion).
+    A view with motion blur (``capture_set.blur_px`` > 0) is smeared horizontally by its blur scaled to the
+    render width (:func:`render_blur_px`, :func:`motion_blur`; module docstring).
     """
     cam = capture_set.camera
     height_px = int(round(width_px * cam.image_height_px / cam.image_width_px))
@@ -100,4 +137,7 @@ def render_views(capture_set: CaptureSet, gt: GroundTruth, width_px: int, textur
         shade = 0.45 + 0.55 * np.clip(nrm @ SUN_DIRECTION, 0, 1)
         rgb[ship] = texture.albedo(p) * shade[:, None]
         images[views] = np.clip(255 * rgb, 0, 255).astype(np.uint8).reshape(len(views), height_px, width_px, 3)
+    for i, length in enumerate(render_blur_px(capture_set, width_px)):
+        if length > 0:
+            images[i] = motion_blur(images[i], length)
     return images, render_cam

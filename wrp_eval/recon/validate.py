@@ -6,12 +6,17 @@ yaw offsets (wind), thinned, or flown farther; broken = per-face views with no t
 faces (the failure the paper's transition viewpoints exist to prevent, Sec. 3.3) and a sparse ring.
 Both oracles measure each; we report the Spearman rank correlation of error_m and the agreement of the
 failed verdicts (issue 6 target: rho >= 0.8, same verdicts).
+
+``--perturbed`` (:func:`validate_perturbed`): both oracles on small, realistic perturbations of ONE planned path
+(:mod:`wrp_eval.recon.perturbed`); we report each oracle's change of error_m and completeness from the
+unperturbed set, the Spearman rho of the two oracles' changes (issue 17 target: >= 0.6) and their sign agreement.
 """
 
 from __future__ import annotations
 
 import csv
 import json
+import traceback
 from pathlib import Path
 
 import numpy as np
@@ -197,3 +202,236 @@ def validate_oracle(oracle: OracleSection, mesh: trimesh.Trimesh, out: Path, see
     summary = summarize(rows)
     write_outputs(rows, summary, out)
     return summary
+
+
+# -- perturbed capture sets of one path (issue 17, item 5; wrp_eval/recon/perturbed.py) ----------------------
+
+PERTURBED_METRICS = ("error_m", "accuracy_m", "completeness", "fscore", "registered_views", "failed", "time_s",
+                     "hole_part_m", "accuracy_part_m")
+DELTA_METRICS = ("error_m", "completeness")
+REPEAT_SEED_OFFSETS = (1, 2)   # the reference again with seed + 1, seed + 2: each oracle's repeat noise
+SPEARMAN_TARGET = 0.6          # issue 17: rank correlation of the two oracles' deltas
+KIND_COLOURS = {"single_view": "tab:blue", "nav_drift": "tab:orange", "heading_bias": "tab:green",
+                "blur": "tab:purple", "flight": "tab:red"}
+
+
+def capture_sha(cs: CaptureSet) -> str:
+    """Short hash of a capture set's poses, roll, priors, blur and views (a reused COLMAP row must be of the
+    same set)."""
+    import hashlib
+
+    h = hashlib.sha256()
+    for arr in (cs.positions, cs.yaw, cs.pitch, cs.planned_index, cs.rotations(), cs.position_priors(), cs.blur()):
+        h.update(np.ascontiguousarray(arr, dtype=np.float64).tobytes())
+    return h.hexdigest()[:16]
+
+
+def _finite(x) -> bool:
+    return x is not None and not isinstance(x, bool) and np.isfinite(float(x))
+
+
+def perturbed_row(name: str, kind: str, cs: CaptureSet, syn: ReconResult, col: ReconResult | None) -> dict:
+    """One row of perturbed_table.csv: the set, its perturbation figures and both oracles' results (the
+    synthetic oracle's ``hole_part_m`` / ``accuracy_part_m`` where its results carry them, else None)."""
+    prior_err = np.linalg.norm(cs.position_priors() - cs.positions, axis=1)
+    row = {"name": name, "kind": kind, "views": len(cs), "capture_sha": capture_sha(cs),
+           "blur_px_mean": float(cs.blur().mean()) if len(cs) else 0.0,
+           "prior_error_rms_m": float(np.sqrt(np.mean(prior_err ** 2))) if len(cs) else 0.0}
+    for prefix, r in (("synthetic", syn), ("colmap", col)):
+        for key in PERTURBED_METRICS:
+            row[f"{prefix}_{key}"] = None if r is None else getattr(r, key, None)
+        row[f"{prefix}_reason"] = None if r is None else r.reason
+    row["colmap_model_sizes"] = None if col is None else " ".join(str(k) for k in col.extra.get("model_sizes", []))
+    row["colmap_camera_residual_m"] = None if col is None else col.extra.get("camera_residual_m")
+    return row
+
+
+def add_deltas(rows: list[dict], reference: str = "unperturbed") -> None:
+    """Set ``<oracle>_delta_<metric>`` (this set's value minus the reference row's; None where either is not
+    finite) on every row, in place, for ``DELTA_METRICS``."""
+    ref = next((r for r in rows if r["name"] == reference), None)
+    for r in rows:
+        for prefix in ("synthetic", "colmap"):
+            for m in DELTA_METRICS:
+                a, b = r.get(f"{prefix}_{m}"), None if ref is None else ref.get(f"{prefix}_{m}")
+                r[f"{prefix}_delta_{m}"] = float(a) - float(b) if _finite(a) and _finite(b) else None
+
+
+def _repeat_noise(rows: list[dict], key: str) -> float | None:
+    """Standard deviation (ddof 1) of ``key`` over the reference and its repeats (other seeds); None if < 2."""
+    values = [float(r[key]) for r in rows if r["kind"] in ("reference", "repeat") and _finite(r.get(key))]
+    return float(np.std(values, ddof=1)) if len(values) >= 2 else None
+
+
+def _agreement(rows: list[dict], metric: str, noise_syn: float | None, noise_col: float | None) -> dict:
+    """Spearman rho and sign agreement of the two oracles' deltas of ``metric`` over ``rows``."""
+    pairs = [(r["synthetic_delta_" + metric], r["colmap_delta_" + metric]) for r in rows
+             if _finite(r.get("synthetic_delta_" + metric)) and _finite(r.get("colmap_delta_" + metric))]
+    syn = np.array([p[0] for p in pairs], dtype=float)
+    col = np.array([p[1] for p in pairs], dtype=float)
+    same = np.sign(syn) == np.sign(col)
+    out = {"pairs": len(pairs),
+           "spearman_rho": float(spearmanr(syn, col).statistic) if len(pairs) >= 3 else float("nan"),
+           "sign_agreement": float(same.mean()) if len(pairs) else float("nan"),
+           "repeat_noise_synthetic": noise_syn, "repeat_noise_colmap": noise_col,
+           "below_noise_sets": None, "sign_agreement_above_noise": None, "pairs_above_noise": None}
+    if noise_syn is not None and noise_col is not None:
+        small = (np.abs(syn) < noise_syn) | (np.abs(col) < noise_col)  # either delta within its oracle's noise
+        out["below_noise_sets"] = int(small.sum())
+        out["pairs_above_noise"] = int((~small).sum())
+        out["sign_agreement_above_noise"] = float(same[~small].mean()) if np.any(~small) else float("nan")
+    return out
+
+
+def summarize_perturbed(rows: list[dict]) -> dict:
+    """Agreement of the two oracles on the perturbed sets (kinds other than reference / repeat), relative to
+    the unperturbed set: per metric of ``DELTA_METRICS`` the Spearman rho of the deltas (target >= 0.6), their
+    sign agreement, the repeat noise of each oracle (std over the reference's seeds) and how many sets have a
+    delta within it; per kind the median deltas and the sign agreement of error_m."""
+    ref = next((r for r in rows if r["kind"] == "reference"), None)
+    perturbed = [r for r in rows if r["kind"] not in ("reference", "repeat")]
+    summary = {"capture_sets": len(rows), "perturbed_sets": len(perturbed),
+               "compared": sum(r.get("colmap_failed") is not None for r in perturbed),
+               "spearman_target": SPEARMAN_TARGET,
+               "reference": None if ref is None else {k: ref.get(k) for k in (
+                   "synthetic_error_m", "synthetic_completeness", "synthetic_registered_views", "colmap_error_m",
+                   "colmap_completeness", "colmap_registered_views", "views")}}
+    for m in DELTA_METRICS:
+        summary[m] = _agreement(perturbed, m, _repeat_noise(rows, f"synthetic_{m}"), _repeat_noise(rows, f"colmap_{m}"))
+    rho = summary["error_m"]["spearman_rho"]
+    summary["spearman_target_met"] = bool(np.isfinite(rho) and rho >= SPEARMAN_TARGET)
+    per_kind = {}
+    for kind in dict.fromkeys(r["kind"] for r in perturbed):
+        of_kind = [r for r in perturbed if r["kind"] == kind]
+        med = {}
+        for prefix in ("synthetic", "colmap"):
+            values = [r[f"{prefix}_delta_error_m"] for r in of_kind if _finite(r.get(f"{prefix}_delta_error_m"))]
+            med[f"{prefix}_median_delta_error_m"] = float(np.median(values)) if values else None
+        per_kind[kind] = {"sets": len(of_kind), **med,
+                          "sign_agreement_error_m": _agreement(of_kind, "error_m", None, None)["sign_agreement"]}
+    summary["per_kind"] = per_kind
+    summary["failed_synthetic"] = [r["name"] for r in rows if r.get("synthetic_failed")]
+    summary["failed_colmap"] = [r["name"] for r in rows if r.get("colmap_failed")]
+    return summary
+
+
+def _symlog_threshold(values: list[float]) -> float:
+    nonzero = np.abs([v for v in values if v != 0.0])
+    return float(max(np.percentile(nonzero, 25), 1e-6)) if nonzero.size else 1e-3
+
+
+def write_perturbed_outputs(rows: list[dict], summary: dict, out: Path) -> None:
+    """perturbed_table.csv, perturbed_summary.json (summary + rows) and perturbed_scatter.png, atomically."""
+    fields = list(dict.fromkeys(k for r in rows for k in r))
+    with atomic_path(out / "perturbed_table.csv") as tmp, tmp.open("w", newline="") as fh:
+        writer = csv.DictWriter(fh, fieldnames=fields)
+        writer.writeheader()
+        writer.writerows(rows)
+    write_text_atomic(out / "perturbed_summary.json", json.dumps({**summary, "rows": rows}, indent=1, default=float))
+    fig = Figure(figsize=(7.5, 6.0))
+    ax = fig.subplots()
+    shown = [r for r in rows if r["kind"] not in ("reference", "repeat")
+             and _finite(r.get("synthetic_delta_error_m")) and _finite(r.get("colmap_delta_error_m"))]
+    for kind in dict.fromkeys(r["kind"] for r in shown):
+        of_kind = [r for r in shown if r["kind"] == kind]
+        ax.scatter([r["synthetic_delta_error_m"] for r in of_kind], [r["colmap_delta_error_m"] for r in of_kind],
+                   c=KIND_COLOURS.get(kind, "tab:gray"), label=kind, s=18,
+                   marker="o")
+    for r in shown:
+        ax.annotate(r["name"], (r["synthetic_delta_error_m"], r["colmap_delta_error_m"]), fontsize=5)
+    if shown:
+        ax.set_xscale("symlog", linthresh=_symlog_threshold([r["synthetic_delta_error_m"] for r in shown]))
+        ax.set_yscale("symlog", linthresh=_symlog_threshold([r["colmap_delta_error_m"] for r in shown]))
+        ax.legend(fontsize=7)
+    ax.axhline(0.0, color="0.7", lw=0.8)
+    ax.axvline(0.0, color="0.7", lw=0.8)
+    e = summary["error_m"]
+    ax.set_xlabel("synthetic oracle: error_m - unperturbed (m, symlog)")
+    ax.set_ylabel("COLMAP oracle: error_m - unperturbed (m, symlog)")
+    ax.set_title(f"perturbed sets of one path: Spearman rho = {e['spearman_rho']:.2f} (target >= "
+                 f"{SPEARMAN_TARGET}); sign agreement = {e['sign_agreement']:.2f} ({e['pairs']} sets)", fontsize=8)
+    fig.tight_layout()
+    with atomic_path(out / "perturbed_scatter.png") as tmp:
+        fig.savefig(tmp, dpi=130, format="png")
+
+
+def _fmt(x, spec: str = ".4f") -> str:
+    return format(float(x), spec) if _finite(x) else str(x)
+
+
+def validate_perturbed(oracle: OracleSection, mesh: trimesh.Trimesh, sets: list[tuple[str, str, CaptureSet]],
+                       out: Path, seed: int = 0, reuse_colmap: Path | None = None,
+                       repeats: tuple[int, ...] = REPEAT_SEED_OFFSETS) -> dict:
+    """Both oracles on the perturbed capture sets of one path (``sets`` from
+    :func:`wrp_eval.recon.perturbed.perturbed_capture_sets`, the reference first), plus the reference again
+    with the seeds ``seed + k`` for ``k`` in ``repeats`` (kind ``repeat``: each oracle's repeat noise); write
+    perturbed_table.csv, perturbed_summary.json and perturbed_scatter.png after every set (COLMAP's databases
+    under OUT/colmap/NAME/). With ``reuse_colmap`` (a previous perturbed_summary.json of the same config and
+    seed) the COLMAP columns are taken from it and only the synthetic oracle runs; sets it lacks are skipped,
+    and sets whose poses differ from the ones it scored are listed in ``reuse_mismatched_sets``."""
+    out = Path(out)
+    sets = list(sets)
+    if not sets or sets[0][1] != "reference":
+        raise ValueError("the perturbed sets must start with the reference (unperturbed) set")
+    reference_name, _, reference = sets[0]
+    runs = [(name, kind, cs, seed) for name, kind, cs in sets]
+    runs += [(f"{reference_name}_repeat{k}", "repeat", reference, seed + k) for k in repeats]
+    synthetic = SyntheticOracle(oracle)
+    previous = _read_colmap_rows(reuse_colmap) if reuse_colmap is not None else None
+    if previous is not None and reference_name not in previous:
+        raise InputError(reuse_colmap, f"has no {reference_name!r} row: not a validate-oracle "
+                                       f"perturbed_summary.json")
+    colmap = ColmapOracle(oracle) if previous is None else None
+    rows, mismatched, errors = [], [], []
+    for name, kind, cs, run_seed in runs:
+        if previous is not None and name not in previous:
+            continue
+        syn = _evaluate_or_error(synthetic, cs, mesh, run_seed, f"{name}: synthetic", errors)
+        if previous is not None:
+            row = perturbed_row(name, kind, cs, syn, None)
+            old_sha = previous[name].get("colmap_capture_sha")
+            row.update(previous[name])
+            if old_sha is not None and old_sha != row["capture_sha"]:
+                mismatched.append(name)
+        else:
+            # features and matches kept per set under OUT/colmap/NAME, as validate_oracle does
+            colmap.work_dir = out / "colmap" / name
+            col = _evaluate_or_error(colmap, cs, mesh, run_seed, f"{name}: colmap", errors)
+            row = perturbed_row(name, kind, cs, syn, col)
+            row["colmap_capture_sha"] = row["capture_sha"]  # the set COLMAP scored (checked when reused)
+        rows.append(row)
+        add_deltas(rows, reference_name)
+        print(f"{name:30s} {kind:12s} synthetic err {_fmt(row['synthetic_error_m'])} "
+              f"(d {_fmt(row['synthetic_delta_error_m'], '+.4f')}) "
+              f"reg {row['synthetic_registered_views']}/{len(cs)} | colmap err {_fmt(row['colmap_error_m'])} "
+              f"(d {_fmt(row['colmap_delta_error_m'], '+.4f')}) reg {row['colmap_registered_views']}/{len(cs)} "
+              f"({_fmt(row['colmap_time_s'], '.0f')} s)", flush=True)
+        summary = {**summarize_perturbed(rows), "reuse_mismatched_sets": mismatched, "oracle_errors": errors}
+        write_perturbed_outputs(rows, summary, out)  # partial results survive an interruption
+    summary = {**summarize_perturbed(rows), "reuse_mismatched_sets": mismatched, "oracle_errors": errors}
+    write_perturbed_outputs(rows, summary, out)
+    return summary
+
+
+class _OracleError:
+    """Stands in for the :class:`ReconResult` of an oracle that raised: no figures, the error as the reason."""
+
+    def __init__(self, reason: str):
+        self.reason = reason
+        self.extra = {}
+
+    def __getattr__(self, key):
+        return None
+
+
+def _evaluate_or_error(oracle, cs: CaptureSet, mesh: trimesh.Trimesh, seed: int, what: str, errors: list):
+    """``oracle.evaluate``; an exception is recorded (in ``errors`` and as the row's reason, no figures) and
+    printed, so that one bad set does not end a run of 40 minutes (re-score it with --reuse-colmap)."""
+    try:
+        return oracle.evaluate(cs, mesh, seed=seed)
+    except Exception as err:  # noqa: BLE001  # recorded, reported in the summary and on stdout
+        message = f"oracle error: {type(err).__name__}: {err}"
+        errors.append(f"{what}: {message}")
+        print(f"{what}: {message}", flush=True)
+        traceback.print_exc()  # the log keeps where it failed
+        return _OracleError(message)

@@ -68,7 +68,8 @@ def pose_columns(capture_sets: Sequence[CaptureSet], n_views: int) -> dict[str, 
     """Per trial x view columns (flattened, trial-major, NaN where a view was not taken) of the poses in
     ``capture_sets`` (one per trial): x_m, y_m, z_m, yaw_deg, pitch_deg, and ``roll_deg`` / ``prior_*_m``
     / ``blur_px`` when any capture set has a roll / position priors / blur (a set without them writes 0 / its
-    true positions / 0, what None means). The layout of ``captures.parquet``; :mod:`wrp_eval.recon.capture_io` reads it back."""
+    true positions / 0, what None means). The layout of ``captures.parquet``; :mod:`wrp_eval.recon.capture_io`
+    reads it back."""
     b = len(capture_sets)
     pos = np.full((b, n_views, 3), np.nan)
     ang = np.full((b, n_views, 3), np.nan)  # yaw, pitch, roll

@@ -1,0 +1,197 @@
+"""Perturbed capture sets of one planned path (wrp_eval/recon/perturbed.py) and ``validate-oracle
+--perturbed`` with reused COLMAP figures (no COLMAP run, no long flights)."""
+
+from __future__ import annotations
+
+import dataclasses
+import json
+import time
+from collections import Counter
+
+import numpy as np
+import pytest
+
+from wrp_eval.cli import main
+from wrp_eval.experiment import ExperimentContext
+from wrp_eval.planning.path import Path
+from wrp_eval.recon.capture_io import captures_from_path
+from wrp_eval.recon.perturbed import (HEADING_BIAS_DEG, NAV_DRIFT_RMS_M, drift_shape, flight_capture_sets,
+                                      perturbed_capture_sets)
+from wrp_eval.recon.scenarios import reference_capture_set
+
+
+@pytest.fixture(scope="module")
+def path() -> Path:
+    cs = reference_capture_set(30)
+    n = len(cs)
+    return Path(cs.positions, cs.yaw, cs.pitch, np.zeros(n, int), np.zeros(n, int), np.zeros(n, int))
+
+
+def _fake_flights(path: Path, count: int = 8):
+    return [(f"flight_fake_{k}", "flight", captures_from_path(path)) for k in range(count)]
+
+
+def test_count_and_kinds(path):
+    sets = perturbed_capture_sets(path, seed=0, flights=_fake_flights(path))
+    assert sets[0][0] == "unperturbed" and sets[0][1] == "reference"
+    kinds = Counter(kind for _, kind, _ in sets)
+    assert kinds == {"reference": 1, "single_view": 6, "nav_drift": 3, "heading_bias": 2, "blur": 3, "flight": 8}
+    assert len(sets) - 1 >= 20
+    assert len({name for name, _, _ in sets}) == len(sets)  # names are unique (they name COLMAP work folders)
+    assert len(perturbed_capture_sets(path, seed=0)) == 15  # no flights given
+
+
+def _arrays(cs):
+    return [cs.positions, cs.yaw, cs.pitch, cs.position_priors(), cs.blur()]
+
+
+def test_deterministic_from_the_seed(path):
+    a, b, c = (perturbed_capture_sets(path, seed=s) for s in (4, 4, 5))
+    for (na, _, ca), (nb, _, cb) in zip(a, b):
+        assert na == nb
+        for x, y in zip(_arrays(ca), _arrays(cb)):
+            np.testing.assert_array_equal(x, y)
+    moved_a = [cs.positions for _, kind, cs in a if kind in ("single_view", "nav_drift")]
+    moved_c = [cs.positions for _, kind, cs in c if kind in ("single_view", "nav_drift")]
+    assert not all(np.array_equal(x, y) for x, y in zip(moved_a, moved_c))
+
+
+def test_single_view_sets_move_exactly_one_view(path):
+    sets = perturbed_capture_sets(path, seed=1)
+    ref = sets[0][2]
+    views = []
+    for name, kind, cs in sets:
+        if kind != "single_view":
+            continue
+        moved = np.flatnonzero(np.any(cs.positions != ref.positions, axis=1) | (cs.yaw != ref.yaw))
+        assert len(moved) == 1 and name.endswith(f"{moved[0]:02d}")
+        v = moved[0]
+        assert 1.5 - 1e-9 <= np.linalg.norm(cs.positions[v] - ref.positions[v]) <= 2.0 + 1e-9
+        assert 10.0 - 1e-9 <= abs(np.degrees(cs.yaw[v] - ref.yaw[v])) <= 20.0 + 1e-9
+        np.testing.assert_array_equal(cs.pitch, ref.pitch)
+        assert cs.prior_positions is None and cs.blur_px is None
+        views.append(v)
+    assert len(set(views)) == 6 and min(views) < len(ref) / 6 and max(views) >= 5 * len(ref) / 6  # spread
+
+
+def test_nav_drift_flies_off_the_plan_and_records_the_plan(path):
+    drift = [(name, cs) for name, kind, cs in perturbed_capture_sets(path, seed=2) if kind == "nav_drift"]
+    assert len(drift) == len(NAV_DRIFT_RMS_M)
+    shapes = []
+    for (name, cs), rms in zip(drift, NAV_DRIFT_RMS_M):
+        np.testing.assert_array_equal(cs.prior_positions, path.positions)  # what the GNSS believed: the plan
+        d = cs.positions - path.positions
+        assert np.all(np.linalg.norm(d, axis=1) > 0)
+        assert np.sqrt(np.mean(np.sum(d ** 2, axis=1))) == pytest.approx(rms, rel=1e-6)
+        np.testing.assert_array_equal(cs.yaw, path.yaw)
+        shapes.append(d / rms)
+    np.testing.assert_allclose(shapes[0], shapes[2], atol=1e-9)  # one drift shape, three doses
+    # smooth along the path: neighbouring views drift alike
+    walk = drift_shape(2000, np.random.default_rng(0))
+    assert np.corrcoef(walk[:-1, 0], walk[1:, 0])[0, 1] > 0.85
+    assert walk[:, 0].std() == pytest.approx(1.0, abs=0.15) and walk[:, 2].std() == pytest.approx(0.5, abs=0.1)
+
+
+def test_heading_bias_and_blur_sets(path):
+    sets = {name: (kind, cs) for name, kind, cs in perturbed_capture_sets(path, seed=0)}
+    for bias in HEADING_BIAS_DEG:
+        _, cs = sets[f"heading_bias_{bias:g}deg"]
+        np.testing.assert_allclose(np.degrees(cs.yaw - path.yaw), bias)
+        np.testing.assert_array_equal(cs.positions, path.positions)
+    assert np.all(sets["blur_8px"][1].blur() == 8.0) and np.all(sets["blur_25px"][1].blur() == 25.0)
+    every_other = sets["blur_40px_every_other"][1].blur()
+    np.testing.assert_array_equal(every_other, np.where(np.arange(len(path)) % 2 == 0, 40.0, 0.0))
+    np.testing.assert_array_equal(sets["blur_8px"][1].positions, path.positions)
+
+
+def test_flight_sets_carry_the_flight_errors():
+    ctx = ExperimentContext.load(__import__("pathlib").Path(__file__).resolve().parents[2]
+                                 / "experiments" / "quickstart.yaml")
+    full = ctx.plan_with("ours").path
+    keep = slice(0, 5)
+    short = dataclasses.replace(full, positions=full.positions[keep], yaw=full.yaw[keep], pitch=full.pitch[keep],
+                                face_id=full.face_id[keep], kind=full.kind[keep], sortie=full.sortie[keep])
+    t0 = time.perf_counter()
+    sets = flight_capture_sets(ctx, short, seed=0, speeds=(0.0, 8.0), per_speed=1)
+    assert time.perf_counter() - t0 < 15.0
+    assert [kind for _, kind, _ in sets] == ["flight", "flight"]
+    assert sets[0][0].startswith("flight_u0_1") and sets[1][0].startswith("flight_u8_1")
+    for name, _, cs in sets:
+        assert 0 < len(cs) <= len(short) and ("_partial" in name) == (len(cs) < len(short))
+        off = np.linalg.norm(cs.positions - short.positions[cs.planned_index], axis=1)
+        assert np.all(off < 5.0) and np.any(off > 0.0)
+        assert cs.prior_positions is not None and cs.roll is not None and cs.blur_px is not None
+    assert flight_capture_sets(ctx, short, seed=0, per_speed=0) == []
+
+
+# -- validate-oracle --perturbed --reuse-colmap, end to end ----------------------------------------------------
+
+@pytest.fixture
+def config_file(tmp_path):
+    file = tmp_path / "cfg.yaml"
+    file.write_text("run:\n  seed: 3\noracle:\n  synthetic:\n    rays_x: 32\n    rays_y: 22\n")
+    return file
+
+
+def _colmap_row(name: str, error: float, completeness: float) -> dict:
+    return {"name": name, "colmap_error_m": error, "colmap_completeness": completeness, "colmap_failed": False,
+            "colmap_registered_views": 40, "colmap_time_s": 60.0, "colmap_reason": ""}
+
+
+def test_perturbed_with_reused_colmap_rows(config_file, tmp_path, capsys):
+    ctx = ExperimentContext.load(config_file)
+    names = [name for name, _, _ in perturbed_capture_sets(ctx.plan_with("ours").path, ctx.run_seed)]
+    errors = {"unperturbed": 0.10, names[1]: 0.12, names[2]: 0.09, "nav_drift_3m": 0.30, "heading_bias_5deg": 0.11}
+    rows = [_colmap_row(n, e, 0.8 - e) for n, e in errors.items()]
+    rows.append(_colmap_row("not_a_set_of_this_run", 1.0, 0.1))
+    prev = tmp_path / "prev" / "perturbed_summary.json"
+    prev.parent.mkdir()
+    prev.write_text(json.dumps({"rows": rows}))
+    out = tmp_path / "out"
+    assert main(["validate-oracle", str(config_file), "--out", str(out), "--perturbed", "--flights", "0",
+                 "--reuse-colmap", str(prev)]) == 0
+    summary = json.loads((out / "perturbed_summary.json").read_text())
+    assert (out / "perturbed_table.csv").is_file() and (out / "perturbed_scatter.png").is_file()
+    assert summary["perturbed_sets"] == 4 and summary["error_m"]["pairs"] == 4
+    by_name = {r["name"]: r for r in summary["rows"]}
+    assert list(by_name) == list(errors)  # only the sets the summary has, in the run's order
+    assert by_name["nav_drift_3m"]["colmap_delta_error_m"] == pytest.approx(0.20)
+    assert by_name["nav_drift_3m"]["kind"] == "nav_drift"
+    assert by_name["unperturbed"]["synthetic_delta_error_m"] == 0.0
+    assert "synthetic_hole_part_m" in by_name["unperturbed"]
+    assert np.isfinite(summary["error_m"]["spearman_rho"]) and 0 <= summary["error_m"]["sign_agreement"] <= 1
+    assert summary["reuse_mismatched_sets"] == []
+    assert '"spearman_rho"' in capsys.readouterr().out
+
+
+def test_perturbed_bad_input_exits_2(config_file, tmp_path, capsys):
+    base = ["validate-oracle", str(config_file), "--out", str(tmp_path / "o"), "--perturbed", "--flights", "0"]
+    assert main(base + ["--reuse-colmap", str(tmp_path / "missing.json")]) == 2
+    assert "no such summary file" in capsys.readouterr().err
+    garbled = tmp_path / "garbled.json"
+    garbled.write_text("{not json")
+    assert main(base + ["--reuse-colmap", str(garbled)]) == 2
+    assert "not a validate-oracle summary.json" in capsys.readouterr().err
+    other = tmp_path / "summary.json"  # a summary without the unperturbed row (e.g. the 10-set validation's)
+    other.write_text(json.dumps({"rows": [_colmap_row("good_2rings", 0.5, 0.5)]}))
+    assert main(base + ["--reuse-colmap", str(other)]) == 2
+    assert "'unperturbed'" in capsys.readouterr().err
+    assert main(["validate-oracle", str(config_file), "--out", str(tmp_path / "o"), "--flights", "1"]) == 2
+    assert "--flights" in capsys.readouterr().err
+
+
+def test_an_oracle_that_raises_leaves_a_row_without_figures(capsys):
+    from wrp_eval.recon.validate import _evaluate_or_error, perturbed_row
+
+    class Broken:
+        def evaluate(self, cs, mesh, seed=0):
+            raise ValueError("no keypoints")
+
+    errors = []
+    cs = reference_capture_set(6)
+    res = _evaluate_or_error(Broken(), cs, None, 0, "x: synthetic", errors)
+    row = perturbed_row("x", "blur", cs, res, None)
+    assert row["synthetic_error_m"] is None and row["synthetic_hole_part_m"] is None
+    assert row["synthetic_reason"] == "oracle error: ValueError: no keypoints"
+    assert errors == ["x: synthetic: oracle error: ValueError: no keypoints"]
+    assert "no keypoints" in capsys.readouterr().out

@@ -1,0 +1,180 @@
+"""Perturbed capture sets of ONE planned path (issue 17, item 5): do the two oracles rank small, realistic
+capture errors of the same path alike?
+
+``validate-oracle`` compares the oracles on capture sets that differ grossly (good, degraded, broken paths);
+this module builds capture sets that differ from one path's unperturbed captures by the errors a flight makes,
+each kind known by construction (all deterministic from ``seed``, one numpy stream per kind):
+
+* ``reference``: the path flown exactly (``unperturbed``);
+* ``single_view`` (6): ONE view moved, 1.5-2 m in a random 3-D direction and 10-20 deg of yaw (random sign);
+  the views are spread over the path (one drawn from each sixth of the view order);
+* ``nav_drift`` (3): the drone flies on a navigation estimate that drifts: the TRUE positions are the plan
+  plus a smooth drift along the path, the recorded ``prior_positions`` (what the GNSS believed) the plan.
+  The drift is a stationary first-order Gauss-Markov walk over the view order (correlation length
+  ``NAV_DRIFT_CORRELATION_VIEWS`` views, ~50 s of the quickstart path at ~5 s per view), the vertical
+  component at half the horizontal standard deviation (altitude is held on the barometer as well); ONE
+  drift shape scaled to 0.5 / 1.5 / 3 m RMS (of the 3-D drift over the views), so the three sets are doses
+  of the same error;
+* ``heading_bias`` (2): a constant yaw bias of 5 and 10 deg on every view (a compass error);
+* ``blur`` (3): motion blur of 8 px on every view, 25 px on every view, 40 px on every other view (pixels of
+  the capture camera, ``CaptureSet.blur_px``);
+* ``flight`` (``FLIGHTS_PER_SPEED`` per speed): the path flown by the simulator with the config's ``sim:``
+  section (navigation errors, gimbal, fly-through capture, ship motion, air wake; the wind return rule
+  off, ``wind_limit_m_s`` None, so the flights complete: the question is the capture errors) through the
+  config's synthetic wind at U10 = 0, 4, 8, 12 m/s, each flight's wind direction drawn uniformly (as
+  ``wrp-eval bench --only capture`` does); :func:`flight_capture_sets`. A flight that still misses views
+  keeps the views it took, and its name ends in ``_partial<taken>of<n>``.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+from scipy.signal import lfilter
+
+from wrp_eval.errors import InputError
+from wrp_eval.planning.path import Path
+from wrp_eval.recon.capture_io import captures_from_path
+from wrp_eval.sim.captures import CaptureSet
+
+REFERENCE = "unperturbed"
+KINDS = ("reference", "single_view", "nav_drift", "heading_bias", "blur", "flight")
+SINGLE_VIEW_SETS = 6
+SINGLE_VIEW_OFFSET_M = (1.5, 2.0)
+SINGLE_VIEW_YAW_DEG = (10.0, 20.0)
+NAV_DRIFT_RMS_M = (0.5, 1.5, 3.0)
+NAV_DRIFT_CORRELATION_VIEWS = 10.0
+NAV_DRIFT_VERTICAL_SCALE = 0.5
+HEADING_BIAS_DEG = (5.0, 10.0)
+BLUR_SETS = (("blur_8px", 8.0, 1), ("blur_25px", 25.0, 1), ("blur_40px_every_other", 40.0, 2))  # name, px, step
+FLIGHT_SPEEDS_M_S = (0.0, 4.0, 8.0, 12.0)
+FLIGHTS_PER_SPEED = 2
+MIN_ALTITUDE_M = 1.0
+_STREAMS = ("single_view", "nav_drift", "flight")
+
+
+def _stream(seed: int, kind: str) -> np.random.Generator:
+    """The generator of one kind of perturbation: changing one kind's draws never changes another's."""
+    return np.random.default_rng([int(seed), _STREAMS.index(kind)])
+
+
+def _above_sea(offsets: np.ndarray, path: Path) -> np.ndarray:
+    """Offsets whose moved views would fly below ``MIN_ALTITUDE_M`` get their dz mirrored (then clipped)."""
+    z = np.asarray(path.positions, dtype=float)[:, 2]
+    low = z + offsets[:, 2] < MIN_ALTITUDE_M
+    offsets[low, 2] = np.maximum(-offsets[low, 2], MIN_ALTITUDE_M - z[low])
+    return offsets
+
+
+def single_view_sets(path: Path, seed: int) -> list[tuple[str, str, CaptureSet]]:
+    """``SINGLE_VIEW_SETS`` sets, each with ONE view moved (one view drawn from each sixth of the path)."""
+    rng = _stream(seed, "single_view")
+    n = len(path)
+    bounds = np.linspace(0, n, SINGLE_VIEW_SETS + 1).round().astype(int)
+    sets = []
+    for k in range(SINGLE_VIEW_SETS):
+        lo, hi = bounds[k], max(bounds[k + 1], bounds[k] + 1)
+        view = int(rng.integers(lo, hi)) % n
+        direction = rng.standard_normal(3)
+        direction /= np.linalg.norm(direction)
+        offsets = np.zeros((n, 4))
+        offsets[view, :3] = direction * rng.uniform(*SINGLE_VIEW_OFFSET_M)
+        offsets[view, 3] = np.radians(rng.uniform(*SINGLE_VIEW_YAW_DEG)) * rng.choice([-1.0, 1.0])
+        sets.append((f"single_view_{view:02d}", "single_view", captures_from_path(path, _above_sea(offsets, path))))
+    return sets
+
+
+def drift_shape(n: int, rng: np.random.Generator, correlation_views: float = NAV_DRIFT_CORRELATION_VIEWS,
+                vertical_scale: float = NAV_DRIFT_VERTICAL_SCALE) -> np.ndarray:
+    """(n, 3) a stationary Gauss-Markov (AR(1)) walk over ``n`` views, correlation exp(-1/correlation_views)
+    between neighbours, unit variance horizontally and ``vertical_scale`` vertically (scipy's lfilter runs
+    the recursion x_k = a x_(k-1) + sqrt(1 - a^2) e_k, x_0 = e_0)."""
+    a = float(np.exp(-1.0 / correlation_views))
+    b = float(np.sqrt(1.0 - a * a))
+    e = rng.standard_normal((n, 3))
+    e[0] /= b  # so that x_0 = e_0: the walk starts in its stationary distribution
+    walk = lfilter([b], [1.0, -a], e, axis=0)
+    return walk * [1.0, 1.0, vertical_scale]
+
+
+def nav_drift_sets(path: Path, seed: int) -> list[tuple[str, str, CaptureSet]]:
+    """The true positions = plan + one drift shape scaled to each RMS of ``NAV_DRIFT_RMS_M``; priors = plan."""
+    n = len(path)
+    shape = drift_shape(n, _stream(seed, "nav_drift"))
+    shape /= max(float(np.sqrt(np.mean(np.sum(shape ** 2, axis=1)))), 1e-12)  # unit RMS of the 3-D drift
+    plan = np.asarray(path.positions, dtype=float)
+    sets = []
+    for rms in NAV_DRIFT_RMS_M:
+        offsets = np.zeros((n, 4))
+        offsets[:, :3] = rms * shape
+        cs = captures_from_path(path, _above_sea(offsets, path), prior_positions=plan)
+        sets.append((f"nav_drift_{rms:g}m", "nav_drift", cs))
+    return sets
+
+
+def heading_bias_sets(path: Path) -> list[tuple[str, str, CaptureSet]]:
+    """A constant yaw bias on every view, one set per ``HEADING_BIAS_DEG``."""
+    sets = []
+    for bias in HEADING_BIAS_DEG:
+        offsets = np.zeros((len(path), 4))
+        offsets[:, 3] = np.radians(bias)
+        sets.append((f"heading_bias_{bias:g}deg", "heading_bias", captures_from_path(path, offsets)))
+    return sets
+
+
+def blur_sets(path: Path) -> list[tuple[str, str, CaptureSet]]:
+    """Motion blur (capture-camera pixels) on every ``step``-th view (from the first), per ``BLUR_SETS``."""
+    n = len(path)
+    return [(name, "blur", captures_from_path(path, blur_px=np.where(np.arange(n) % step == 0, px, 0.0)))
+            for name, px, step in BLUR_SETS]
+
+
+def flight_capture_sets(ctx, path: Path, seed: int, speeds=FLIGHT_SPEEDS_M_S,
+                        per_speed: int = FLIGHTS_PER_SPEED) -> list[tuple[str, str, CaptureSet]]:
+    """Fly ``path`` ``per_speed`` times at each U10 of ``speeds`` (m/s), in ONE batch of the simulator, and
+    return each flight's capture set (``FlightResult.captures``: true poses, gimbal pitch and roll, the
+    navigation's positions as priors, motion blur) as ``("flight_u<U>_<k>", "flight", captures)``; a flight
+    that missed views is named ``..._partial<taken>of<n>``.
+
+    ``ctx``: the :class:`wrp_eval.experiment.ExperimentContext` (its ``sim:`` section with the wind return rule
+    off, its synthetic ``wind:`` section with U10 and a uniformly drawn direction per flight, its ship mesh,
+    motion and particulars), as ``wrp-eval fly`` builds them. Deterministic from ``seed`` (wind, navigation
+    errors and ship motion). About 7 s for 8 flights of the 46-view quickstart path on 2 cores."""
+    from wrp_eval.sim.flight import FlightSimulator  # lazily: MuJoCo loads only when flying
+    from wrp_eval.sim.onboard import ShipInScene
+    from wrp_eval.wind.field import build_wind_field
+
+    config = ctx.config
+    if per_speed < 1 or not len(speeds):
+        return []
+    if config.wind.source != "synthetic":
+        raise InputError("wind", f"the perturbed flights set U10 on the synthetic wind, not {config.wind.source}")
+    rng = _stream(seed, "flight")
+    speed_of = np.repeat(np.asarray(speeds, dtype=float), per_speed)
+    directions = rng.uniform(0.0, 360.0, len(speed_of))
+    sections = [config.wind.model_copy(update={"speed_10m_mps": float(u), "direction_deg": float(d)})
+                for u, d in zip(speed_of, directions)]
+    sim = config.sim.model_copy(update={"wind_limit_m_s": None})
+    wind_seed, flight_seed = np.random.SeedSequence(int(rng.integers(2 ** 63 - 1))).spawn(2)
+    dt = sim.timestep_s * sim.chunk_steps  # the wind is stepped at the controller rate (wrp-eval fly)
+    wind = build_wind_field(sections, ctx.particulars, wind_seed, dt, ctx.config_dir)
+    ship = ShipInScene.of(ctx.ship.mesh, config.ship.motion, ctx.particulars, wind.speed_10m_at_ship(len(sections)))
+    with FlightSimulator(sim) as simulator:
+        result = simulator.fly(path, wind, len(sections), ship=ship, flight_rngs=flight_seed)
+    sets = []
+    for i, (u, captures) in enumerate(zip(speed_of, result.captures)):
+        name = f"flight_u{u:g}_{i % per_speed + 1}"
+        if len(captures) < len(path):
+            name += f"_partial{len(captures)}of{len(path)}"
+        sets.append((name, "flight", captures))
+    return sets
+
+
+def perturbed_capture_sets(path: Path, seed: int = 0, flights=None) -> list[tuple[str, str, CaptureSet]]:
+    """(name, kind, capture set) triples: the unperturbed reference (name ``unperturbed``, kind ``reference``)
+    first, then the single_view, nav_drift, heading_bias and blur sets of ``path`` (deterministic from
+    ``seed``), then ``flights``: the flown sets (:func:`flight_capture_sets`, which needs the experiment's
+    simulator and wind; None / empty: no flights)."""
+    if len(path) == 0:
+        raise InputError("path", "has no viewpoints to perturb")
+    return ([(REFERENCE, "reference", captures_from_path(path))] + single_view_sets(path, seed)
+            + nav_drift_sets(path, seed) + heading_bias_sets(path) + blur_sets(path) + list(flights or []))
