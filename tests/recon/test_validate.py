@@ -79,3 +79,23 @@ def test_perturbed_deltas_spearman_sign_agreement_and_noise():
     # the same rows without repeats: no noise estimate, the counts are None
     s2 = summarize_perturbed(rows[:6])
     assert s2["error_m"]["repeat_noise_colmap"] is None and s2["error_m"]["below_noise_sets"] is None
+
+
+def test_calibration_columns_put_colmap_beside_the_synthetic_oracle_under_its_conditions(box_on_water,
+                                                                                        fast_section):
+    from wrp_eval.recon.synthetic import SyntheticOracle
+    from wrp_eval.recon.validate import add_calibration
+
+    from .conftest import ring_views
+    cs = ring_views((0, 0, 0), 22.0, (3.0, 16.0), 16, target=(0, 0, 1.5))
+    oracle = SyntheticOracle(fast_section)
+    syn = oracle.evaluate(cs, box_on_water, seed=0)
+    row = {"synthetic_error_m": syn.error_m, "colmap_error_m": 5 * syn.error_m, "colmap_n_points": 80}
+    add_calibration(row, oracle, cs, box_on_water, 0, 800)
+    assert row["error_ratio_colmap_to_synthetic"] == pytest.approx(5.0)
+    assert syn.error_m < row["synthetic_width_error_m"] < row["synthetic_sparse_error_m"]
+    assert row["error_ratio_colmap_to_sparse_equivalent"] == pytest.approx(
+        row["colmap_error_m"] / row["synthetic_sparse_error_m"])
+    bare = {"synthetic_error_m": syn.error_m, "colmap_error_m": None, "colmap_n_points": None}
+    add_calibration(bare, oracle, cs, box_on_water, 0, 800)     # no COLMAP figures: no ratio, no thinning
+    assert bare["error_ratio_colmap_to_synthetic"] is None and "synthetic_sparse_error_m" not in bare

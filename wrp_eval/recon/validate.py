@@ -29,6 +29,7 @@ from wrp_eval.camera import Camera, yaw_pitch_towards
 from wrp_eval.errors import InputError
 from wrp_eval.planning.path import Path as FlightPath
 from wrp_eval.recon.base import ReconResult
+from wrp_eval.recon.calibration import colmap_equivalent
 from wrp_eval.recon.capture_io import captures_from_path
 from wrp_eval.recon.colmap import ColmapOracle
 from wrp_eval.recon.config import OracleSection
@@ -104,15 +105,34 @@ def planned_capture_sets(paths: dict[str, FlightPath]) -> list[tuple[str, str, C
     return [(f"planned_{method}", "planned", captures_from_path(path)) for method, path in paths.items()]
 
 
+ROW_METRICS = ("error_m", "hole_part_m", "accuracy_part_m", "accuracy_m", "completeness", "fscore", "n_points",
+               "registered_views", "failed", "time_s")
+
+
 def _row(name: str, category: str, cs: CaptureSet, syn: ReconResult, col: ReconResult | None) -> dict:
     row = {"name": name, "category": category, "views": len(cs)}
     for prefix, r in (("synthetic", syn), ("colmap", col)):
-        for key in ("error_m", "accuracy_m", "completeness", "fscore", "registered_views", "failed", "time_s"):
-            row[f"{prefix}_{key}"] = None if r is None else getattr(r, key)
+        for key in ROW_METRICS:
+            row[f"{prefix}_{key}"] = None if r is None else getattr(r, key, None)
         row[f"{prefix}_reason"] = None if r is None else r.reason
     row["colmap_model_sizes"] = None if col is None else " ".join(str(k) for k in col.extra.get("model_sizes", []))
     row["colmap_camera_residual_m"] = None if col is None else col.extra.get("camera_residual_m")
     return row
+
+
+def add_calibration(row: dict, synthetic: SyntheticOracle, cs: CaptureSet, mesh: trimesh.Trimesh, seed: int,
+                    render_width_px: int) -> None:
+    """Issue 17 item 6: COLMAP's error over the synthetic oracle's, and the synthetic reconstruction under
+    COLMAP's conditions (render width, thinned to COLMAP's point count; :mod:`wrp_eval.recon.calibration`)."""
+    syn, col, n_points = row.get("synthetic_error_m"), row.get("colmap_error_m"), row.get("colmap_n_points")
+    row["error_ratio_colmap_to_synthetic"] = (col / syn if _finite(syn) and _finite(col) and syn > 0 else None)
+    if not n_points:
+        return
+    eq = colmap_equivalent(synthetic, cs, mesh, int(n_points), render_width_px, seed)
+    row.update({f"synthetic_{k}": (v if np.isfinite(v) else None) for k, v in eq.items()})
+    sparse = row.get("synthetic_sparse_error_m")
+    row["error_ratio_colmap_to_sparse_equivalent"] = (col / sparse if _finite(sparse) and _finite(col) and sparse > 0
+                                                      else None)
 
 
 def summarize(rows: list[dict]) -> dict:
@@ -125,7 +145,11 @@ def summarize(rows: list[dict]) -> dict:
     comp = [(r["synthetic_completeness"], r["colmap_completeness"]) for r in both]
     rho_c = float(spearmanr(*zip(*comp)).statistic) if len(comp) >= 3 else float("nan")
     agree = [r["synthetic_failed"] == r["colmap_failed"] for r in both]
+    good = [r for r in both if not r["synthetic_failed"] and not r["colmap_failed"]]
+    ratios = {key: [r[key] for r in good if _finite(r.get(key))]
+              for key in ("error_ratio_colmap_to_synthetic", "error_ratio_colmap_to_sparse_equivalent")}
     return {"capture_sets": len(rows), "compared": len(both), "spearman_rho_error_m": rho,
+            **{f"median_{key}_not_failed": (float(np.median(v)) if v else None) for key, v in ratios.items()},
             "spearman_rho_completeness": rho_c, "pairs_for_rho": len(pairs),
             "failed_verdict_agreement": float(np.mean(agree)) if agree else float("nan"),
             "disagreements": [r["name"] for r, a in zip(both, agree) if not a]}
@@ -193,6 +217,7 @@ def validate_oracle(oracle: OracleSection, mesh: trimesh.Trimesh, out: Path, see
             colmap.work_dir = out / "colmap" / name
             col = colmap.evaluate(cs, mesh, seed=seed)
             row = _row(name, category, cs, syn, col)
+        add_calibration(row, synthetic, cs, mesh, seed, oracle.colmap.image_width_px)
         rows.append(row)
         print(f"{name:22s} synthetic err {syn.error_m:.4f} comp {syn.completeness:.3f} "
               f"reg {syn.registered_views}/{len(cs)} failed {syn.failed} | colmap err {row['colmap_error_m']:.4f} "
