@@ -35,10 +35,11 @@ def test_count_and_kinds(path):
     sets = perturbed_capture_sets(path, seed=0, flights=_fake_flights(path))
     assert sets[0][0] == "unperturbed" and sets[0][1] == "reference"
     kinds = Counter(kind for _, kind, _ in sets)
-    assert kinds == {"reference": 1, "single_view": 6, "nav_drift": 3, "heading_bias": 2, "blur": 3, "flight": 8}
+    assert kinds == {"reference": 1, "jitter": 3, "single_view": 6, "nav_drift": 3, "heading_bias": 2, "blur": 3,
+                     "flight": 8}
     assert len(sets) - 1 >= 20
     assert len({name for name, _, _ in sets}) == len(sets)  # names are unique (they name COLMAP work folders)
-    assert len(perturbed_capture_sets(path, seed=0)) == 15  # no flights given
+    assert len(perturbed_capture_sets(path, seed=0)) == 18  # no flights given
 
 
 def _arrays(cs):
@@ -140,8 +141,9 @@ def _colmap_row(name: str, error: float, completeness: float) -> dict:
 
 def test_perturbed_with_reused_colmap_rows(config_file, tmp_path, capsys):
     ctx = ExperimentContext.load(config_file)
-    names = [name for name, _, _ in perturbed_capture_sets(ctx.plan_with("ours").path, ctx.run_seed)]
-    errors = {"unperturbed": 0.10, names[1]: 0.12, names[2]: 0.09, "nav_drift_3m": 0.30, "heading_bias_5deg": 0.11}
+    names = [name for name, kind, _ in perturbed_capture_sets(ctx.plan_with("ours").path, ctx.run_seed)
+             if kind == "single_view"]
+    errors = {"unperturbed": 0.10, names[0]: 0.12, names[1]: 0.09, "nav_drift_3m": 0.30, "heading_bias_5deg": 0.11}
     rows = [_colmap_row(n, e, 0.8 - e) for n, e in errors.items()]
     rows.append(_colmap_row("not_a_set_of_this_run", 1.0, 0.1))
     prev = tmp_path / "prev" / "perturbed_summary.json"
@@ -195,3 +197,22 @@ def test_an_oracle_that_raises_leaves_a_row_without_figures(capsys):
     assert row["synthetic_reason"] == "oracle error: ValueError: no keypoints"
     assert errors == ["x: synthetic: oracle error: ValueError: no keypoints"]
     assert "no keypoints" in capsys.readouterr().out
+
+
+def test_jitter_rows_set_the_noise_floor_not_the_agreement():
+    from wrp_eval.recon.validate import add_deltas, summarize_perturbed
+
+    def row(name, kind, syn, col):
+        return {"name": name, "kind": kind, "synthetic_error_m": syn, "colmap_error_m": col,
+                "synthetic_completeness": 0.9, "colmap_completeness": 0.8, "colmap_failed": False}
+    rows = [row("unperturbed", "reference", 0.100, 0.50), row("jitter_1", "jitter", 0.1001, 0.52),
+            row("jitter_2", "jitter", 0.0999, 0.48), row("a", "single_view", 0.105, 0.60),
+            row("b", "single_view", 0.1002, 0.49), row("c", "heading_bias", 0.110, 0.70)]
+    add_deltas(rows)
+    summary = summarize_perturbed(rows)["error_m"]
+    assert summary["pairs"] == 3                                   # jitter rows are not perturbations
+    assert summary["jitter_noise_colmap"] == pytest.approx(np.std([0.50, 0.52, 0.48], ddof=1))
+    assert summary["noise_colmap"] == summary["jitter_noise_colmap"]   # the larger of seed and jitter noise
+    assert summary["repeat_noise_colmap"] is None                       # no seed repeats in these rows
+    assert summary["below_noise_sets"] == 1 and summary["pairs_above_noise"] == 2   # "b": COLMAP's -0.01 is noise
+    assert summary["sign_agreement_above_noise"] == 1.0

@@ -168,6 +168,9 @@ def check_inputs(capture_set: CaptureSet, mesh: trimesh.Trimesh) -> None:
             raise InputError("capture set", f"{name} is not all finite")
     if capture_set.blur_px is not None and np.any(np.asarray(capture_set.blur_px) < 0):
         raise InputError("capture set", "blur_px is negative")
+    planned = np.asarray(capture_set.planned_index)
+    if planned.dtype.kind not in "iu" or np.any(planned < 0) or len(np.unique(planned)) != n:
+        raise InputError("capture set", "planned_index must be distinct non-negative integers (one per view)")
 
 
 def _fibonacci_sphere(count: int) -> np.ndarray:

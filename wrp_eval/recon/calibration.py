@@ -7,7 +7,7 @@ is a sparse SfM cloud (a few thousand SIFT points, no dense MVS: pycolmap's Patc
 800-px renders. :func:`colmap_equivalent` removes these differences one at a time from the synthetic side:
 
 * ``width``: the same capture set with the camera at the render width (same field of view, coarser pixels:
-  the pixel noise in metres and the pose information scale with it);
+  the pixel noise in metres scales with it; the same keypoints per image and no range cut, as COLMAP);
 * ``sparse``: that reconstruction thinned to COLMAP's number of points (drawn by reconstruction
   probability, seeded) and scored as COLMAP's cloud is (surfels with the 4th-neighbour radius,
   :func:`wrp_eval.recon.colmap.sparse_surfels`).
@@ -38,14 +38,28 @@ def at_width(capture_set: CaptureSet, width_px: int) -> CaptureSet:
     return replace(capture_set, camera=small, blur_px=blur)
 
 
+def _at_render_width(oracle, shrink: float):
+    """A copy of the synthetic ``oracle`` for images ``shrink`` times narrower: the GSD range cut kept where it
+    was in metres of standoff (COLMAP has none; at the capture width it never binds), and the same matched
+    keypoints per image (COLMAP extracts up to ``oracle.colmap.max_num_features`` per render whatever its
+    width), so only the coarser pixels change."""
+    from wrp_eval.recon.synthetic import SyntheticOracle
+
+    syn = oracle.section.synthetic
+    section = oracle.section.model_copy(update={"synthetic": syn.model_copy(update={
+        "max_gsd_m": syn.max_gsd_m * shrink, "keypoints_per_mpx": syn.keypoints_per_mpx * shrink ** 2})})
+    return SyntheticOracle(section)
+
+
 def colmap_equivalent(oracle, capture_set: CaptureSet, mesh: trimesh.Trimesh, n_points: int, width_px: int,
                       seed: int = 0) -> dict[str, float]:
     """The synthetic ``oracle``'s figures under COLMAP's conditions (module docstring): ``width_error_m`` /
     ``width_completeness`` (dense, at ``width_px``) and ``sparse_error_m`` / ``sparse_completeness`` /
     ``sparse_hole_part_m`` (thinned to ``n_points``)."""
     gt = oracle.ground_truth(mesh)
-    fused, _, _, _ = oracle.reconstruct(at_width(capture_set, width_px), gt, seed)
-    dense = fused.score(gt, oracle.section, seed)
+    small = _at_render_width(oracle, capture_set.camera.image_width_px / width_px)
+    fused, _, _, _ = small.reconstruct(at_width(capture_set, width_px), gt, seed)
+    dense = fused.score(gt, small.section, seed)
     out = {"width_error_m": dense.error_m, "width_completeness": dense.completeness}
     present = np.flatnonzero(fused.existence > 0)
     count = int(min(n_points, len(present)))

@@ -32,8 +32,8 @@ class SyntheticOracleSection(StrictModel):
                              "rust, welds): views whose features would be finer (sigma_0 x GSD < texture_m, i.e. "
                              "closer than ~23 m with the default camera) find fewer keypoints")
     keypoints_per_mpx: float = Field(100.0, gt=0, description="matched keypoints per megapixel of a sharp, fully "
-                                     "textured image (2000 on a 20 MP frame): the count behind each view's pose "
-                                     "uncertainty")
+                                     "textured image (2400 on the default 24 MP frame): the count behind each "
+                                     "view's pose uncertainty")
     prior_position_sigma_m: float | None = Field(
         1.0, gt=0, description="the bundle adjustment's position prior (the recorded GNSS position of each photo, "
                                "CaptureSet.prior_positions), standard deviation in m; null = no priors")

@@ -35,8 +35,9 @@ the rays happen to hit, and every random draw is attached to a sample or a view 
    model floor ``noise_floor_gsd`` x GSD in quadrature; each view's pose error moves its ray and so the
    point by C_s sum(info_sv (dc_v + phi_v x (p_s - c_v))). One seeded normal draw per sample scales sigma_n.
 
-Scoring (:func:`score_fused`): the reconstructed samples (e_s > 0) are aligned to the truth as the paper
-aligns (ICP with scale, :func:`wrp_eval.recon.base.align_to_ground_truth`); then each visible ground-truth
+Scoring (:func:`score_fused`): the samples more likely reconstructed than not (e_s >= 0.5; a fixed subset of
+``ICP_POINTS``) are aligned to the truth as the paper aligns (ICP with scale,
+:func:`wrp_eval.recon.base.align_to_ground_truth`); then each visible ground-truth
 sample contributes e_s |n_s . (aligned estimate - truth)| (the accuracy part: the distance to the fused
 surface) + (1 - e_s) h_s (the hole part: the distance to the nearest reconstructed patch, each reconstructed
 sample standing for a disc of the area it represents in its tangent plane, a partly reconstructed neighbour j
@@ -67,6 +68,9 @@ NO_PRIOR_ROTATION_RAD = 1.0
 HOLE_PENALTY_M = 1.0         # a neighbour reconstructed with probability e counts (1 - e) x this farther away
 HOLE_NEIGHBOURS = 16
 MIN_EXISTENCE = 0.01         # samples less likely reconstructed than this are not part of the reconstruction
+MAX_VIEWS_PER_SAMPLE = 24    # real MVS bounds the views per point (e.g. Goesele et al. 2007: ~10 neighbours per
+                             # reference view); keeps the pair count linear in the views (46-view path: <= 19)
+ICP_POINTS = 5000            # the ICP's source points: a fixed subset of the samples (stable under small changes)
 
 
 @dataclass(frozen=True)
@@ -127,8 +131,13 @@ def observe_samples(capture_set: CaptureSet, gt: GroundTruth, registered: np.nda
     patch_px2 = sample_area_m2 * c_inc / gsd ** 2 * keep_frac
     weight = (border_weight(u[s_idx, v_idx], v[s_idx, v_idx], cam_model.image_width_px, cam_model.image_height_px)
               * incidence_weight(c_inc, inc_max) * patch_match_probability(patch_px2))
-    return SampleObservations(s_idx, view, rel_k, dist_k, cam[s_idx, v_idx], weight,
-                              pixel_noise_px(p.sigma_px, blur), patch_px2, gsd)
+    # the best MAX_VIEWS_PER_SAMPLE observations of each sample (by weight; still sorted by sample)
+    order = np.lexsort((-weight, s_idx))
+    first = np.searchsorted(s_idx[order], s_idx[order], side="left")
+    keep = order[np.arange(len(order)) - first < MAX_VIEWS_PER_SAMPLE]
+    cam_k = cam[s_idx, v_idx]
+    return SampleObservations(s_idx[keep], view[keep], rel_k[keep], dist_k[keep], cam_k[keep], weight[keep],
+                              pixel_noise_px(p.sigma_px, blur[keep]), patch_px2[keep], gsd[keep])
 
 
 def sample_pairs(sample: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
@@ -268,9 +277,12 @@ def fuse(capture_set: CaptureSet, gt: GroundTruth, registered: np.ndarray, secti
     sigma_n = np.sqrt(sigma_geo2 + (p.noise_floor_gsd * gsd) ** 2)
     estimates = gt.samples + point_shift + (sigma_n * z_samples)[:, None] * normals
     estimates = np.where((existence > 0)[:, None], estimates, gt.samples)
-    registered = np.asarray(registered, dtype=bool)[:, None]
+    # a registered view that observes no sample has only its prior: no estimated pose to speak of
+    posed = (np.asarray(registered, dtype=bool) & (np.bincount(obs.view, minlength=len(capture_set)) > 0))
+    pose_sigma = np.where(posed[:, None], pose_sigma, np.nan)
     return FusedReconstruction(estimates, existence, np.where(existence > 0, sigma_n, np.nan), pose_sigma,
-                               np.where(registered, dc, 0.0), np.where(registered, phi, 0.0), int(len(obs.sample)))
+                               np.where(posed[:, None], dc, 0.0), np.where(posed[:, None], phi, 0.0),
+                               int(len(obs.sample)))
 
 
 def score_fused(recon: FusedReconstruction, gt: GroundTruth, section: OracleSection, seed: int = 0) -> Scores:
@@ -280,26 +292,34 @@ def score_fused(recon: FusedReconstruction, gt: GroundTruth, section: OracleSect
     present = np.flatnonzero(e > MIN_EXISTENCE)
     if len(present) == 0:
         return Scores(float("nan"), float("nan"), 0.0, 0.0, 0.0, 1.0)
-    core = recon.estimates[e >= 0.5] if np.count_nonzero(e >= 0.5) >= 3 else recon.estimates[present]
-    transform = align_to_ground_truth(core, gt, section.icp_max_correspondence_m, section.icp_max_iterations,
-                                      seed=seed)
+    core = np.flatnonzero(e >= 0.5) if np.count_nonzero(e >= 0.5) >= 3 else present
+    # a subset chosen by a fixed key per sample (not a draw over however many there are): one sample more or
+    # less changes the subset by one sample, so the alignment moves smoothly with the capture set
+    keys = np.random.default_rng(seed).random(len(e))
+    core = core[np.argsort(keys[core], kind="stable")[:ICP_POINTS]]
+    transform = align_to_ground_truth(recon.estimates[np.sort(core)], gt, section.icp_max_correspondence_m,
+                                      section.icp_max_iterations, max_source_points=ICP_POINTS, seed=seed)
     aligned = recon.estimates @ transform[:3, :3].T + transform[:3, 3]
     scale = float(np.cbrt(np.linalg.det(transform[:3, :3])))
     along = np.abs(np.einsum("sj,sj->s", aligned - gt.samples, gt.sample_normals))
-    tree = cKDTree(aligned[present], balanced_tree=False, compact_nodes=False)
-    k = min(HOLE_NEIGHBOURS, len(present))
-    dist, idx = tree.query(gt.samples, k=k)
-    dist, idx = dist.reshape(len(e), k), idx.reshape(len(e), k)
-    # point-to-disc distance to each neighbour's patch (radius sqrt(a / pi), in its tangent plane), as
-    # base.surfel_distances measures a point cloud's surfels
-    radius = np.sqrt(1.0 / (np.pi * section.gt_density_per_m2))
-    rel = gt.samples[:, None, :] - aligned[present][idx]
-    dn = np.einsum("skj,skj->sk", rel, gt.sample_normals[present][idx])
-    dt = np.sqrt(np.maximum(dist * dist - dn * dn, 0.0))
-    cost = np.sqrt(dn * dn + np.maximum(dt - radius, 0.0) ** 2) + HOLE_PENALTY_M * (1.0 - e[present][idx])
-    cost[present[idx] == np.arange(len(e))[:, None]] = np.inf  # a sample's own estimate is its accuracy part
-    hole = cost.min(axis=1)
-    hole = np.where(np.isfinite(hole), hole, dist.max(axis=1) + HOLE_PENALTY_M)  # only itself within reach
+    hole = np.zeros(len(e))
+    missing = np.flatnonzero(e < 1.0)   # a certainly reconstructed sample has no hole term
+    if len(missing):
+        cloud = aligned[present]
+        tree = cKDTree(cloud, balanced_tree=False, compact_nodes=False)
+        k = min(HOLE_NEIGHBOURS, len(present))
+        dist, idx = tree.query(gt.samples[missing], k=k)
+        dist, idx = dist.reshape(len(missing), k), idx.reshape(len(missing), k)
+        # point-to-disc distance to each neighbour's patch (radius sqrt(a / pi), in its tangent plane), as
+        # base.surfel_distances measures a point cloud's surfels
+        radius = np.sqrt(1.0 / (np.pi * section.gt_density_per_m2))
+        rel = gt.samples[missing][:, None, :] - cloud[idx]
+        dn = np.einsum("skj,skj->sk", rel, gt.sample_normals[present][idx])
+        dt = np.sqrt(np.maximum(dist * dist - dn * dn, 0.0))
+        cost = np.sqrt(dn * dn + np.maximum(dt - radius, 0.0) ** 2) + HOLE_PENALTY_M * (1.0 - e[present][idx])
+        cost[present[idx] == missing[:, None]] = np.inf  # a sample's own estimate is its accuracy part
+        nearest = cost.min(axis=1)
+        hole[missing] = np.where(np.isfinite(nearest), nearest, dist.max(axis=1) + HOLE_PENALTY_M)
     accuracy_part = float(np.mean(e * along))
     hole_part = float(np.mean((1.0 - e) * hole))
     tau = section.tau_m

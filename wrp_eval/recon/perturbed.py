@@ -37,7 +37,8 @@ from wrp_eval.recon.capture_io import captures_from_path
 from wrp_eval.sim.captures import CaptureSet
 
 REFERENCE = "unperturbed"
-KINDS = ("reference", "single_view", "nav_drift", "heading_bias", "blur", "flight")
+KINDS = ("reference", "jitter", "single_view", "nav_drift", "heading_bias", "blur", "flight")
+JITTER_SETS = 3   # the reference under an ideal flight's pose noise: each oracle's noise from image content
 SINGLE_VIEW_SETS = 6
 SINGLE_VIEW_OFFSET_M = (1.5, 2.0)
 SINGLE_VIEW_YAW_DEG = (10.0, 20.0)
@@ -49,7 +50,7 @@ BLUR_SETS = (("blur_8px", 8.0, 1), ("blur_25px", 25.0, 1), ("blur_40px_every_oth
 FLIGHT_SPEEDS_M_S = (0.0, 4.0, 8.0, 12.0)
 FLIGHTS_PER_SPEED = 2
 MIN_ALTITUDE_M = 1.0
-_STREAMS = ("single_view", "nav_drift", "flight")
+_STREAMS = ("single_view", "nav_drift", "flight", "jitter")
 
 
 def _stream(seed: int, kind: str) -> np.random.Generator:
@@ -63,6 +64,17 @@ def _above_sea(offsets: np.ndarray, path: Path) -> np.ndarray:
     low = z + offsets[:, 2] < MIN_ALTITUDE_M
     offsets[low, 2] = np.maximum(-offsets[low, 2], MIN_ALTITUDE_M - z[low])
     return offsets
+
+
+def jitter_sets(path: Path, seed: int, count: int = JITTER_SETS) -> list[tuple[str, str, CaptureSet]]:
+    """``count`` copies of the reference with every view jittered by 2 cm per axis and 0.1 deg of yaw (the
+    response yardstick's jitter, :mod:`wrp_eval.recon.response`): not perturbations but the noise floor of
+    each oracle against which the perturbations' changes are read (a seed repeat of COLMAP re-maps the same
+    images; a jitter re-renders and re-matches slightly different ones)."""
+    from wrp_eval.recon.response import jitter
+
+    rng = _stream(seed, "jitter")
+    return [(f"jitter_{k + 1}", "jitter", captures_from_path(path, jitter(len(path), rng))) for k in range(count)]
 
 
 def single_view_sets(path: Path, seed: int) -> list[tuple[str, str, CaptureSet]]:
@@ -171,10 +183,12 @@ def flight_capture_sets(ctx, path: Path, seed: int, speeds=FLIGHT_SPEEDS_M_S,
 
 def perturbed_capture_sets(path: Path, seed: int = 0, flights=None) -> list[tuple[str, str, CaptureSet]]:
     """(name, kind, capture set) triples: the unperturbed reference (name ``unperturbed``, kind ``reference``)
-    first, then the single_view, nav_drift, heading_bias and blur sets of ``path`` (deterministic from
+    first, then its jitter copies (each oracle's noise floor), then the single_view, nav_drift, heading_bias
+    and blur sets of ``path`` (deterministic from
     ``seed``), then ``flights``: the flown sets (:func:`flight_capture_sets`, which needs the experiment's
     simulator and wind; None / empty: no flights)."""
     if len(path) == 0:
         raise InputError("path", "has no viewpoints to perturb")
-    return ([(REFERENCE, "reference", captures_from_path(path))] + single_view_sets(path, seed)
+    return ([(REFERENCE, "reference", captures_from_path(path))] + jitter_sets(path, seed)
+            + single_view_sets(path, seed)
             + nav_drift_sets(path, seed) + heading_bias_sets(path) + blur_sets(path) + list(flights or []))

@@ -34,7 +34,7 @@ For one capture set on the true ship mesh:
    :mod:`wrp_eval.recon.image_effects`), each view's estimated pose (uncertainty from its correspondences, pulled
    towards its recorded position prior), the fused least-squares point per sample with the pose and pixel
    errors it inherits; ICP with scale as the paper aligns; error_m = accuracy part + hole part.
-   Registration (step 4) counts a ray as the share of a keypoint its view keeps (blur, texture).
+   Registration (step 4) counts a ray as the share of a keypoint its view keeps (blur).
 
 Every random draw comes from ``numpy.random.default_rng(seed)``: same inputs and seed, same result.
 
@@ -403,11 +403,11 @@ class SyntheticOracle(MeshOracle):
 
         # --- reconstruct (fusion.py): estimated poses, triangulated and fused points on the visible truth ---
         fused = fuse(capture_set, gt, registered_mask, self.section, seed)
-        registered_sigma = fused.pose_sigma[registered_mask]
+        registered_sigma = fused.pose_sigma[registered_mask & np.isfinite(fused.pose_sigma[:, 0])]
         extra = {"hits": int(len(obs.points)), "candidate_pairs": int(len(hit)), **reg_extra, "cell_m": cell_m,
                  "median_sigma_n_m": float(np.nanmedian(fused.sigma_n)) if np.any(fused.existence > 0) else None,
                  "mean_existence": float(fused.existence.mean()), "observations": fused.observations,
                  "median_pose_sigma_deg": float(np.degrees(np.median(registered_sigma[:, 0])))
-                 if n_registered else None,
-                 "median_pose_sigma_m": float(np.median(registered_sigma[:, 1])) if n_registered else None}
+                 if len(registered_sigma) else None,
+                 "median_pose_sigma_m": float(np.median(registered_sigma[:, 1])) if len(registered_sigma) else None}
         return fused, n_registered, reason, extra

@@ -282,10 +282,21 @@ def add_deltas(rows: list[dict], reference: str = "unperturbed") -> None:
                 r[f"{prefix}_delta_{m}"] = float(a) - float(b) if _finite(a) and _finite(b) else None
 
 
-def _repeat_noise(rows: list[dict], key: str) -> float | None:
-    """Standard deviation (ddof 1) of ``key`` over the reference and its repeats (other seeds); None if < 2."""
-    values = [float(r[key]) for r in rows if r["kind"] in ("reference", "repeat") and _finite(r.get(key))]
+NOISE_KINDS = ("reference", "repeat", "jitter")   # rows that measure noise, not a perturbation's effect
+
+
+def _repeat_noise(rows: list[dict], key: str, kinds: tuple[str, ...] = ("reference", "repeat")) -> float | None:
+    """Standard deviation (ddof 1) of ``key`` over the reference and the rows of ``kinds`` (seed repeats; with
+    "jitter", the reference under an ideal flight's pose noise); None if < 2."""
+    values = [float(r[key]) for r in rows if r["kind"] in kinds and _finite(r.get(key))]
     return float(np.std(values, ddof=1)) if len(values) >= 2 else None
+
+
+def _noise(rows: list[dict], key: str) -> float | None:
+    """The larger of the seed-repeat noise and the jitter noise of ``key`` (what a delta must exceed)."""
+    found = [v for v in (_repeat_noise(rows, key), _repeat_noise(rows, key, ("reference", "jitter")))
+             if v is not None]
+    return max(found) if found else None
 
 
 def _agreement(rows: list[dict], metric: str, noise_syn: float | None, noise_col: float | None) -> dict:
@@ -298,7 +309,7 @@ def _agreement(rows: list[dict], metric: str, noise_syn: float | None, noise_col
     out = {"pairs": len(pairs),
            "spearman_rho": float(spearmanr(syn, col).statistic) if len(pairs) >= 3 else float("nan"),
            "sign_agreement": float(same.mean()) if len(pairs) else float("nan"),
-           "repeat_noise_synthetic": noise_syn, "repeat_noise_colmap": noise_col,
+           "noise_synthetic": noise_syn, "noise_colmap": noise_col,
            "below_noise_sets": None, "sign_agreement_above_noise": None, "pairs_above_noise": None}
     if noise_syn is not None and noise_col is not None:
         small = (np.abs(syn) < noise_syn) | (np.abs(col) < noise_col)  # either delta within its oracle's noise
@@ -309,12 +320,13 @@ def _agreement(rows: list[dict], metric: str, noise_syn: float | None, noise_col
 
 
 def summarize_perturbed(rows: list[dict]) -> dict:
-    """Agreement of the two oracles on the perturbed sets (kinds other than reference / repeat), relative to
-    the unperturbed set: per metric of ``DELTA_METRICS`` the Spearman rho of the deltas (target >= 0.6), their
-    sign agreement, the repeat noise of each oracle (std over the reference's seeds) and how many sets have a
-    delta within it; per kind the median deltas and the sign agreement of error_m."""
+    """Agreement of the two oracles on the perturbed sets (kinds other than reference / repeat / jitter),
+    relative to the unperturbed set: per metric of ``DELTA_METRICS`` the Spearman rho of the deltas (target
+    >= 0.6), their sign agreement, each oracle's noise (the larger of its seed-repeat and its jitter std;
+    both reported) and how many sets have a delta within it; per kind the median deltas and the sign
+    agreement of error_m."""
     ref = next((r for r in rows if r["kind"] == "reference"), None)
-    perturbed = [r for r in rows if r["kind"] not in ("reference", "repeat")]
+    perturbed = [r for r in rows if r["kind"] not in NOISE_KINDS]
     summary = {"capture_sets": len(rows), "perturbed_sets": len(perturbed),
                "compared": sum(r.get("colmap_failed") is not None for r in perturbed),
                "spearman_target": SPEARMAN_TARGET,
@@ -322,7 +334,9 @@ def summarize_perturbed(rows: list[dict]) -> dict:
                    "synthetic_error_m", "synthetic_completeness", "synthetic_registered_views", "colmap_error_m",
                    "colmap_completeness", "colmap_registered_views", "views")}}
     for m in DELTA_METRICS:
-        summary[m] = _agreement(perturbed, m, _repeat_noise(rows, f"synthetic_{m}"), _repeat_noise(rows, f"colmap_{m}"))
+        summary[m] = _agreement(perturbed, m, _noise(rows, f"synthetic_{m}"), _noise(rows, f"colmap_{m}"))
+        summary[m].update({f"{kind}_noise_{prefix}": _repeat_noise(rows, f"{prefix}_{m}", ("reference", kind))
+                           for kind in ("repeat", "jitter") for prefix in ("synthetic", "colmap")})
     rho = summary["error_m"]["spearman_rho"]
     summary["spearman_target_met"] = bool(np.isfinite(rho) and rho >= SPEARMAN_TARGET)
     per_kind = {}
@@ -355,7 +369,7 @@ def write_perturbed_outputs(rows: list[dict], summary: dict, out: Path) -> None:
     write_text_atomic(out / "perturbed_summary.json", json.dumps({**summary, "rows": rows}, indent=1, default=float))
     fig = Figure(figsize=(7.5, 6.0))
     ax = fig.subplots()
-    shown = [r for r in rows if r["kind"] not in ("reference", "repeat")
+    shown = [r for r in rows if r["kind"] not in NOISE_KINDS
              and _finite(r.get("synthetic_delta_error_m")) and _finite(r.get("colmap_delta_error_m"))]
     for kind in dict.fromkeys(r["kind"] for r in shown):
         of_kind = [r for r in shown if r["kind"] == kind]
