@@ -96,6 +96,8 @@ def test_calibration_columns_put_colmap_beside_the_synthetic_oracle_under_its_co
     assert syn.error_m < row["synthetic_width_error_m"] < row["synthetic_sparse_error_m"]
     assert row["error_ratio_colmap_to_sparse_equivalent"] == pytest.approx(
         row["colmap_error_m"] / row["synthetic_sparse_error_m"])
+    assert row["error_ratio_colmap_to_width_equivalent"] == pytest.approx(
+        row["colmap_error_m"] / row["synthetic_width_error_m"])
     bare = {"synthetic_error_m": syn.error_m, "colmap_error_m": None, "colmap_n_points": None}
     add_calibration(bare, oracle, cs, box_on_water, 0, 800)     # no COLMAP figures: no ratio, no thinning
     assert bare["error_ratio_colmap_to_synthetic"] is None and "synthetic_sparse_error_m" not in bare

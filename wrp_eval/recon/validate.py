@@ -130,9 +130,10 @@ def add_calibration(row: dict, synthetic: SyntheticOracle, cs: CaptureSet, mesh:
         return
     eq = colmap_equivalent(synthetic, cs, mesh, int(n_points), render_width_px, seed)
     row.update({f"synthetic_{k}": (v if np.isfinite(v) else None) for k, v in eq.items()})
-    sparse = row.get("synthetic_sparse_error_m")
-    row["error_ratio_colmap_to_sparse_equivalent"] = (col / sparse if _finite(sparse) and _finite(col) and sparse > 0
-                                                      else None)
+    for key in ("width", "sparse"):
+        ref = row.get(f"synthetic_{key}_error_m")
+        ok = _finite(ref) and _finite(col) and ref > 0
+        row[f"error_ratio_colmap_to_{key}_equivalent"] = col / ref if ok else None
 
 
 def summarize(rows: list[dict]) -> dict:
@@ -147,7 +148,8 @@ def summarize(rows: list[dict]) -> dict:
     agree = [r["synthetic_failed"] == r["colmap_failed"] for r in both]
     good = [r for r in both if not r["synthetic_failed"] and not r["colmap_failed"]]
     ratios = {key: [r[key] for r in good if _finite(r.get(key))]
-              for key in ("error_ratio_colmap_to_synthetic", "error_ratio_colmap_to_sparse_equivalent")}
+              for key in ("error_ratio_colmap_to_synthetic", "error_ratio_colmap_to_width_equivalent",
+                          "error_ratio_colmap_to_sparse_equivalent")}
     return {"capture_sets": len(rows), "compared": len(both), "spearman_rho_error_m": rho,
             **{f"median_{key}_not_failed": (float(np.median(v)) if v else None) for key, v in ratios.items()},
             "spearman_rho_completeness": rho_c, "pairs_for_rho": len(pairs),
