@@ -205,6 +205,28 @@ def write_report(ctx: ExperimentContext, path, summary: dict, trials: TrialData)
     for row in ev["paired"]:
         lines.append(f"| {row['path']} | {row['mean_error_diff_m']:+.4f} | {_ci(row.get('mean_error_diff_ci'))} | "
                      f"{row['both_succeeded']} | {100 * row['failure_rate_diff']:+.1f} points |")
+    if "robustness" in ev:
+        lines += ["", "| path | wind-free error (m) | P(meets spec) | CI | views not taken (mean) |",
+                  "|---|---|---|---|---|"]
+        for row in ev["paths"]:
+            lines.append(f"| {row['path']} | {fmt(ev['windfree_error_m'].get(row['path']), 4)} | "
+                         f"{fmt(row.get('p_meets_spec'), 3)} | {_ci(row.get('p_meets_spec_ci'))} | "
+                         f"{fmt(row.get('mean_views_not_taken'), 2)} |")
+        spec = ev["paths"][0]
+        lines += ["", f"Spec: error <= {fmt(spec.get('spec_error_m'), 4)} m and completeness >= "
+                      f"{fmt(spec.get('spec_completeness'), 2)}.", "",
+                  "| WRP | robustness gain (mm) | CI | placebo 95th pct (mm) | placebos | verdict |",
+                  "|---|---|---|---|---|---|"]
+        for kind, v in ev["robustness"].items():
+            ci = v.get("gain_ci_m")
+            lines.append(f"| {kind} | {1e3 * v['gain_m']:+.2f} | "
+                         + (f"[{1e3 * ci[0]:+.2f}, {1e3 * ci[1]:+.2f}]" if ci else "-")
+                         + f" | {1e3 * v['placebo_gain_p95_m']:+.2f} | {len(v['placebo_gains_m'])} | "
+                         + ("**recommended**" if v["recommended"] else f"not recommended: {v['reason']}") + " |")
+        lines += ["", f"**Path to fly: {ev['recommended_path']}.** Robustness gain = [E_wind - E_windfree](initial) "
+                      "- [E_wind - E_windfree](WRP) per paired trial; a WRP is recommended only when its gain's CI "
+                      "excludes 0 and exceeds the 95th percentile of its placebo paths' gains (as many viewpoints "
+                      "moved by the same magnitudes, chosen at random, flown under the same winds)."]
     lines += [
         "",
         f"Paper anchor: mean error of the no-WRP path under random offsets "

@@ -4,7 +4,8 @@ import numpy as np
 import pytest
 
 from wrp_eval.config import ExperimentConfig
-from wrp_eval.wrp.evaluate import PathTrials, paired_difference, path_summary, summarise
+from wrp_eval.wrp.evaluate import (PathTrials, paired_difference, path_summary, robustness_gains, robustness_verdict,
+                                   summarise)
 
 from .conftest import helpers
 
@@ -48,7 +49,8 @@ def test_evaluate_flies_all_paths_with_the_same_winds(tmp_path):
         "run": {"seed": 2},
         "campaign": {"backend": {"workers": 0}, "batch_size": 4},
         "wrp": {"iterations": 16, "attitude_samples": 3, "neighbourhood_samples": 3, "block_iterations": 8,
-                "oracle_error": False, "threshold_m": 0.2, "evaluate": {"n_trials": 6, "bootstrap": 200}}})
+                "oracle_error": False, "threshold_m": 0.2,
+                "evaluate": {"n_trials": 6, "bootstrap": 200, "placebos": 2}}})
     doc = evaluate_job(ExperimentContext(config, tmp_path), tmp_path / "ev", checkpoint=str(tmp_path / "s.pt"), campaign=str(camp),
                        e_original=0.6, quiet=True, evaluator=ANALYTIC_EVALUATOR)
     assert [p["path"] for p in doc["paths"]] == ["initial", "iswrp", "swrp"]
@@ -58,6 +60,16 @@ def test_evaluate_flies_all_paths_with_the_same_winds(tmp_path):
              for n in ("initial", "iswrp", "swrp")]
     assert winds[0].equals(winds[1]) and winds[0].equals(winds[2])       # common random numbers
     assert json.loads((tmp_path / "ev" / "evaluate.json").read_text())["paired"][0]["paired_trials"] == 6
+    # the placebos of each WRP fly the same winds and enter its verdict
+    placebo = TrialStore(tmp_path / "ev" / "campaign-placebo-iswrp-00").read_table(
+        ["trial_id", "wind_seed", "wind_speed_10m_m_s"]).sort_by("trial_id")
+    assert placebo.equals(winds[0])
+    for kind in ("iswrp", "swrp"):
+        verdict = doc["robustness"][kind]
+        assert len(verdict["placebo_gains_m"]) == 2 and isinstance(verdict["recommended"], bool)
+        assert verdict["recommended"] or verdict["reason"]
+    assert doc["recommended_path"] in ("initial", "iswrp", "swrp")
+    assert all("p_meets_spec" in p and "mean_views_not_taken" in p for p in doc["paths"])
     assert (tmp_path / "ev" / "boxplot.png").stat().st_size > 0
     assert set(doc["wrp"]) == {"iswrp", "swrp"}
 
@@ -66,3 +78,38 @@ def test_summarise_is_seeded():
     p = [PathTrials(n, np.arange(30), np.random.default_rng(k).normal(1, 0.1, 30), np.zeros(30, bool))
          for k, n in enumerate(("initial", "iswrp"))]
     assert summarise(p, 1, 200, 0.95) == summarise(p, 1, 200, 0.95)
+
+
+def test_robustness_gain_is_the_wind_loss_saved_against_the_same_winds():
+    base = PathTrials("initial", np.arange(4), np.array([0.030, 0.034, 0.040, 0.050]), np.zeros(4, bool))
+    wrp = PathTrials("iswrp", np.arange(4), np.array([0.031, 0.033, 0.036, 0.060]), np.array([0, 0, 0, 1], bool))
+    gains = robustness_gains(base, wrp, windfree_base_m=0.025, windfree_other_m=0.027)
+    # trial 3 failed on the WRP: left out; gain = (e_b - 0.025) - (e_w - 0.027)
+    np.testing.assert_allclose(gains, [0.001, 0.003, 0.006])
+
+
+def test_a_wrp_is_recommended_only_beyond_zero_and_beyond_its_placebos():
+    rng = np.random.default_rng(0)
+    strong = np.full(40, 0.004) + rng.normal(0, 0.001, 40)
+    placebos = rng.normal(0.0, 0.001, 20)
+    yes = robustness_verdict(strong, placebos, np.random.default_rng(1), 500, 0.95)
+    assert yes["recommended"] and yes["gain_ci_m"][0] > 0 and yes["gain_m"] > yes["placebo_gain_p95_m"]
+    noisy = robustness_verdict(rng.normal(0.0, 0.002, 40), placebos, np.random.default_rng(1), 500, 0.95)
+    assert not noisy["recommended"] and "does not exclude 0" in noisy["reason"]
+    like_placebo = robustness_verdict(np.full(40, 0.002) + rng.normal(0, 1e-4, 40), np.linspace(0, 0.003, 20),
+                                      np.random.default_rng(1), 500, 0.95)
+    assert not like_placebo["recommended"] and "placebo 95th percentile" in like_placebo["reason"]
+    alone = robustness_verdict(strong, np.array([]), np.random.default_rng(1), 500, 0.95)
+    assert not alone["recommended"] and "no placebo" in alone["reason"]
+
+
+def test_summary_recommends_nothing_when_no_wrp_beats_its_placebos():
+    base = PathTrials("initial", np.arange(30), np.full(30, 0.03), np.zeros(30, bool))
+    wrp = PathTrials("iswrp", np.arange(30), np.full(30, 0.03) + np.random.default_rng(2).normal(0, 1e-3, 30),
+                     np.zeros(30, bool))
+    placebo = [PathTrials(f"p{k}", np.arange(30), np.full(30, 0.03), np.zeros(30, bool)) for k in range(5)]
+    doc = summarise([base, wrp], 0, 300, 0.9, (0.035, 0.9), {"initial": 0.025, "iswrp": 0.025,
+                                                             **{f"p{k}": 0.025 for k in range(5)}},
+                    {"iswrp": placebo})
+    assert doc["recommended_path"] == "initial" and not doc["robustness"]["iswrp"]["recommended"]
+    assert doc["paths"][0]["p_meets_spec"] == 1.0      # no completeness recorded: the error alone decides

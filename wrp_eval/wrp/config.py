@@ -18,6 +18,13 @@ class EvaluateSection(StrictModel):
     thresholds_m: list[float] | None = Field(None, description="one threshold per WRP kind [iswrp, swrp] "
                                              "(none: the optimisation's threshold for both)")
     bootstrap: int = Field(2000, ge=100, le=1_000_000, description="bootstrap resamples of the CIs")
+    placebos: int = Field(20, ge=0, le=10_000, description="placebo paths per WRP (as many viewpoints moved by "
+                          "the same magnitudes, chosen at random), flown under the same winds: the control a "
+                          "WRP's robustness gain must beat (0: no control, so no WRP is recommended)")
+    spec_error_m: float | None = Field(None, gt=0, description="reconstruction spec: error at most this (m; none: "
+                                       "1.1 x the initial path's wind-free error)")
+    spec_completeness: float = Field(0.95, ge=0, le=1, description="reconstruction spec: completeness at least "
+                                     "this")
     confidence: float = Field(0.95, gt=0.5, lt=1)
     out_dir: str | None = Field(None, description="none: logs/<run.name>/evaluate")
 

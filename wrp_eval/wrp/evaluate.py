@@ -10,6 +10,18 @@ over the trials that did not fail, and the failure rate, each with a bootstrap c
 (``scipy.stats.bootstrap``, percentile method); per WRP the paired differences against the initial path (mean
 error difference over the trials where both succeeded, failure-rate difference over all trials), with paired
 bootstrap intervals; a box plot of the errors.
+
+Issue 18 adds what tells a WRP's gain from chance (``robustness`` of :func:`summarise`):
+* the **robustness gain** of a WRP: per paired trial k, [e_k - E_windfree](initial) - [e_k - E_windfree](WRP)
+  (E_windfree: the oracle's error of the path flown as planned), its mean and paired bootstrap CI (positive:
+  the WRP loses less to the wind than the initial path);
+* the **placebo gains**: the same for placebo paths (:mod:`wrp_eval.wrp.placebo`: as many viewpoints moved as
+  the WRP moved, by the same magnitudes, chosen at random) flown under the same winds, and their 95th
+  percentile;
+* the **verdict**: a WRP is recommended only when its gain's CI excludes 0 (lower bound > 0) AND its mean gain
+  exceeds the placebos' 95th percentile; otherwise the initial path is kept and the reason is stated;
+* per path the probability of meeting a reconstruction spec (error <= ``spec_error_m`` and completeness >=
+  ``spec_completeness``; a failed trial does not meet it) and the mean number of views not taken, with CIs.
 """
 
 from __future__ import annotations
@@ -22,27 +34,38 @@ from matplotlib.figure import Figure
 from scipy import stats
 
 from wrp_eval.atomic import atomic_path
+from wrp_eval.campaign.records import column_array
 from wrp_eval.campaign.store import TrialStore
 from wrp_eval.errors import InputError
 
 
 @dataclass(frozen=True)
 class PathTrials:
-    """One path's campaign: trial_id (n,), error_m (n,) (NaN where none), failed (n,) bool."""
+    """One path's campaign: trial_id (n,), error_m (n,) (NaN where none), failed (n,) bool; completeness (n,)
+    (NaN where none) and views_not_taken (n,) where the store has them (None for hand-made trials)."""
 
     name: str
     trial_id: np.ndarray
     error_m: np.ndarray
     failed: np.ndarray
+    completeness: np.ndarray | None = None
+    views_not_taken: np.ndarray | None = None
 
 
 def read_trials(name: str, folder: str | Path) -> PathTrials:
-    """The error and failure of every stored trial of a campaign folder, in trial-id order."""
-    table = TrialStore(folder).read_table(["trial_id", "error_m", "failed"])
+    """The error, completeness, failure and views not taken of every stored trial of a campaign folder, in
+    trial-id order."""
+    table = TrialStore(folder).read_table(["trial_id", "n_views", "error_m", "completeness", "failed",
+                                           "flown_offsets"])
     order = np.argsort(table.column("trial_id").to_numpy())
-    return PathTrials(name, table.column("trial_id").to_numpy()[order],
-                      table.column("error_m").to_numpy(zero_copy_only=False).astype(float)[order],
-                      table.column("failed").to_numpy(zero_copy_only=False).astype(bool)[order])
+    flown = column_array(table, "flown_offsets")
+    not_taken = (~np.all(np.isfinite(flown), axis=2)).sum(axis=1).astype(float)
+
+    def col(name):
+        return table.column(name).to_numpy(zero_copy_only=False).astype(float)[order]
+    return PathTrials(name, table.column("trial_id").to_numpy()[order], col("error_m"),
+                      table.column("failed").to_numpy(zero_copy_only=False).astype(bool)[order],
+                      col("completeness"), not_taken[order])
 
 
 def _ci(samples, statistic, rng, resamples: int, confidence: float, paired: bool = False) -> list | None:
@@ -55,8 +78,17 @@ def _ci(samples, statistic, rng, resamples: int, confidence: float, paired: bool
     return [float(low), float(high)]
 
 
-def path_summary(p: PathTrials, rng: np.random.Generator, resamples: int, confidence: float) -> dict:
-    """mean / std / p95 of the error over trials that did not fail, failure rate; each with its CI."""
+def meets_spec(p: PathTrials, spec_error_m: float, spec_completeness: float) -> np.ndarray:
+    """(n,) bool: the trial's reconstruction meets the spec (error and completeness; failed trials do not)."""
+    comp = p.completeness if p.completeness is not None else np.full(p.error_m.shape, np.inf)
+    with np.errstate(invalid="ignore"):
+        return ~p.failed & (p.error_m <= spec_error_m) & (comp >= spec_completeness)
+
+
+def path_summary(p: PathTrials, rng: np.random.Generator, resamples: int, confidence: float,
+                 spec: tuple[float, float] | None = None) -> dict:
+    """mean / std / p95 of the error over trials that did not fail, failure rate; with ``spec`` (error m,
+    completeness) the probability of meeting it; the mean views not taken; each with its CI."""
     ok = p.error_m[~p.failed & np.isfinite(p.error_m)]
     fail = p.failed.astype(float)
     out = {"path": p.name, "trials": int(p.trial_id.size), "succeeded": int(ok.size),
@@ -67,7 +99,53 @@ def path_summary(p: PathTrials, rng: np.random.Generator, resamples: int, confid
                     ("p95_error_m", lambda x, axis: np.percentile(x, 95, axis=axis))):
         out[key] = float(fn(ok, None)) if ok.size > 1 else float("nan")
         out[key + "_ci"] = _ci((ok,), fn, rng, resamples, confidence) if ok.size > 2 else None
+    mean = lambda x, axis: x.mean(axis=axis)  # noqa: E731
+    if spec is not None:
+        met = meets_spec(p, *spec).astype(float)
+        out.update({"spec_error_m": spec[0], "spec_completeness": spec[1],
+                    "p_meets_spec": float(met.mean()) if met.size else float("nan"),
+                    "p_meets_spec_ci": _ci((met,), mean, rng, resamples, confidence)})
+    if p.views_not_taken is not None:
+        out["mean_views_not_taken"] = float(p.views_not_taken.mean()) if p.views_not_taken.size else float("nan")
+        out["mean_views_not_taken_ci"] = _ci((p.views_not_taken,), mean, rng, resamples, confidence)
     return out
+
+
+def robustness_gains(base: PathTrials, other: PathTrials, windfree_base_m: float,
+                     windfree_other_m: float) -> np.ndarray:
+    """Per paired trial where both succeeded: [e - E_windfree](base) - [e - E_windfree](other) (m): how much
+    less ``other`` loses to the same wind than ``base``."""
+    common, ib, io = np.intersect1d(base.trial_id, other.trial_id, return_indices=True)
+    both = (~base.failed[ib] & ~other.failed[io] & np.isfinite(base.error_m[ib]) & np.isfinite(other.error_m[io]))
+    return (base.error_m[ib][both] - windfree_base_m) - (other.error_m[io][both] - windfree_other_m)
+
+
+def robustness_verdict(gains: np.ndarray, placebo_means: np.ndarray, rng: np.random.Generator, resamples: int,
+                       confidence: float) -> dict:
+    """A WRP's gain against its placebos: mean gain and CI, the placebos' mean gains and 95th percentile, and
+    whether the WRP is recommended (CI lower bound > 0 and mean > the placebo 95th percentile), with why."""
+    mean = lambda x, axis: x.mean(axis=axis)  # noqa: E731
+    gain = float(gains.mean()) if gains.size else float("nan")
+    ci = _ci((gains,), mean, rng, resamples, confidence) if gains.size > 2 else None
+    placebo = np.asarray(placebo_means, dtype=float)
+    placebo = placebo[np.isfinite(placebo)]
+    p95 = float(np.percentile(placebo, 95)) if placebo.size else float("nan")
+    reasons = []
+    if ci is None:
+        reasons.append("too few paired trials for a confidence interval")
+    elif ci[0] <= 0:
+        reasons.append(f"the gain's {100 * confidence:g} % CI [{1e3 * ci[0]:+.2f}, {1e3 * ci[1]:+.2f}] mm "
+                       "does not exclude 0")
+    if not placebo.size:
+        reasons.append("no placebo paths were flown")
+    elif not gain > p95:
+        reasons.append(f"the gain {1e3 * gain:+.2f} mm does not exceed the placebo 95th percentile "
+                       f"{1e3 * p95:+.2f} mm ({placebo.size} placebos)")
+    return {"gain_m": gain, "gain_ci_m": ci, "paired_trials": int(gains.size),
+            "placebo_gains_m": [float(x) for x in placebo], "placebo_gain_p95_m": p95,
+            "recommended": not reasons, "reason": "; ".join(reasons) or
+            f"the gain {1e3 * gain:+.2f} mm is above 0 at {100 * confidence:g} % and beyond every placebo but "
+            f"the top 5 %"}
 
 
 def paired_difference(base: PathTrials, other: PathTrials, rng: np.random.Generator, resamples: int,
@@ -104,9 +182,28 @@ def box_plot(paths: list[PathTrials], file: Path) -> None:
         fig.savefig(tmp, format="png")
 
 
-def summarise(paths: list[PathTrials], seed: int, resamples: int, confidence: float) -> dict:
-    """Tables 4/5 analogues: per-path summaries and paired differences against the first path."""
+def summarise(paths: list[PathTrials], seed: int, resamples: int, confidence: float,
+              spec: tuple[float, float] | None = None, windfree_m: dict[str, float] | None = None,
+              placebos: dict[str, list[PathTrials]] | None = None) -> dict:
+    """Tables 4/5 analogues: per-path summaries and paired differences against the first path; with
+    ``windfree_m`` (path name -> wind-free error, placebos included) and ``placebos`` (WRP name -> its placebo
+    paths' trials) the robustness gain of every other path and its verdict (module docstring)."""
     rng = np.random.default_rng(np.random.SeedSequence(seed, spawn_key=(7,)))
-    return {"confidence": confidence, "bootstrap_resamples": resamples,
-            "paths": [path_summary(p, rng, resamples, confidence) for p in paths],
-            "paired": [paired_difference(paths[0], p, rng, resamples, confidence) for p in paths[1:]]}
+    out = {"confidence": confidence, "bootstrap_resamples": resamples,
+           "paths": [path_summary(p, rng, resamples, confidence, spec) for p in paths],
+           "paired": [paired_difference(paths[0], p, rng, resamples, confidence) for p in paths[1:]]}
+    if windfree_m is None:
+        return out
+    base = paths[0]
+    robustness = {}
+    for p in paths[1:]:
+        gains = robustness_gains(base, p, windfree_m[base.name], windfree_m[p.name])
+        placebo_means = [robustness_gains(base, q, windfree_m[base.name], windfree_m[q.name]).mean()
+                         if q.trial_id.size else np.nan for q in (placebos or {}).get(p.name, [])]
+        robustness[p.name] = robustness_verdict(gains, np.array(placebo_means), rng, resamples, confidence)
+        robustness[p.name]["windfree_error_m"] = windfree_m[p.name]
+    out["windfree_error_m"] = {k: v for k, v in windfree_m.items()}
+    out["robustness"] = robustness
+    recommended = [k for k, v in robustness.items() if v["recommended"]]
+    out["recommended_path"] = max(recommended, key=lambda k: robustness[k]["gain_m"]) if recommended else base.name
+    return out

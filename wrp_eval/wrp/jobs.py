@@ -32,7 +32,9 @@ from wrp_eval.recon.scene import ScoredShip
 from wrp_eval.surrogate.data import TrialData, load_campaign_trials
 from wrp_eval.surrogate.model import Surrogate
 from wrp_eval.wrp.config import WrpSection
-from wrp_eval.wrp.evaluate import box_plot, read_trials, summarise
+from wrp_eval.ship.nofly import flyable
+from wrp_eval.wrp.evaluate import PathTrials, box_plot, read_trials, summarise
+from wrp_eval.wrp.placebo import placebo_offsets
 from wrp_eval.wrp.optimize import (
     WrpParams,
     apply_offsets,
@@ -229,16 +231,29 @@ def evaluate_job(ctx: ExperimentContext, out: Path | None = None, *, n_trials: i
     campaign_doc["perturbation"]["design"] = "physical"   # the paths flown as planned: the flight makes the offsets
     campaign_doc["outputs"].update({"dir": None, "rerun": False})
     flown = trial.model_copy(update={"campaign": type(trial.campaign).model_validate(campaign_doc)})
-    flown_trials = []
-    for name, path in paths.items():
+    placebo_paths, infeasible = placebo_paths_of(ctx, paths, ev.placebos)
+
+    def fly(name: str, path: FlightPath) -> PathTrials:
         folder = evaluated_campaign_dir(out, name)
         summary = run_campaign(flown, path, folder, root_seed=ctx.campaign_seed, config_dir=ctx.config_dir,
                                progress=not quiet, evaluator=evaluator or DEFAULT_EVALUATOR)
         if not quiet:
             print(f"{name}: {summary.done} trials in {folder} ({summary.failed} failed)")
-        flown_trials.append(read_trials(name, folder))
+        return read_trials(name, folder)
+
+    flown_trials = [fly(name, path) for name, path in paths.items()]
+    placebo_trials = {kind: [fly(name, path) for name, path in named.items()]
+                      for kind, named in placebo_paths.items()}
+    windfree = {name: windfree_error(ctx, path) for name, path in paths.items()}
+    windfree.update({name: windfree_error(ctx, path)
+                     for named in placebo_paths.values() for name, path in named.items()})
+    spec_error = ev.spec_error_m if ev.spec_error_m is not None else SPEC_ERROR_FACTOR * windfree["initial"]
     seed = ctx.campaign_seed
-    result = summarise(flown_trials, seed, ev.bootstrap, ev.confidence)
+    result = summarise(flown_trials, seed, ev.bootstrap, ev.confidence, (spec_error, ev.spec_completeness),
+                       windfree, placebo_trials)
+    result["placebos"] = {"per_wrp": ev.placebos, "moves_without_a_flyable_direction": infeasible,
+                          "how": "as many viewpoints as the WRP moved, chosen at random, moved by the WRP's move "
+                                 "magnitudes in random directions with its yaw offsets (wrp/placebo.py)"}
     result["wrp"] = {kind: d["table3"] for kind, d in optimised.items()}
     result["common_random_numbers"] = (f"every path flown with campaign seed {seed}: trial k of every path "
                                        "draws the same wind")
@@ -254,4 +269,39 @@ def evaluate_job(ctx: ExperimentContext, out: Path | None = None, *, n_trials: i
             print(f"{row['path']} - initial: mean error {row['mean_error_diff_m']:+.4f} m "
                   + (f"[{ci[0]:+.4f}, {ci[1]:+.4f}]" if ci else "") + f" over {row['both_succeeded']} pairs, "
                   f"failure rate {100 * row['failure_rate_diff']:+.1f} points")
+        for kind, verdict in result["robustness"].items():
+            print(f"{kind}: robustness gain {1e3 * verdict['gain_m']:+.2f} mm, placebo p95 "
+                  f"{1e3 * verdict['placebo_gain_p95_m']:+.2f} mm: "
+                  + ("RECOMMENDED" if verdict["recommended"] else f"not recommended ({verdict['reason']})"))
+        print(f"recommended path: {result['recommended_path']}")
     return result
+
+
+SPEC_ERROR_FACTOR = 1.1   # wrp.evaluate.spec_error_m unset: 1.1 x the initial path's wind-free error
+
+
+def windfree_error(ctx: ExperimentContext, path: FlightPath) -> float:
+    """E_windfree (m): the oracle's error of ``path`` flown exactly as planned (NaN when it cannot score)."""
+    error = oracle_error(ctx.scored_ship, path)["error_m"]
+    return float("nan") if error is None else float(error)
+
+
+def placebo_paths_of(ctx: ExperimentContext, paths: dict[str, FlightPath],
+                     count: int) -> tuple[dict[str, dict[str, FlightPath]], int]:
+    """``count`` placebo paths per WRP of ``paths`` (name -> path; "initial" is the base), seeded from the
+    campaign seed and the WRP's index: WRP name -> {placebo name -> path}; and how many placebo moves found no
+    flyable direction."""
+    initial = paths["initial"]
+    safety = safety_constraints(ctx, initial)
+    out, infeasible = {}, 0
+    for index, (kind, wrp) in enumerate((k, p) for k, p in paths.items() if k != "initial"):
+        offsets = np.concatenate([np.asarray(wrp.positions) - np.asarray(initial.positions),
+                                  np.angle(np.exp(1j * (np.asarray(wrp.yaw) - np.asarray(initial.yaw))))[:, None]],
+                                 axis=1)
+        rng = np.random.default_rng(np.random.SeedSequence(ctx.campaign_seed, spawn_key=(11, index)))
+        placebo, bad = placebo_offsets(offsets, count, rng, safety["base_positions"],
+                                       lambda pts: flyable(pts, safety["no_fly_bounds"], safety["min_altitude_m"]))
+        infeasible += bad
+        out[kind] = {f"placebo-{kind}-{k:02d}": apply_offsets(initial, placebo[k], {"placebo_of": kind})
+                     for k in range(count)}
+    return out, infeasible
