@@ -41,10 +41,12 @@ def reference_optimise(s, p: WrpParams, seed: int) -> np.ndarray:
     return offsets
 
 
-@pytest.mark.parametrize("kind,threshold,gain,error_std", [("iswrp", 0.002, 20.0, 1.0), ("swrp", 1e-5, 1.0, 0.05)])
-def test_batched_scan_equals_the_sequential_algorithm(kind, threshold, gain, error_std):
+@pytest.mark.parametrize("kind,threshold,gain,error_std,spread", [("iswrp", 0.002, 20.0, 1.0, "std"),
+                                                                  ("swrp", 1e-5, 1.0, 0.05, "variance"),
+                                                                  ("swrp", 1e-5, 1.0, 0.05, "std")])
+def test_batched_scan_equals_the_sequential_algorithm(kind, threshold, gain, error_std, spread):
     s = small_surrogate(5, seed=1, gain=gain, error_std=error_std)
-    p = params_for(s, kind, threshold, iterations=20, block_iterations=6)
+    p = params_for(s, kind, threshold, iterations=20, block_iterations=6, swrp_spread=spread)
     result = interval_optimise(s, p, seed=11)
     expect = reference_optimise(s, p, seed=11)
     np.testing.assert_allclose(result.offsets, expect, atol=1e-9)
@@ -52,10 +54,11 @@ def test_batched_scan_equals_the_sequential_algorithm(kind, threshold, gain, err
     assert np.any((result.accepted_iteration >= 0) & (result.accepted_iteration < p.iterations - 1))
 
 
-@pytest.mark.parametrize("kind,threshold", [("iswrp", 0.004), ("swrp", 1e-3)])
-def test_accepted_moves_satisfy_the_criterion_and_bounds(kind, threshold):
+@pytest.mark.parametrize("kind,threshold,spread", [("iswrp", 0.004, "std"), ("swrp", 1e-3, "variance"),
+                                                   ("swrp", 0.03, "std")])
+def test_accepted_moves_satisfy_the_criterion_and_bounds(kind, threshold, spread):
     surrogate = small_surrogate(6, seed=0, error_std=1.0, gain=20.0)
-    p = params_for(surrogate, kind, threshold)
+    p = params_for(surrogate, kind, threshold, swrp_spread=spread)
     r = interval_optimise(surrogate, p, seed=2)
     assert r.moved.any()
     assert np.all(np.abs(r.offsets[:, :3]) <= p.step_m)
@@ -122,9 +125,10 @@ def test_neighbourhood_statistic_hand_computed():
     e = np.array([[1.0, 2.0, 3.0]])
     p = WrpParams("iswrp", 0.1, 1.5, np.ones(1))
     assert neighbourhood_statistic(e, p)[0] == pytest.approx(0.5)
-    assert neighbourhood_statistic(e, WrpParams("swrp", 0.1, 1.5, np.ones(1)))[0] == pytest.approx(2 / 3)
-    assert neighbourhood_statistic(e, WrpParams("swrp", 0.1, 1.5, np.ones(1), swrp_spread="std"))[0] == \
-        pytest.approx(np.sqrt(2 / 3))
+    assert neighbourhood_statistic(e, WrpParams("swrp", 0.1, 1.5, np.ones(1), swrp_spread="variance"))[0] == \
+        pytest.approx(2 / 3)
+    # the default: the standard deviation, in the unit of t (issue 18)
+    assert neighbourhood_statistic(e, WrpParams("swrp", 0.1, 1.5, np.ones(1)))[0] == pytest.approx(np.sqrt(2 / 3))
 
 
 def test_draws_respect_radii_and_ranges():

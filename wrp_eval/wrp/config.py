@@ -62,8 +62,10 @@ class WrpSection(StrictModel):
     sample_radius_m: float = Field(0.5, gt=0, description="r_s when fixed, or when no campaign is available")
     sample_radius_quantile: float = Field(0.95, gt=0, le=1, description="r_s = this quantile of the "
                                           "wind-induced position offset |flown - commanded| per viewpoint")
-    swrp_spread: Literal["variance", "std"] = Field("variance", description="SWRP accepts when this spread of "
-                                                    "the neighbourhood's errors is <= t (paper: variance)")
+    swrp_spread: Literal["variance", "std"] = Field("std", description="SWRP accepts when this spread of the "
+                                                    "neighbourhood's errors is <= t: the standard deviation (m, "
+                                                    "the unit of t; issue 18), or the paper's literal variance "
+                                                    "(m^2 against m: the paper-table configs)")
     block_iterations: int = Field(64, ge=1, le=100_000, description="iterations drawn and scored per batch")
     stage2_batch: int = Field(8, ge=1, le=100_000, description="stage-1 survivors whose neighbourhoods are "
                               "scored per batch")

@@ -52,7 +52,7 @@ class WrpParams:
     yaw_range_rad: float = float(np.radians(20.0))
     neighbourhood_samples: int = 16
     step_m: float = 2.0
-    swrp_spread: str = "variance"
+    swrp_spread: str = "std"
     block_iterations: int = 64
     stage2_batch: int = 8
     # "paper": Alg. 3 as written (the last accepted candidate is kept); "improve": a viewpoint moves only to the
