@@ -109,15 +109,21 @@ ROW_METRICS = ("error_m", "hole_part_m", "accuracy_part_m", "accuracy_m", "compl
                "registered_views", "failed", "time_s")
 
 
-def _row(name: str, category: str, cs: CaptureSet, syn: ReconResult, col: ReconResult | None) -> dict:
-    row = {"name": name, "category": category, "views": len(cs)}
+def oracle_columns(syn: ReconResult, col: ReconResult | None, metrics: tuple[str, ...] = ROW_METRICS) -> dict:
+    """Both oracles' ``metrics`` (None where a result lacks one or there is no COLMAP result), reasons, and
+    COLMAP's model sizes and camera residual, as ``<oracle>_<metric>`` columns."""
+    row = {}
     for prefix, r in (("synthetic", syn), ("colmap", col)):
-        for key in ROW_METRICS:
+        for key in metrics:
             row[f"{prefix}_{key}"] = None if r is None else getattr(r, key, None)
         row[f"{prefix}_reason"] = None if r is None else r.reason
     row["colmap_model_sizes"] = None if col is None else " ".join(str(k) for k in col.extra.get("model_sizes", []))
     row["colmap_camera_residual_m"] = None if col is None else col.extra.get("camera_residual_m")
     return row
+
+
+def _row(name: str, category: str, cs: CaptureSet, syn: ReconResult, col: ReconResult | None) -> dict:
+    return {"name": name, "category": category, "views": len(cs), **oracle_columns(syn, col)}
 
 
 def add_calibration(row: dict, synthetic: SyntheticOracle, cs: CaptureSet, mesh: trimesh.Trimesh, seed: int,
@@ -264,13 +270,7 @@ def perturbed_row(name: str, kind: str, cs: CaptureSet, syn: ReconResult, col: R
     row = {"name": name, "kind": kind, "views": len(cs), "capture_sha": capture_sha(cs),
            "blur_px_mean": float(cs.blur().mean()) if len(cs) else 0.0,
            "prior_error_rms_m": float(np.sqrt(np.mean(prior_err ** 2))) if len(cs) else 0.0}
-    for prefix, r in (("synthetic", syn), ("colmap", col)):
-        for key in PERTURBED_METRICS:
-            row[f"{prefix}_{key}"] = None if r is None else getattr(r, key, None)
-        row[f"{prefix}_reason"] = None if r is None else r.reason
-    row["colmap_model_sizes"] = None if col is None else " ".join(str(k) for k in col.extra.get("model_sizes", []))
-    row["colmap_camera_residual_m"] = None if col is None else col.extra.get("camera_residual_m")
-    return row
+    return {**row, **oracle_columns(syn, col, PERTURBED_METRICS)}
 
 
 def add_deltas(rows: list[dict], reference: str = "unperturbed") -> None:
