@@ -196,3 +196,22 @@ def test_improve_acceptance_keeps_a_flat_surrogate_path_unmoved():
     assert not r.moved.any()
     paper = interval_optimise(surrogate, params_for(surrogate, "iswrp", 0.5), seed=1)
     assert paper.moved.all()                  # Alg. 3 as written moves every viewpoint of a flat surrogate
+
+
+def test_measured_neighbourhood_follows_the_campaigns_offset_covariance():
+    from wrp_eval.wrp.optimize import iteration_draws, offset_cholesky
+    rng = np.random.default_rng(5)
+    cov = np.array([[4.0, 1.2, 0.0], [1.2, 1.0, 0.0], [0.0, 0.0, 0.04]])      # anisotropic and correlated
+    dev = np.zeros((4000, 2, 4))
+    dev[:, 0, :3] = rng.multivariate_normal([0.3, 0.0, 0.0], cov, 4000)
+    dev[:, 1, :3] = rng.normal(0.0, 0.1, (4000, 3))
+    dev[::7, 0] = np.nan                                                    # views not taken are left out
+    chol = offset_cholesky(dev)
+    np.testing.assert_allclose(chol[0] @ chol[0].T, cov, atol=0.15)
+    p = WrpParams("swrp", 0.01, 1.0, np.full(2, 0.5), block_iterations=500, neighbourhood_samples=8,
+                  neighbour_cholesky=chol)
+    draws = iteration_draws(0, 0, 0, p).neighbour_offset.reshape(-1, 3)
+    np.testing.assert_allclose(np.cov(draws.T), cov, atol=0.25)             # about the candidate, not a ball
+    ball = iteration_draws(0, 0, 0, WrpParams("swrp", 0.01, 1.0, np.full(2, 0.5), block_iterations=500,
+                                              neighbourhood_samples=8)).neighbour_offset.reshape(-1, 3)
+    assert np.linalg.norm(ball, axis=1).max() <= 0.5 + 1e-12

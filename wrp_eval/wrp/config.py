@@ -57,6 +57,11 @@ class WrpSection(StrictModel):
     step_m: float | None = Field(None, gt=0, description="position moves in +-step per axis (none: the "
                                  "surrogate's training range, so that candidates stay where it has data)")
     step_fallback_m: float = Field(2.0, gt=0)
+    neighbourhood: Literal["measured", "ball"] = Field(
+        "measured", description="stage 2's samples around a candidate: drawn from the viewpoint's own position-offset "
+                                "distribution as the campaign measured it (anisotropic, correlated; issue 18), or "
+                                "uniform in the ball of r_s (the paper's 'circle'); measured falls back to the ball "
+                                "without a campaign")
     sample_radius: Literal["campaign", "fixed"] = Field("campaign", description="r_s per viewpoint: the "
                                                         "campaign's measured wind-induced offset spread, or fixed")
     sample_radius_m: float = Field(0.5, gt=0, description="r_s when fixed, or when no campaign is available")

@@ -39,6 +39,7 @@ from wrp_eval.wrp.optimize import (
     WrpParams,
     apply_offsets,
     interval_optimise,
+    offset_cholesky,
     sample_radii,
 )
 
@@ -55,6 +56,7 @@ class WrpInputs:
     campaign_dir: Path
     radius_m: np.ndarray
     radius_source: str
+    neighbour_cholesky: np.ndarray | None = None   # (n, 3, 3) m: the measured neighbourhoods, when a campaign is
 
 
 def oracle_error(ship: ScoredShip, path: FlightPath) -> dict:
@@ -83,9 +85,15 @@ def resolve_inputs(ctx: ExperimentContext, section: WrpSection, checkpoint: str 
         surrogate.check_path(len(path), digests, source="surrogate")
     radius = np.full(len(path), section.sample_radius_m)
     source = f"fixed {section.sample_radius_m} m"
+    if trials is None and (section.sample_radius == "campaign" or section.neighbourhood == "measured") \
+            and (camp / "campaign.json").is_file():
+        trials = load_campaign_trials(camp)
+    chol = None
+    if section.neighbourhood == "measured" and trials is not None and trials.deviation is not None:
+        if trials.n_views != len(path):
+            raise InputError(camp, f"campaign has {trials.n_views} viewpoints, the path {len(path)}")
+        chol = offset_cholesky(trials.deviation)
     if section.sample_radius == "campaign":
-        if trials is None and (camp / "campaign.json").is_file():
-            trials = load_campaign_trials(camp)
         if trials is not None:
             if trials.n_views != len(path):
                 raise InputError(camp, f"campaign has {trials.n_views} viewpoints, the path {len(path)}")
@@ -97,7 +105,9 @@ def resolve_inputs(ctx: ExperimentContext, section: WrpSection, checkpoint: str 
                       f"{section.sample_radius_m} m)")
         else:
             source = f"fixed {section.sample_radius_m} m (no campaign at {camp})"
-    return WrpInputs(path, surrogate, camp, radius, source)
+    if chol is not None:
+        source += f"; neighbourhoods: the measured position-offset covariance of {trials.n_trials} trials"
+    return WrpInputs(path, surrogate, camp, radius, source, chol)
 
 
 def safety_constraints(ctx: ExperimentContext, path: FlightPath) -> dict:
@@ -149,7 +159,7 @@ def run_optimize(ctx: ExperimentContext, section: WrpSection, out: Path, inputs:
                        block_iterations=section.block_iterations, stage2_batch=section.stage2_batch,
                        acceptance=section.acceptance, min_improvement_fraction=section.min_improvement_fraction,
                        improve_candidates=section.improve_candidates,
-                       **safety_constraints(ctx, path))
+                       neighbour_cholesky=inputs.neighbour_cholesky, **safety_constraints(ctx, path))
     seed = section.seed if section.seed is not None else ctx.run_seed
     result = interval_optimise(surrogate, params, seed=seed)
     table = result.table3()
@@ -167,6 +177,7 @@ def run_optimize(ctx: ExperimentContext, section: WrpSection, out: Path, inputs:
            "sample_radius_m": radius.tolist(), "step_m": params.step_m, "seed": seed,
            "yaw_range_deg": section.yaw_range_deg, "iterations": params.iterations,
            "attitude_samples": params.attitude_samples, "neighbourhood_samples": params.neighbourhood_samples,
+           "neighbourhood": "measured" if params.neighbour_cholesky is not None else "ball",
            "swrp_spread": params.swrp_spread, "acceptance": params.acceptance,
            "min_improvement_fraction": params.min_improvement_fraction,
            "surrogate": {"path_digest": surrogate.meta.path_digest, "metrics": surrogate.meta.metrics.get("test")},

@@ -40,7 +40,8 @@ from wrp_eval.surrogate.model import Surrogate, ViewQuery
 class WrpParams:
     """kind: 'iswrp' | 'swrp'; threshold_m: t (m of error); e_original_m: E_original (m); iterations: K;
     attitude_samples: Alg. 4's sample count; yaw_range_rad: Y; neighbourhood_samples: M; step_m: position
-    move bound per axis (m); sample_radius_m: r_s per viewpoint (n_views,) m; swrp_spread: 'variance'|'std';
+    move bound per axis (m); sample_radius_m: r_s per viewpoint (n_views,) m (the ball neighbourhood);
+    swrp_spread: 'std' | 'variance';
     block_iterations: iterations per draw/score batch; stage2_batch: stage-1 survivors scored per batch."""
 
     kind: str
@@ -67,6 +68,9 @@ class WrpParams:
     base_positions: np.ndarray | None = None
     min_altitude_m: float = 0.0
     no_fly_bounds: np.ndarray | None = None
+    # the measured neighbourhood (issue 18): per viewpoint the Cholesky factor (n, 3, 3) m of the campaign's
+    # position-offset covariance; neighbours are drawn from N(candidate, L L^T). None: the uniform ball of r_s
+    neighbour_cholesky: np.ndarray | None = None
 
     def feasible(self, view: int, offsets: np.ndarray) -> np.ndarray:
         """(B,) bool: position offsets (B, 3) of ``view`` that keep it flyable (the ship stage's one predicate,
@@ -104,10 +108,13 @@ def iteration_draws(seed: int, view: int, block: int, params: WrpParams) -> Iter
     position = rng.uniform(-params.step_m, params.step_m, size=(b, 3))
     yaw = rng.uniform(-y, y, size=(b, a))
     direction = rng.normal(size=(b, m, 3))
-    direction /= np.linalg.norm(direction, axis=-1, keepdims=True)
-    radius = params.sample_radius_m[view] * rng.uniform(size=(b, m, 1)) ** (1.0 / 3.0)   # uniform in the ball
+    if params.neighbour_cholesky is not None:   # where the flight really puts the drone: anisotropic, correlated
+        neighbour = direction @ np.asarray(params.neighbour_cholesky[view]).T
+    else:
+        direction /= np.linalg.norm(direction, axis=-1, keepdims=True)
+        neighbour = direction * params.sample_radius_m[view] * rng.uniform(size=(b, m, 1)) ** (1.0 / 3.0)  # ball
     neighbour_yaw = rng.uniform(-y, y, size=(b, m, a))
-    return IterationDraws(position, yaw, direction * radius, neighbour_yaw)
+    return IterationDraws(position, yaw, neighbour, neighbour_yaw)
 
 
 def best_attitude(query: ViewQuery, view: int, positions: np.ndarray, yaws: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
@@ -281,6 +288,20 @@ def apply_offsets(path, offsets: np.ndarray, note: dict | None = None):
     yaw = np.angle(np.exp(1j * (np.asarray(path.yaw) + offsets[:, 3])))
     meta = {**path.metadata, **(note or {})}
     return replace(path, positions=np.asarray(path.positions) + offsets[:, :3], yaw=yaw, metadata=meta)
+
+
+def offset_cholesky(deviation: np.ndarray, floor_m: float = 1e-3) -> np.ndarray:
+    """Per viewpoint the Cholesky factor (n, 3, 3) m of the position-offset covariance over a campaign's
+    trials (deviation (n_trials, n_views, 4), NaN where a view was not taken), with ``floor_m``^2 added on the
+    diagonal (a view flown identically in every trial still gets a proper, tiny neighbourhood)."""
+    pos = np.asarray(deviation, dtype=float)[..., :3]
+    ok = np.all(np.isfinite(pos), axis=-1)
+    count = ok.sum(axis=0)
+    filled = np.where(ok[..., None], pos, 0.0)
+    mean = filled.sum(axis=0) / np.maximum(count, 1)[:, None]
+    centred = np.where(ok[..., None], pos - mean, 0.0)
+    cov = np.einsum("tvi,tvj->vij", centred, centred) / np.maximum(count - 1, 1)[:, None, None]
+    return np.linalg.cholesky(cov + floor_m ** 2 * np.eye(3))
 
 
 def sample_radii(deviation: np.ndarray, quantile: float) -> np.ndarray:
