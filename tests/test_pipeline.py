@@ -19,7 +19,7 @@ campaign:
   perturbation: {design: box, position_half_width_m: 1.0, yaw_half_width_deg: 10.0}
   backend: {kind: local, workers: 1}
 surrogate: {epochs: 20, use_failed_trials: true}   # the fishing path registers 8-10 of 17 views: most trials fail
-wrp: {iterations: 50, evaluate: {n_trials: 4}}
+wrp: {iterations: 50, evaluate: {n_trials: 4, placebos: 2}}
 """
 
 
@@ -44,6 +44,10 @@ def test_run_writes_report_recording_and_missions_and_is_reproducible(tmp_path, 
         assert (out / "missions" / f"{name}.plan").is_file() and (out / "missions" / f"{name}.kmz").is_file()
     first = json.loads((out / "run_summary.json").read_text())
     assert first["campaign"]["trials"] == 12 and len(first["evaluate"]["paths"]) == 3
+    # the verdict: every WRP against its placebos, and the path to fly, in the summary and the report
+    assert {v["placebos_flown"] for v in first["evaluate"]["robustness"].values()} == {2}
+    assert first["evaluate"]["recommended_path"] in ("initial", "iswrp", "swrp")
+    assert f"Path to fly: {first['evaluate']['recommended_path']}" in report
 
     assert main(["run", str(cfg)]) == 0
     second = json.loads((out / "run_summary.json").read_text())

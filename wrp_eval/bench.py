@@ -29,6 +29,7 @@ BENCH_GROUPS: dict[str, str] = {
     "oracle": "wrp_eval.recon.bench",
     "surrogate": "wrp_eval.surrogate.bench",
     "wrp": "wrp_eval.wrp.bench",
+    "robustness": "wrp_eval.wrp.robustness_bench",
 }
 
 

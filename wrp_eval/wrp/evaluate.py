@@ -127,8 +127,9 @@ def robustness_verdict(gains: np.ndarray, placebo_means: np.ndarray, rng: np.ran
     mean = lambda x, axis: x.mean(axis=axis)  # noqa: E731
     gain = float(gains.mean()) if gains.size else float("nan")
     ci = _ci((gains,), mean, rng, resamples, confidence) if gains.size > 2 else None
+    flown = len(placebo_means)
     placebo = np.asarray(placebo_means, dtype=float)
-    placebo = placebo[np.isfinite(placebo)]
+    placebo = placebo[np.isfinite(placebo)]   # a placebo without a paired success has no gain
     p95 = float(np.percentile(placebo, 95)) if placebo.size else float("nan")
     reasons = []
     if ci is None:
@@ -137,12 +138,13 @@ def robustness_verdict(gains: np.ndarray, placebo_means: np.ndarray, rng: np.ran
         reasons.append(f"the gain's {100 * confidence:g} % CI [{1e3 * ci[0]:+.2f}, {1e3 * ci[1]:+.2f}] mm "
                        "does not exclude 0")
     if not placebo.size:
-        reasons.append("no placebo paths were flown")
+        reasons.append("no placebo paths were flown" if not flown else
+                       f"none of the {flown} placebo paths has a trial that succeeded on it and on the initial path")
     elif not gain > p95:
         reasons.append(f"the gain {1e3 * gain:+.2f} mm does not exceed the placebo 95th percentile "
                        f"{1e3 * p95:+.2f} mm ({placebo.size} placebos)")
     return {"gain_m": gain, "gain_ci_m": ci, "paired_trials": int(gains.size),
-            "placebo_gains_m": [float(x) for x in placebo], "placebo_gain_p95_m": p95,
+            "placebos_flown": flown, "placebo_gains_m": [float(x) for x in placebo], "placebo_gain_p95_m": p95,
             "recommended": not reasons, "reason": "; ".join(reasons) or
             f"the gain {1e3 * gain:+.2f} mm is above 0 at {100 * confidence:g} % and beyond every placebo but "
             f"the top 5 %"}

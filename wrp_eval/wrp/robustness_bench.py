@@ -1,0 +1,58 @@
+"""``wrp-eval bench --only robustness``: does a WRP beat its placebos? (issue 18, item 4)
+
+The main job's evaluation on the quickstart config (experiments/quickstart.yaml: its campaign, surrogate, ISWRP
+and SWRP, then the initial path, both WRPs and ``wrp.evaluate.placebos`` placebo paths per WRP flown under the
+same winds), written to a temporary folder. ~12 minutes on the 2-core machine, most of it the placebo flights.
+
+Records per WRP kind (``.iswrp`` / ``.swrp``): ``wrp.robustness_gain_mm`` ([E_wind - E_windfree](initial) -
+[E_wind - E_windfree](WRP), mean over paired trials), ``wrp.robustness_gain_ci_low_mm`` (its bootstrap CI's
+lower bound), ``wrp.placebo_gain_p95_mm`` (the placebos' 95th percentile), ``wrp.recommended`` (1 when the CI
+excludes 0 and the gain beats the placebo 95th percentile, else 0), and ``wrp.evaluate_s``.
+"""
+
+from __future__ import annotations
+
+import tempfile
+import time
+from pathlib import Path
+
+from wrp_eval.bench_record import BenchRecord
+from wrp_eval.campaign.jobs import campaign_job
+from wrp_eval.experiment import ExperimentContext
+from wrp_eval.surrogate.train import train_from_campaign
+from wrp_eval.wrp.jobs import evaluate_job
+
+CONFIG = Path(__file__).resolve().parents[2] / "experiments" / "quickstart.yaml"
+
+
+def run_bench() -> list[BenchRecord]:
+    ctx = ExperimentContext.load(CONFIG)
+    with tempfile.TemporaryDirectory(prefix="wrp-robustness-") as tmp:
+        out = Path(tmp)
+        start = time.perf_counter()
+        campaign_job(ctx, out_dir=out / "campaign", progress=False)
+        trained, trials, _ = train_from_campaign(ctx, out / "campaign", out / "surrogate")
+        doc = evaluate_job(ctx, out / "evaluate", campaign=out / "campaign", quiet=True,
+                           surrogate=trained.surrogate, trials=trials)
+        seconds = time.perf_counter() - start
+    r2 = trained.metrics["test"]["r2"]
+    records = []
+    for kind, v in doc["robustness"].items():
+        table = doc["wrp"][kind]
+        note = (f"quickstart, {doc['paths'][0]['trials']} winds per path, {len(v['placebo_gains_m'])} placebos; "
+                f"{table['offset_rate_pct']:.0f} % of the viewpoints moved; surrogate held-out R^2 {r2:.3f}; "
+                f"verdict: {'recommended' if v['recommended'] else v['reason']}")
+        ci = v["gain_ci_m"]
+        records += [
+            BenchRecord(f"wrp.robustness_gain_mm.{kind}", 1e3 * v["gain_m"], "mm", None, None, note),
+            BenchRecord(f"wrp.robustness_gain_ci_low_mm.{kind}", 1e3 * ci[0] if ci else float("nan"), "mm",
+                        "issue 18: > 0 to recommend", 0.0, note),
+            BenchRecord(f"wrp.placebo_gain_p95_mm.{kind}", 1e3 * v["placebo_gain_p95_m"], "mm",
+                        "issue 18: the gain must exceed it", None, note),
+            BenchRecord(f"wrp.recommended.{kind}", float(v["recommended"]), "bool", None, None, note),
+        ]
+    records.append(BenchRecord("wrp.evaluate_s", seconds, "s", None, None,
+                               f"campaign {ctx.config.campaign.n_trials} trials + training + ISWRP/SWRP + "
+                               f"{len(doc['paths'])} paths and their placebos flown; recommended path: "
+                               f"{doc['recommended_path']}"))
+    return records
