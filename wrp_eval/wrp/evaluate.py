@@ -200,8 +200,9 @@ def summarise(paths: list[PathTrials], seed: int, resamples: int, confidence: fl
     robustness = {}
     for p in paths[1:]:
         gains = robustness_gains(base, p, windfree_m[base.name], windfree_m[p.name])
-        placebo_means = [robustness_gains(base, q, windfree_m[base.name], windfree_m[q.name]).mean()
-                         if q.trial_id.size else np.nan for q in (placebos or {}).get(p.name, [])]
+        placebo_gains = [robustness_gains(base, q, windfree_m[base.name], windfree_m[q.name])
+                         for q in (placebos or {}).get(p.name, [])]
+        placebo_means = [g.mean() if g.size else np.nan for g in placebo_gains]
         robustness[p.name] = robustness_verdict(gains, np.array(placebo_means), rng, resamples, confidence)
         robustness[p.name]["windfree_error_m"] = windfree_m[p.name]
     out["windfree_error_m"] = {k: v for k, v in windfree_m.items()}
