@@ -34,9 +34,9 @@ def test_run_writes_report_recording_and_missions_and_is_reproducible(tmp_path, 
     assert "rerun logs/pipeline-test/run.rrd" in printed and "logs/pipeline-test/report.md" in printed
     report = (out / "report.md").read_text()
     for heading in ("## Ship and path", "## Monte Carlo campaign", "## Surrogate", "## ISWRP and SWRP",
-                    "## Robustness", "## Missions"):
+                    "## Robustness", "## Per-view risk", "## Missions"):
         assert heading in report
-    for png in ("figures/ship_path.png", "figures/wind_field.png", "figures/offsets.png",
+    for png in ("figures/ship_path.png", "figures/wind_field.png", "figures/offsets.png", "figures/view_risk.png",
                 "surrogate/parity.png", "evaluate/boxplot.png"):
         assert (out / png).stat().st_size > 1000, png
     assert sorted(read_trial_ids(out / "run.rrd")) == list(range(12))

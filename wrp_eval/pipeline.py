@@ -26,6 +26,7 @@ from wrp_eval.ship.rerun_log import save_ship_recording
 from wrp_eval.study.runner import run_study
 from wrp_eval.surrogate.train import CHECKPOINT_NAME, train_from_campaign
 from wrp_eval.wrp.jobs import EVALUATED_PATHS, evaluate_job
+from wrp_eval.wrp.risk import save_risk_recording, view_risk
 
 
 class Step:
@@ -100,13 +101,17 @@ def run_pipeline(ctx: ExperimentContext, *, quiet: bool = True, smallest: bool =
         summary["missions"] = export_missions(ctx)
 
     with Step(timings, "report", "report.md, figures and run.rrd"):
-        parts = [out / "ship.rrd", out / "plan.rrd"]
+        risk = view_risk(ctx.scored_ship, path, trials.offsets)
+        save_risk_recording(path, risk, out / "risk.rrd", recording_id=campaign_recording_id(path))
+        parts = [out / "ship.rrd", out / "plan.rrd", out / "risk.rrd"]
         if (campaign_dir / "campaign.rrd").is_file():
             parts.append(campaign_dir / "campaign.rrd")
         merge_recordings(parts, folders.recording)
         timings["total"] = time.perf_counter() - job_start
         summary["timings_s"] = timings
-        report = write_report(ctx, path, summary, trials)
+        summary["view_risk"] = {"risk_m": risk.risk_m.tolist(), "p_missed": risk.p_missed.tolist(),
+                                "loss_m": risk.loss_m.tolist(), "base_error_m": risk.base_error_m}
+        report = write_report(ctx, path, summary, trials, risk)
     timings["total"] = time.perf_counter() - job_start
     write_json_atomic(out / "run_summary.json", summary)
     summary["report"] = str(report)

@@ -18,6 +18,7 @@ from wrp_eval.experiment import ExperimentContext
 from wrp_eval.surrogate.data import TrialData
 from wrp_eval.wind.field import sample_mean_field
 from wrp_eval.wind.outputs import quiver_png
+from wrp_eval.wrp.risk import ViewRisk
 
 # Paper anchors (wind-resistance-aerial-path-planning, Sec. 4.1 and Tables 3, 4, 7; stylized ship).
 PAPER = {
@@ -39,8 +40,9 @@ def _savefig(fig, file: Path) -> Path:
     return file
 
 
-def ship_path_figure(mesh, path, file: Path) -> Path:
-    """The ship mesh (shaded), the tour and the viewpoints (surface blue, transition orange)."""
+def ship_path_figure(mesh, path, file: Path, risk_m: np.ndarray | None = None) -> Path:
+    """The ship mesh (shaded), the tour and the viewpoints (surface blue, transition orange; with ``risk_m``
+    (n,) each viewpoint coloured by its risk, mm, :mod:`wrp_eval.wrp.risk`)."""
 
     fig = Figure(figsize=(11, 6))
     ax = fig.add_subplot(projection="3d")
@@ -51,9 +53,14 @@ def ship_path_figure(mesh, path, file: Path) -> Path:
     p = path.positions
     ax.plot(p[:, 0], p[:, 1], p[:, 2], "-", color="0.4", lw=0.8)
     transition = path.kind == 1
-    ax.scatter(*p[~transition].T, s=12, c="tab:blue", label="surface views", depthshade=False)
-    if transition.any():
-        ax.scatter(*p[transition].T, s=18, c="tab:orange", label="transition views", depthshade=False)
+    if risk_m is not None:
+        dots = ax.scatter(*p.T, s=24, c=1e3 * np.nan_to_num(risk_m), cmap="inferno_r", depthshade=False,
+                          label="viewpoints (colour: risk)")
+        fig.colorbar(dots, ax=ax, shrink=0.6, label="risk: error std the view adds when missed (mm)")
+    else:
+        ax.scatter(*p[~transition].T, s=12, c="tab:blue", label="surface views", depthshade=False)
+        if transition.any():
+            ax.scatter(*p[transition].T, s=18, c="tab:orange", label="transition views", depthshade=False)
     lo, hi = p.min(0), p.max(0)
     centre, half = (lo + hi) / 2, (hi - lo).max() / 2
     ax.set_xlim(centre[0] - half, centre[0] + half)
@@ -110,12 +117,15 @@ def _design_text(design: str) -> str:
     return f"commanded offsets from the campaign's `{design}` perturbation design"
 
 
-def write_report(ctx: ExperimentContext, path, summary: dict, trials: TrialData) -> Path:
+def write_report(ctx: ExperimentContext, path, summary: dict, trials: TrialData, risk: ViewRisk | None = None) -> Path:
     """Figures under ``<run>/figures`` and ``<run>/report.md``; returns the report's path. path: the planned
-    Path; summary: the run summary so far; trials: the campaign's trials (as the surrogate was trained on)."""
+    Path; summary: the run summary so far; trials: the campaign's trials (as the surrogate was trained on);
+    risk: the per-view risk map (:mod:`wrp_eval.wrp.risk`), None: no risk section."""
     config, ship, out = ctx.config, ctx.ship, ctx.folders.root
     figures = out / "figures"
     ship_path_figure(ship.mesh, path, figures / "ship_path.png")
+    if risk is not None:
+        ship_path_figure(ship.mesh, path, figures / "view_risk.png", risk.risk_m)
     x, y, z, velocity = sample_mean_field(config.wind, ship.particulars, ctx.config_dir)
     figures.mkdir(parents=True, exist_ok=True)
     quiver_png(figures / "wind_field.png", x, y, z, velocity, config.wind.source)
@@ -235,6 +245,19 @@ def write_report(ctx: ExperimentContext, path, summary: dict, trials: TrialData)
         "",
         "![error distributions](evaluate/boxplot.png)",
         "",
+    ]
+    if risk is not None:
+        top = np.argsort(-np.nan_to_num(risk.risk_m))[:5]
+        lines += ["## Per-view risk (what spreads the error)", "",
+                  "Each viewpoint's risk: what missing it costs the wind-free error (the oracle, the path without "
+                  "it) x sqrt(p (1 - p)), p the share of the campaign's flights that did not take it (returns "
+                  "home on the wind limit or the battery). A first-order map: missed views come in runs.", "",
+                  "![per-view risk](figures/view_risk.png)", "",
+                  "| view | risk (mm) | missed in | cost when missed (mm) |", "|---|---|---|---|"]
+        lines += [f"| {i} | {1e3 * risk.risk_m[i]:.2f} | {100 * risk.p_missed[i]:.0f} % | "
+                  f"{1e3 * risk.loss_m[i]:+.2f} |" for i in top]
+        lines += ["", "In the recording: entity `risk/viewpoints`.", ""]
+    lines += [
         "## Missions",
         "",
     ]
