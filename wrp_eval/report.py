@@ -216,12 +216,13 @@ def write_report(ctx: ExperimentContext, path, summary: dict, trials: TrialData,
         lines.append(f"| {row['path']} | {row['mean_error_diff_m']:+.4f} | {_ci(row.get('mean_error_diff_ci'))} | "
                      f"{row['both_succeeded']} | {100 * row['failure_rate_diff']:+.1f} points |")
     if "robustness" in ev:
-        lines += ["", "| path | wind-free error (m) | P(meets spec) | CI | views not taken (mean) |",
-                  "|---|---|---|---|---|"]
+        lines += ["", "| path | wind-free error (m) | P(meets spec) | CI | views not taken (mean) | expected sorties |",
+                  "|---|---|---|---|---|---|"]
         for row in ev["paths"]:
             lines.append(f"| {row['path']} | {fmt(ev['windfree_error_m'].get(row['path']), 4)} | "
                          f"{fmt(row.get('p_meets_spec'), 3)} | {_ci(row.get('p_meets_spec_ci'))} | "
-                         f"{fmt(row.get('mean_views_not_taken'), 2)} |")
+                         f"{fmt(row.get('mean_views_not_taken'), 2)} | {fmt(row.get('expected_sorties'), 3)} "
+                         f"{_ci(row.get('expected_sorties_ci'))} |")
         spec = ev["paths"][0]
         lines += ["", f"Spec: error <= {fmt(spec.get('spec_error_m'), 4)} m and completeness >= "
                       f"{fmt(spec.get('spec_completeness'), 2)}.", "",

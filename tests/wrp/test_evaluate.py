@@ -69,7 +69,8 @@ def test_evaluate_flies_all_paths_with_the_same_winds(tmp_path):
         assert len(verdict["placebo_gains_m"]) == 2 and isinstance(verdict["recommended"], bool)
         assert verdict["recommended"] or verdict["reason"]
     assert doc["recommended_path"] in ("initial", "iswrp", "swrp")
-    assert all("p_meets_spec" in p and "mean_views_not_taken" in p for p in doc["paths"])
+    assert all("p_meets_spec" in p and "mean_views_not_taken" in p and p["expected_sorties"] >= 1.0
+               for p in doc["paths"])
     assert (tmp_path / "ev" / "boxplot.png").stat().st_size > 0
     assert set(doc["wrp"]) == {"iswrp", "swrp"}
 
@@ -113,3 +114,11 @@ def test_summary_recommends_nothing_when_no_wrp_beats_its_placebos():
                     {"iswrp": placebo})
     assert doc["recommended_path"] == "initial" and not doc["robustness"]["iswrp"]["recommended"]
     assert doc["paths"][0]["p_meets_spec"] == 1.0      # no completeness recorded: the error alone decides
+
+
+def test_expected_sorties_cover_the_views_flights_leave():
+    p = PathTrials("a", np.arange(4), np.full(4, 0.03), np.zeros(4, bool), np.full(4, 0.97),
+                   np.array([0.0, 10.0, 20.0, 10.0]), 40)
+    s = path_summary(p, np.random.default_rng(0), 200, 0.9)
+    assert s["mean_views_not_taken"] == 10.0
+    assert s["expected_sorties"] == pytest.approx(40 / 30)      # a flight takes 30 of 40 views on average

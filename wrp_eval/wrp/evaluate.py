@@ -21,7 +21,9 @@ Issue 18 adds what tells a WRP's gain from chance (``robustness`` of :func:`summ
 * the **verdict**: a WRP is recommended only when its gain's CI excludes 0 (lower bound > 0) AND its mean gain
   exceeds the placebos' 95th percentile; otherwise the initial path is kept and the reason is stated;
 * per path the probability of meeting a reconstruction spec (error <= ``spec_error_m`` and completeness >=
-  ``spec_completeness``; a failed trial does not meet it) and the mean number of views not taken, with CIs.
+  ``spec_completeness``; a failed trial does not meet it), the mean number of views not taken and the expected
+  sorties (n_views / the mean views a flight takes: the flights a mission needs when every sortie is cut short
+  as these were), with CIs.
 """
 
 from __future__ import annotations
@@ -50,6 +52,7 @@ class PathTrials:
     failed: np.ndarray
     completeness: np.ndarray | None = None
     views_not_taken: np.ndarray | None = None
+    n_views: int | None = None
 
 
 def read_trials(name: str, folder: str | Path) -> PathTrials:
@@ -65,7 +68,7 @@ def read_trials(name: str, folder: str | Path) -> PathTrials:
         return table.column(name).to_numpy(zero_copy_only=False).astype(float)[order]
     return PathTrials(name, table.column("trial_id").to_numpy()[order], col("error_m"),
                       table.column("failed").to_numpy(zero_copy_only=False).astype(bool)[order],
-                      col("completeness"), not_taken[order])
+                      col("completeness"), not_taken[order], int(flown.shape[1]))
 
 
 def _ci(samples, statistic, rng, resamples: int, confidence: float, paired: bool = False) -> list | None:
@@ -108,6 +111,13 @@ def path_summary(p: PathTrials, rng: np.random.Generator, resamples: int, confid
     if p.views_not_taken is not None:
         out["mean_views_not_taken"] = float(p.views_not_taken.mean()) if p.views_not_taken.size else float("nan")
         out["mean_views_not_taken_ci"] = _ci((p.views_not_taken,), mean, rng, resamples, confidence)
+        if p.n_views:
+            # every sortie takes on average n - (views not taken) views: the whole mission needs n / that
+            taken = p.n_views - p.views_not_taken
+            out["expected_sorties"] = float(p.n_views / taken.mean()) if taken.size and taken.mean() > 0 \
+                else float("inf")
+            out["expected_sorties_ci"] = _ci((taken,), lambda x, axis: p.n_views / x.mean(axis=axis), rng,
+                                             resamples, confidence) if taken.size > 2 and taken.min() > 0 else None
     return out
 
 
