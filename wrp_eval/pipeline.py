@@ -90,7 +90,8 @@ def run_pipeline(ctx: ExperimentContext, *, quiet: bool = True, smallest: bool =
 
     with Step(timings, "surrogate", "train the CNN surrogate on the campaign"):
         trained, trials, _ = train_from_campaign(ctx, campaign_dir, folders.surrogate, progress=not quiet)
-        summary["surrogate"] = trained.metrics["test"]
+        summary["surrogate"] = {**trained.metrics["test"],
+                                "physical_variance_share": trained.metrics.get("physical_variance_share")}
 
     with Step(timings, "wrp", "ISWRP and SWRP, then the three paths flown under the same winds"):
         summary["evaluate"] = evaluate_job(ctx, folders.evaluate, checkpoint=folders.surrogate / CHECKPOINT_NAME,

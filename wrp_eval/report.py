@@ -173,6 +173,9 @@ def write_report(ctx: ExperimentContext, path, summary: dict, trials: TrialData,
         "",
         "![flown offsets](figures/offsets.png)",
         "",
+        *([f"Share of the flown offsets' variance that the flights made (not commanded): position "
+           f"{fmt(share['position'], 3)}, yaw {fmt(share['yaw'], 3)} (issue 18 target >= 0.9).", ""]
+          if (share := sur.get("physical_variance_share")) else []),
         "## Surrogate (paper Sec. 4.1)",
         "",
         "| held-out test trials | ours | paper |",

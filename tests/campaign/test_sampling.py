@@ -113,3 +113,22 @@ def test_solo_views_move_on_their_own_and_leave_the_rest_of_the_trial_unchanged(
     chosen = [np.flatnonzero(np.any(commanded_offsets(plain, 3, k, 30) != commanded_offsets(solo, 3, k, 30), 1))
               for k in range(16)]
     assert np.unique(np.concatenate(chosen)).size >= 15
+
+
+def test_physical_design_targets_a_short_run_of_views_in_a_share_of_trials():
+    s = section(perturbation={"design": "physical", "targeted_share": 0.25, "targeted_max_views": 4,
+                              "targeted_position_sigma_m": 1.5, "targeted_yaw_sigma_deg": 8.0})
+    offs = np.stack([commanded_offsets(s, 7, k, 40) for k in range(400)])          # (400, 40, 4)
+    moved = np.any(offs != 0, axis=2)                                               # (400, 40)
+    targeted = moved.any(axis=1)
+    assert 0.18 < targeted.mean() < 0.32                                            # about a quarter
+    for row in moved[targeted]:                                                     # one run of 1..4 views
+        idx = np.flatnonzero(row)
+        assert 1 <= len(idx) <= 4 and np.all(np.diff(idx) == 1)
+    values = offs[moved]
+    assert 1.2 < values[:, :3].std() < 1.8 and 6.0 < np.degrees(values[:, 3]).std() < 10.0
+    np.testing.assert_array_equal(commanded_offsets(s, 7, 11, 40), offs[11])         # pure function of the trial
+    # the targets have their own stream: the wind draws are those of an untargeted campaign
+    plain = section(perturbation={"design": "physical", "targeted_share": 0.0})
+    assert not np.any([commanded_offsets(plain, 7, k, 40) for k in range(50)])
+    assert draw_wind(s, 7, 3) == draw_wind(plain, 7, 3)

@@ -43,3 +43,16 @@ def test_trial_data_shape_checks():
 def test_planned_pose_features_hand_computed():
     f = planned_pose_features(np.array([[1.0, 2, 3], [4, 5, 6]]), np.array([0.0, np.pi / 2]), np.array([-0.1, 0]))
     np.testing.assert_allclose(f, [[1, 2, 3, 1, 0, -0.1, 0], [4, 5, 6, 0, 1, 0, 1]], atol=1e-12)
+
+
+def test_physical_share_is_the_flights_part_of_the_offset_variance():
+    from wrp_eval.surrogate.data import physical_variance_share
+    rng = np.random.default_rng(0)
+    dev = rng.normal(0.0, 1.0, (500, 10, 4))
+    commanded = np.zeros((500, 10, 4))
+    commanded[:100, 2] = rng.normal(0.0, 1.0, (100, 4))            # one targeted view in a fifth of the trials
+    data = TrialData(commanded + dev, np.zeros(500), np.zeros(500, bool), deviation=dev)
+    share = physical_variance_share(data)
+    expected = 1.0 / (1.0 + 0.2 * 0.1)                               # commanded variance: 1 in 2 % of the cells
+    assert share["position"] == pytest.approx(expected, abs=0.02) and share["yaw"] == pytest.approx(expected, abs=0.03)
+    assert physical_variance_share(TrialData(dev, np.zeros(500), np.zeros(500, bool))) is None

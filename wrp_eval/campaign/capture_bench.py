@@ -66,7 +66,7 @@ def _campaign(ctx: ExperimentContext, speed: float, out: Path):
                             "wind": {**doc["campaign"]["wind"], "speed_10m_m_s": float(speed),
                                      "direction_deg": {"dist": "uniform", "low": 0.0, "high": 360.0},
                                      "turbulence": {"severity": "moderate", "sigma_w_mps": None}},
-                            "perturbation": {"design": "physical"}})
+                            "perturbation": {"design": "physical", "targeted_share": 0.0}})
     doc["campaign"]["backend"].update({"kind": "local", "workers": 2})
     doc["campaign"]["outputs"].update({"dir": str(out), "rerun": False})
     summary = campaign_job(ctx.with_config(ExperimentConfig.model_validate(doc)), progress=False)

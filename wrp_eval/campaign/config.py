@@ -128,8 +128,11 @@ class Perturbation(StrictModel):
 
     design ``physical`` (the default): the viewpoints are flown as planned (commanded offsets 0) and the flown
     offsets are exactly the flight's (no extra disturbance, whatever ``flown_disturbance`` says): everything in
-    a capture comes from the flight (navigation, gimbal, wind, capture mode, ship motion). ``none``: commanded
-    offsets 0, with the paper's extra disturbance of the flown offsets.
+    a capture comes from the flight (navigation, gimbal, wind, capture mode, ship motion); except that in a
+    ``targeted_share`` of the trials a run of 1..``targeted_max_views`` consecutive viewpoints is commanded off
+    the plan (Gaussian, ``targeted_position_sigma_m`` / ``targeted_yaw_sigma_deg``), so that single viewpoints
+    and short segments move on their own in the data, as the optimiser's queries do (issue 18).
+    ``none``: commanded offsets 0, with the paper's extra disturbance of the flown offsets.
 
     design ``box``: per viewpoint (dx, dy, dz, dyaw) uniform in [-half_width, +half_width], drawn as a
     scrambled Sobol sequence (``sampler: sobol``, extendable: trial k is point k whatever the trial count) or a
@@ -158,6 +161,17 @@ class Perturbation(StrictModel):
     solo_views: int = Field(0, ge=0, description="design common: viewpoints per trial with an independent "
                             "offset uniform in the box instead of the common one")
     flown_disturbance: float = Field(0.2, ge=0, le=1)
+    targeted_share: float = Field(0.2, ge=0, le=1, description="design physical: the share of trials in which a "
+                                  "short run of consecutive viewpoints is commanded off the plan (issue 18: the "
+                                  "optimiser's one-viewpoint queries must lie inside the training data)")
+    targeted_max_views: int = Field(5, ge=1, description="design physical: the longest run of targeted viewpoints "
+                                    "(its length uniform in 1..this)")
+    targeted_position_sigma_m: float = Field(1.5, ge=0, description="design physical: std per axis (m) of a "
+                                             "targeted viewpoint's commanded offset: twice the consumer GNSS "
+                                             "error the flights carry (1.5 m 95 % -> 0.77 m std)")
+    targeted_yaw_sigma_deg: float = Field(8.0, ge=0, le=90, description="design physical: std (deg) of a "
+                                          "targeted viewpoint's commanded yaw offset (the flights' own: ~1.6 deg "
+                                          "median; the optimiser moves yaw within +-20 deg)")
 
 
 class Backend(StrictModel):

@@ -12,6 +12,7 @@ others. Streams:
   and, for the common design, the per-viewpoint disturbance of trial k (child (k,)).
 * ``DISTURB_STREAM``: the paper's extra random disturbance of the flown offsets.
 * ``FLIGHT_STREAM``: seeds handed to the flight and the oracle for any randomness of their own.
+* ``TARGET_STREAM``: the physical design's targeted trials (whether, which run of viewpoints, their offsets).
 """
 
 from __future__ import annotations
@@ -26,7 +27,7 @@ from wrp_eval.campaign.config import CampaignSection, Choice, Normal, Uniform
 from wrp_eval.wind.config import WindSection
 from wrp_eval.streams import flight_generators
 
-WIND_STREAM, PERTURB_STREAM, DISTURB_STREAM, FLIGHT_STREAM = 0, 1, 2, 3
+WIND_STREAM, PERTURB_STREAM, DISTURB_STREAM, FLIGHT_STREAM, TARGET_STREAM = 0, 1, 2, 3, 4
 # child index of each wind input within the trial's WIND_STREAM children
 _WIND_INPUTS = ("speed_10m_m_s", "direction_deg", "severity", "sigma_w_mps", "file", "time", "seed")
 
@@ -132,10 +133,28 @@ def unit_design_point(sampler: str, root_seed: int, n_trials: int, trial_id: int
     return engine.random(1)[0]
 
 
+def targeted_offsets(section: CampaignSection, root_seed: int, trial_id: int, n_views: int) -> np.ndarray:
+    """(n_views, 4) the physical design's commanded offsets of trial ``trial_id``: zero, except in a
+    ``targeted_share`` of the trials a run of 1..``targeted_max_views`` consecutive viewpoints with Gaussian
+    offsets (position std per axis, yaw std; see :class:`wrp_eval.campaign.config.Perturbation`)."""
+    pert = section.perturbation
+    out = np.zeros((n_views, 4))
+    rng = trial_rng(root_seed, TARGET_STREAM, trial_id)
+    if n_views == 0 or rng.random() >= pert.targeted_share:
+        return out
+    length = int(rng.integers(1, min(pert.targeted_max_views, n_views) + 1))
+    start = int(rng.integers(0, n_views - length + 1))
+    sigma = np.array([pert.targeted_position_sigma_m] * 3 + [np.radians(pert.targeted_yaw_sigma_deg)])
+    out[start:start + length] = rng.normal(0.0, 1.0, size=(length, 4)) * sigma
+    return out
+
+
 def commanded_offsets(section: CampaignSection, root_seed: int, trial_id: int, n_views: int) -> np.ndarray:
     """(n_views, 4) commanded offsets (dx, dy, dz m, dyaw rad) of trial ``trial_id`` from the planned views."""
     pert = section.perturbation
-    if pert.design in ("physical", "none"):
+    if pert.design == "physical":
+        return targeted_offsets(section, root_seed, trial_id, n_views)
+    if pert.design == "none":
         return np.zeros((n_views, 4))
     half = np.array([pert.position_half_width_m] * 3 + [np.radians(pert.yaw_half_width_deg)])
     if pert.design == "common":

@@ -60,6 +60,22 @@ class TrialData:
             raise InputError(self.source or "trial data", "planned_pose has a different number of viewpoints")
 
 
+def physical_variance_share(data: TrialData) -> dict[str, float] | None:
+    """How much of the flown offsets' variance the flights made (issue 18): per component group, the summed
+    variance of the wind-induced part (flown - commanded) over the summed variance of the flown offsets, over
+    every trial x viewpoint taken: ``position`` (x, y, z, m^2 / m^2) and ``yaw``. None without a deviation."""
+    if data.deviation is None:
+        return None
+    flown = np.asarray(data.offsets, dtype=float).reshape(-1, 4)
+    dev = np.asarray(data.deviation, dtype=float).reshape(-1, 4)
+    ok = np.all(np.isfinite(flown), axis=1) & np.all(np.isfinite(dev), axis=1)
+    if ok.sum() < 2:
+        return None
+    v_flown, v_dev = flown[ok].var(axis=0), dev[ok].var(axis=0)
+    return {"position": float(v_dev[:3].sum() / v_flown[:3].sum()) if v_flown[:3].sum() > 0 else 1.0,
+            "yaw": float(v_dev[3] / v_flown[3]) if v_flown[3] > 0 else 1.0}
+
+
 def planned_pose_features(positions: np.ndarray, yaw: np.ndarray, pitch: np.ndarray) -> np.ndarray:
     """(n_views, 7) pose features of a path: x, y, z (m), cos yaw, sin yaw, pitch (rad), index / (n - 1)."""
     n = positions.shape[0]

@@ -32,7 +32,7 @@ from wrp_eval.atomic import atomic_path, write_json_atomic
 from wrp_eval.errors import InputError
 from wrp_eval.experiment import ExperimentContext
 from wrp_eval.surrogate.config import SurrogateSection
-from wrp_eval.surrogate.data import TrialData, load_campaign_trials, split_indices
+from wrp_eval.surrogate.data import TrialData, load_campaign_trials, physical_variance_share, split_indices
 from wrp_eval.surrogate.model import Surrogate, SurrogateMeta, ViewSequenceCNN
 
 CHECKPOINT_NAME = "surrogate.pt"
@@ -332,6 +332,7 @@ def train_from_campaign(ctx: ExperimentContext, campaign_dir: str | Path | None 
     section = ctx.config.surrogate
     data = load_campaign_trials(campaign_dir if campaign_dir is not None else ctx.training_campaign_dir)
     result, cv = train_with_folds(data, section, section.seed_or(ctx.run_seed), folds, workers, progress=progress)
+    result.metrics["physical_variance_share"] = physical_variance_share(data)
     write_outputs(result, out_dir if out_dir is not None else ctx.folders.surrogate)
     return result, data, cv
 

@@ -240,6 +240,7 @@ def evaluate_job(ctx: ExperimentContext, out: Path | None = None, *, n_trials: i
     campaign_doc = trial.campaign.model_dump()
     campaign_doc.update({"n_trials": n_trials or ev.n_trials, "path": None})
     campaign_doc["perturbation"]["design"] = "physical"   # the paths flown as planned: the flight makes the offsets
+    campaign_doc["perturbation"]["targeted_share"] = 0.0  # ... and nothing else (no training-data targets)
     campaign_doc["outputs"].update({"dir": None, "rerun": False})
     flown = trial.model_copy(update={"campaign": type(trial.campaign).model_validate(campaign_doc)})
     placebo_paths, infeasible = placebo_paths_of(ctx, paths, ev.placebos)
