@@ -26,7 +26,7 @@ from wrp_eval.ship.rerun_log import save_ship_recording
 from wrp_eval.study.runner import run_study
 from wrp_eval.surrogate.train import CHECKPOINT_NAME, train_from_campaign
 from wrp_eval.wrp.jobs import EVALUATED_PATHS, evaluate_job
-from wrp_eval.wrp.risk import save_risk_recording, view_risk
+from wrp_eval.wrp.risk import campaign_flown_offsets, save_risk_recording, view_risk
 
 
 class Step:
@@ -102,7 +102,7 @@ def run_pipeline(ctx: ExperimentContext, *, quiet: bool = True, smallest: bool =
         summary["missions"] = export_missions(ctx)
 
     with Step(timings, "report", "report.md, figures and run.rrd"):
-        risk = view_risk(ctx.scored_ship, path, trials.offsets)
+        risk = view_risk(ctx.scored_ship, path, campaign_flown_offsets(campaign_dir))
         save_risk_recording(path, risk, out / "risk.rrd", recording_id=campaign_recording_id(path))
         parts = [out / "ship.rrd", out / "plan.rrd", out / "risk.rrd"]
         if (campaign_dir / "campaign.rrd").is_file():

@@ -23,6 +23,8 @@ import numpy as np
 import rerun as rr
 from matplotlib import colormaps
 
+from wrp_eval.campaign.records import column_array
+from wrp_eval.campaign.store import TrialStore
 from wrp_eval.recon.capture_io import captures_from_path
 from wrp_eval.recording import recording
 
@@ -35,6 +37,12 @@ class ViewRisk:
     p_missed: np.ndarray
     risk_m: np.ndarray
     base_error_m: float
+
+
+def campaign_flown_offsets(campaign_dir: str | Path) -> np.ndarray:
+    """(n_trials, n_views, 4) every stored trial's flown offsets, NaN rows for views not taken (the surrogate's
+    :class:`wrp_eval.surrogate.data.TrialData` keeps only complete trials, which never miss a view)."""
+    return column_array(TrialStore(campaign_dir).read_table(["n_views", "flown_offsets"]), "flown_offsets")
 
 
 def view_risk(scored_ship, path, offsets: np.ndarray) -> ViewRisk:
