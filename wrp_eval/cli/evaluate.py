@@ -2,10 +2,12 @@
 
     wrp-eval evaluate CONFIG [--trials N] [--out DIR] [--checkpoint FILE] [--campaign DIR] [--e-original E]
 
-Optimises the ISWRP and the SWRP (as ``optimize``), then flies the three paths as campaigns with the same seed
-(common random numbers, viewpoints as planned) and writes <out>/evaluate.json (per path: mean, std, 95th
-percentile of the error and failure rate with bootstrap CIs; paired differences against the initial path)
-and <out>/boxplot.png. Re-running resumes the campaigns.
+Optimises the ISWRP and the SWRP (as ``optimize``), then flies the three paths and ``wrp.evaluate.placebos``
+placebo paths per WRP (as many viewpoints moved by the same magnitudes, chosen at random) as campaigns with the
+same seed (common random numbers, viewpoints as planned) and writes <out>/evaluate.json (per path: mean, std,
+95th percentile of the error, failure rate, P(meets spec), views not taken and expected sorties with bootstrap
+CIs; paired differences against the initial path; each WRP's robustness gain against its placebos and the
+recommended path) and <out>/boxplot.png. Re-running resumes the campaigns.
 """
 
 from __future__ import annotations
@@ -26,8 +28,8 @@ def _evaluate(args: argparse.Namespace) -> int:
 
 
 def register(sub: argparse._SubParsersAction) -> None:
-    e = sub.add_parser("evaluate", help="fly the initial path, ISWRP and SWRP under the same winds; "
-                                        "Tables 4/5 analogues", description=__doc__,
+    e = sub.add_parser("evaluate", help="fly the initial path, ISWRP, SWRP and their placebo paths "
+                                        "under the same winds; which path to fly", description=__doc__,
                        formatter_class=argparse.RawDescriptionHelpFormatter)
     e.add_argument("config", metavar="CONFIG")
     e.add_argument("--trials", type=int, default=None, help="trials per path (overrides wrp.evaluate.n_trials)")

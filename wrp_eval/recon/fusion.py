@@ -258,7 +258,8 @@ def fuse(capture_set: CaptureSet, gt: GroundTruth, registered: np.ndarray, secti
     both = obs.weight[a] * obs.weight[b]
     existence = _any_of(both * t_pair, obs.sample[a], n_samples)
     k = len(obs.sample)
-    matched = _any_of(np.r_[both * m_pair, both * m_pair], np.r_[a, b], k)
+    pair_match = both * m_pair
+    matched = _any_of(np.r_[pair_match, pair_match], np.r_[a, b], k)   # each pair counts for both its ends
     phi, dc, pose_sigma = pose_errors(obs, matched, existence, capture_set, section, z_views)
 
     # step 4: weighted least-squares intersection of the matched rays
