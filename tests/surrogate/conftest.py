@@ -8,6 +8,7 @@ import torch
 
 from wrp_eval.surrogate.config import SurrogateSection
 from wrp_eval.surrogate.data import known_function_trials
+from wrp_eval.surrogate.features import ViewContext
 from wrp_eval.surrogate.model import Surrogate, SurrogateMeta, ViewSequenceCNN
 
 torch.set_num_threads(1)
@@ -33,12 +34,24 @@ def trained(known_data, fast_section):
     return train_surrogate(data, fast_section, seed=3)
 
 
+def random_views(n_views: int, rng: np.random.Generator) -> ViewContext:
+    """Views on a ring of radius ~60 m looking in at patches ~20 m from the centre, random coverage and forecast."""
+    angle = np.linspace(0, 2 * np.pi, n_views, endpoint=False)
+    ring = np.column_stack([np.cos(angle), np.sin(angle), np.zeros(n_views)])
+    position = 60 * ring + [0, 0, 20]
+    target = 20 * ring + rng.normal(0, 2, (n_views, 3))
+    return ViewContext(position, angle + np.pi, np.full(n_views, -0.2), target, ring,
+                       rng.uniform(0, 1, n_views), rng.integers(0, 8, n_views).astype(float),
+                       rng.normal(0, 3, (n_views, 4)))
+
+
 def random_surrogate(n_views: int, channels: int = 8, kernel: int = 3, layers: int = 2, seed: int = 0,
-                     pose: bool = True, digest: str | None = None) -> Surrogate:
-    """An untrained network with non-trivial standardisation (for exactness and checkpoint tests)."""
+                     pose: bool = True, digest: str | None = None, per_view: bool = False) -> Surrogate:
+    """An untrained network with non-trivial standardisation (for exactness and checkpoint tests); ``per_view``:
+    the per-view input set with random views."""
     rng = np.random.default_rng(seed)
-    arch = {"in_channels": 11 if pose else 4, "channels": channels, "kernel": kernel, "layers": layers,
-            "hidden": 16, "outputs": 1}
+    arch = {"in_channels": (11 if pose else 4) + (9 if per_view else 0), "channels": channels, "kernel": kernel,
+            "layers": layers, "hidden": 16, "outputs": 1}
     with torch.random.fork_rng(devices=[]):
         torch.manual_seed(seed)
         net = ViewSequenceCNN(**arch)
@@ -49,6 +62,9 @@ def random_surrogate(n_views: int, channels: int = 8, kernel: int = 3, layers: i
                          pose_mean=planned.mean(0).tolist() if pose else None,
                          pose_std=planned.std(0).tolist() if pose else None,
                          planned_pose=planned.tolist() if pose else None,
-                         offset_low=[-2, -2, -2, -0.35], offset_high=[2, 2, 2, 0.35])
+                         offset_low=[-2, -2, -2, -0.35], offset_high=[2, 2, 2, 0.35],
+                         **({"inputs": "per_view", "views": random_views(n_views, rng).to_json_dict(),
+                             "feature_mean": rng.normal(0, 1, 9).tolist(),
+                             "feature_std": rng.uniform(0.2, 3, 9).tolist()} if per_view else {}))
     return Surrogate(net, meta)
 

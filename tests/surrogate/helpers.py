@@ -17,8 +17,10 @@ def make_path(n_views: int):
 
 def make_campaign(folder, n_trials: int, n_views: int, seed: int = 0, nan_trials=(), failed_trials=()):
     """A campaign folder written through the campaign stage's own store: commanded offsets in a box, a
-    wind-induced deviation of known spread (0.3 m per axis, normal), error from the known function."""
+    wind-induced deviation of known spread (0.3 m per axis, normal), error from the known function; the
+    default trial config (its ship gives the per-view coverage)."""
     from wrp_eval.planning.path import digest_of_document as path_digest
+    from wrp_eval.campaign.config import TrialConfig
     from wrp_eval.campaign.store import TrialStore
     from wrp_eval.surrogate.data import known_function, known_function_trials
     rng = np.random.default_rng(seed)
@@ -40,7 +42,8 @@ def make_campaign(folder, n_trials: int, n_views: int, seed: int = 0, nan_trials
                         "error_m": float("nan") if k in failed_trials else float(error[k]),
                         "failed": k in failed_trials})
     with TrialStore(folder) as store:
-        store.write_meta({"path_digest": digest, "n_views": n_views, "n_trials": n_trials}, doc)
+        store.write_meta({"path_digest": digest, "n_views": n_views, "n_trials": n_trials,
+                          "config": TrialConfig().model_dump(mode="json")}, doc)   # the default (stylized) ship
         store.append(records[: n_trials // 2])
         store.append(records[n_trials // 2:])
     return path, digest, commanded, flown, error

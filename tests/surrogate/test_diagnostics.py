@@ -82,26 +82,46 @@ def test_ceiling_needs_two_repeats(campaign_dir):
 
 @pytest.mark.slow
 def test_single_view_agreement_scores_one_viewpoint_moves_with_both(campaign_dir):
-    from wrp_eval.surrogate.diagnostics import campaign_oracle, single_view_agreement
+    from wrp_eval.surrogate.diagnostics import campaign_oracle, single_view_agreement, single_view_moves
     from .conftest import random_surrogate
     scorer, _ = campaign_oracle(campaign_dir)
     n = len(scorer.planned)
     surrogate = random_surrogate(n, seed=4)
-    doc = single_view_agreement(surrogate, campaign_dir, n_moves=6, seed=2)
-    assert doc["n_moves"] == 6 and -1.0 <= doc["spearman"] <= 1.0
+    doc = single_view_agreement(surrogate, campaign_dir, n_moves=10, jitters=2, seed=2)
+    assert doc["n_moves"] == 10 and -1.0 <= doc["spearman"] <= 1.0 and doc["jitters"] == 2
     assert doc["surrogate_change_std_m"] > 0.0 and doc["oracle_change_std_m"] >= 0.0
-    # the oracle's changes recomputed independently: the same moves from the same seed
-    rng = np.random.default_rng(2)
-    views = rng.integers(0, n, 6)
-    moves = rng.uniform(surrogate.meta.offset_low, surrogate.meta.offset_high, (6, 4))
-    base = scorer.error(np.zeros((n, 4)), 0)
-    changes = []
+    # the moves at the campaign's targeted scale, and the oracle's jitter-averaged changes recomputed by hand
+    views, moves = single_view_moves(campaign_dir, n, 10, 2, np.asarray(surrogate.meta.offset_low),
+                                     np.asarray(surrogate.meta.offset_high))
+    assert np.all(moves >= surrogate.meta.offset_low) and np.all(moves <= surrogate.meta.offset_high)
+    rng = np.random.default_rng(np.random.SeedSequence(2, spawn_key=(1,)))
+    jit = np.concatenate([rng.normal(0, 0.02, (2, n, 3)), rng.normal(0, 0.002, (2, n, 1))], axis=2)
+    changes, predicted = [], []
     for view, move in zip(views, moves):
         offsets = np.zeros((n, 4))
         offsets[view] = move
-        changes.append(scorer.error(offsets, 0) - base)
+        changes.append(np.mean([scorer.error(offsets + j, 0) - scorer.error(j, 0) for j in jit]))
+        predicted.append(surrogate.predict(offsets[None])[0] - surrogate.predict(np.zeros((1, n, 4)))[0])
+    changes, predicted = np.array(changes), np.array(predicted)
     k = int(np.argmax(np.abs(changes)))
     assert doc["largest"][0][:2] == [int(views[k]), pytest.approx(changes[k], abs=1e-12)]
     assert doc["oracle_change_std_m"] == pytest.approx(np.std(changes), abs=1e-12)
+    assert doc["rmse_m"] == pytest.approx(np.sqrt(np.mean((changes - predicted) ** 2)), rel=1e-5)
+    top = int(np.argmax(np.abs(predicted)))         # 10 moves: the top decile is the one largest prediction
+    assert doc["sign_top_decile"] == float(np.sign(predicted[top]) == np.sign(changes[top]))
     with pytest.raises(InputError, match="viewpoints"):
         single_view_agreement(random_surrogate(n + 1), campaign_dir, n_moves=2)
+
+
+def test_mean_offset_baseline_fits_a_function_of_the_mean_and_misses_a_per_view_one():
+    from wrp_eval.surrogate.data import TrialData
+    from wrp_eval.surrogate.diagnostics import mean_offset_baseline
+    rng = np.random.default_rng(0)
+    offsets = rng.normal(0, 1, (400, 6, 4))
+    split = {"train": list(range(0, 300)), "val": list(range(300, 340)), "test": list(range(340, 400))}
+    mean = offsets.mean(axis=1)
+    of_mean = TrialData(offsets, 0.02 + 0.01 * mean[:, 3] ** 2 - 0.004 * mean[:, 0], np.zeros(400, bool))
+    assert mean_offset_baseline(of_mean, split)["r2"] > 0.999
+    per_view = TrialData(offsets, offsets[:, 2, 0] ** 2 - offsets[:, 4, 1], np.zeros(400, bool))
+    doc = mean_offset_baseline(per_view, split)
+    assert doc["r2"] < 0.3 and doc["n"] == 60 and doc["degree"] == 4

@@ -4,15 +4,17 @@ import torch
 
 from wrp_eval.atomic import temporaries
 from wrp_eval.errors import InputError
-from wrp_eval.surrogate.model import Surrogate, ViewQuery
+from wrp_eval.surrogate.model import CHECKPOINT_VERSION, Surrogate, ViewQuery
 
 from .conftest import random_surrogate
 
 
-@pytest.mark.parametrize("kernel,layers", [(3, 2), (5, 2), (3, 3), (1, 1)])
-def test_view_query_matches_full_forward(kernel, layers):
-    """The incremental one-view evaluation equals a full forward pass, at the ends and in the middle."""
-    s = random_surrogate(9, kernel=kernel, layers=layers)
+@pytest.mark.parametrize("kernel,layers,per_view", [(3, 2, False), (5, 2, False), (3, 3, False), (1, 1, False),
+                                                     (3, 2, True), (5, 3, True)])
+def test_view_query_matches_full_forward(kernel, layers, per_view):
+    """The incremental one-view evaluation equals a full forward pass, at the ends and in the middle (with the
+    per-view inputs too: the flown geometry changes with the candidate)."""
+    s = random_surrogate(9, kernel=kernel, layers=layers, per_view=per_view)
     rng = np.random.default_rng(1)
     base = rng.normal(0, 1, (9, 4))
     query = ViewQuery(s, base)
@@ -68,7 +70,7 @@ def test_checkpoint_refuses_corrupt_foreign_and_old_files(tmp_path):
     doc = torch.load(good, weights_only=True)
     doc["version"] = 99
     torch.save(doc, tmp_path / "old.pt")
-    doc["version"] = 1
+    doc["version"] = CHECKPOINT_VERSION
     doc["state_dict"] = {k: v for k, v in list(doc["state_dict"].items())[:-1]}
     torch.save(doc, tmp_path / "missing.pt")
     for name, pattern in [("cut.pt", "not a readable"), ("text.pt", "not a readable"),
@@ -91,3 +93,33 @@ def test_predict_checks_shape():
     s = random_surrogate(4)
     with pytest.raises(ValueError):
         s.predict(np.zeros((2, 5, 4)))
+
+
+def test_checkpoint_refuses_an_older_format_and_another_input_set(tmp_path):
+    """Version-1 checkpoints (before the per-view inputs) and a checkpoint of another input set than the config
+    asks for are refused with one line."""
+    s = random_surrogate(6, per_view=True)
+    s.save(tmp_path / "s.pt")
+    assert Surrogate.load(tmp_path / "s.pt", inputs="per_view").meta.inputs == "per_view"
+    with pytest.raises(InputError, match="input set 'per_view', the config asks for 'offsets'") as err:
+        Surrogate.load(tmp_path / "s.pt", inputs="offsets")
+    assert "\n" not in str(err.value)
+    doc = torch.load(tmp_path / "s.pt", weights_only=True)
+    doc["version"] = 1
+    torch.save(doc, tmp_path / "v1.pt")
+    with pytest.raises(InputError, match="version 1 is not"):
+        Surrogate.load(tmp_path / "v1.pt")
+
+
+def test_per_view_inputs_see_the_conditions_and_default_to_the_forecast():
+    s = random_surrogate(6, per_view=True)
+    off = np.random.default_rng(0).normal(0, 0.5, (3, 6, 4))
+    ref = np.broadcast_to(s.views.condition_reference, (3, 6, 4))
+    np.testing.assert_allclose(s.predict(off), s.predict(off, ref), atol=1e-6)
+    windy = np.array(ref) + [20.0, 8.0, 0.0, 0.0]
+    assert np.all(np.abs(s.predict(off, windy) - s.predict(off)) > 1e-6)
+    nan = np.array(windy)
+    nan[:, 2] = np.nan                     # not recorded at view 2: the forecast stands in
+    expect = np.array(windy)
+    expect[:, 2] = ref[:, 2]
+    np.testing.assert_allclose(s.predict(off, nan), s.predict(off, expect), atol=1e-6)

@@ -79,7 +79,7 @@ def test_failed_trials_are_left_out_of_the_error_fit(known_data):
     failed[::3] = True
     error = data.error.copy()
     error[::3] = np.nan
-    d2 = TrialData(data.offsets, error, failed, data.planned_pose)
+    d2 = TrialData(data.offsets, error, failed, data.planned_pose, views=data.views)
     r = train_surrogate(d2, SurrogateSection(epochs=2, channels=4), seed=0)
     assert r.metrics["n_used"] == data.n_trials - failed.sum()
     r2 = train_surrogate(d2, SurrogateSection(epochs=2, channels=4, predict_failure=True), seed=0)

@@ -13,6 +13,7 @@ from pathlib import Path
 from wrp_eval.errors import InputError
 from wrp_eval.recon.colmap import ColmapOracle
 from wrp_eval.recon.config import OracleSection
+from wrp_eval.recon.coverage import ViewCoverage, view_coverage
 from wrp_eval.recon.synthetic import SyntheticOracle
 from wrp_eval.ship.config import ShipSection
 from wrp_eval.ship.resolve import resolve_ship_full
@@ -44,6 +45,10 @@ class ScoredShip:
     def score(self, captures, seed: int = 0):
         """The oracle's :class:`ReconResult` for ``captures`` (a CaptureSet); any int seed (reduced mod 2^31-1)."""
         return self.oracle.evaluate(captures, self.mesh, seed=int(seed) % SEED_MODULUS)
+
+    def coverage(self, captures) -> ViewCoverage:
+        """What each view of ``captures`` sees of this ship (:func:`wrp_eval.recon.coverage.view_coverage`)."""
+        return view_coverage(captures, self.oracle.ground_truth(self.mesh), self.oracle.section)
 
 
 def scored_ship(ship: ShipSection, oracle: OracleSection, oracle_kind: str,

@@ -43,6 +43,11 @@ class SurrogateSection(StrictModel):
     pose_channels: bool = Field(True, description="add the planned pose of every viewpoint (x, y, z, cos yaw, "
                                 "sin yaw, pitch, index) as constant input channels, so that the network knows "
                                 "WHICH viewpoint an offset belongs to")
+    inputs: Literal["per_view", "offsets"] = Field("per_view", description="per_view: the offsets plus each "
+                                                  "view's flown geometry (standoff, incidence, pointing), its "
+                                                  "conditions at the shutter (blur, wind) and its coverage "
+                                                  "(unique share, co-visible partners); offsets: the 4 offsets "
+                                                  "only (the earlier model, the baseline of the comparison)")
     predict_failure: bool = Field(False, description="second output: logit of the trial failing")
     use_failed_trials: bool = Field(False, description="train the error output on failed trials whose error is "
                                     "finite too (default: only trials that did not fail)")

@@ -12,10 +12,13 @@ from pathlib import Path
 
 import numpy as np
 
+from wrp_eval.campaign.config import TrialConfig
 from wrp_eval.campaign.records import column_array
 from wrp_eval.campaign.store import TrialStore
 from wrp_eval.errors import InputError
 from wrp_eval.planning.path import Path as FlightPath
+from wrp_eval.recon.scene import scored_ship
+from wrp_eval.surrogate.features import CONDITION_NAMES, ViewContext, campaign_view_context
 
 OFFSET_NAMES = ("dx_m", "dy_m", "dz_m", "dyaw_rad")
 POSE_NAMES = ("x_m", "y_m", "z_m", "cos_yaw", "sin_yaw", "pitch_rad", "index")
@@ -29,7 +32,10 @@ class TrialData:
     reconstruction error (NaN where none); failed (n_trials,) bool; planned_pose (n_views, 7) or None: the
     planned pose features of every viewpoint (:data:`POSE_NAMES`); trial_id (n_trials,) int;
     path_digest: the campaign's content hash of the path (None for data not tied to a stored path);
-    deviation (n_trials, n_views, 4) or None: the wind-induced part (flown - commanded), for r_s.
+    deviation (n_trials, n_views, 4) or None: the wind-induced part (flown - commanded), for r_s;
+    conditions (n_trials, n_views, 4) or None: blur px and wind m/s at each view (:data:`CONDITION_NAMES`; NaN
+    where not recorded; None: none recorded); views: the path's :class:`ViewContext` (None: per-view inputs
+    unavailable, only the ``offsets`` input set can be trained).
     """
 
     offsets: np.ndarray
@@ -40,6 +46,8 @@ class TrialData:
     path_digest: str | None = None
     deviation: np.ndarray | None = None
     source: str = ""
+    conditions: np.ndarray | None = None
+    views: ViewContext | None = None
 
     @property
     def n_trials(self) -> int:
@@ -58,6 +66,10 @@ class TrialData:
                              f"error must be ({off.shape[0]},), got {np.asarray(self.error).shape}")
         if self.planned_pose is not None and np.asarray(self.planned_pose).shape[0] != off.shape[1]:
             raise InputError(self.source or "trial data", "planned_pose has a different number of viewpoints")
+        if self.conditions is not None and np.asarray(self.conditions).shape != (*off.shape[:2], len(CONDITION_NAMES)):
+            raise InputError(self.source or "trial data", f"conditions must be {(*off.shape[:2], 4)}")
+        if self.views is not None and len(self.views) != off.shape[1]:
+            raise InputError(self.source or "trial data", "views has a different number of viewpoints")
 
 
 def physical_variance_share(data: TrialData) -> dict[str, float] | None:
@@ -89,8 +101,11 @@ def path_pose_features(path) -> np.ndarray:
                                  np.asarray(path.pitch, float))
 
 
-def load_campaign_trials(campaign_dir: str | Path) -> TrialData:
-    """The trials of a campaign folder (the campaign stage's ``TrialStore``): flown offsets, error_m, failed.
+def load_campaign_trials(campaign_dir: str | Path, *, views: bool = True, config_dir: str | Path = ".") -> TrialData:
+    """The trials of a campaign folder (the campaign stage's ``TrialStore``): flown offsets, error_m, failed,
+    the conditions at each view (blur, wind) and, with ``views``, the path's :class:`ViewContext` (the ship and
+    oracle of the campaign's stored config, resolved relative to ``config_dir``: ~1 s; None without a stored
+    config).
 
     Trials whose flown offsets are not all finite (views never taken, or a trial that raised) have no input
     the network can take: they are dropped here and counted in ``source``. The planned pose comes from the
@@ -103,7 +118,7 @@ def load_campaign_trials(campaign_dir: str | Path) -> TrialData:
     if meta is None:
         raise InputError(folder, "not a campaign folder (no campaign.json); run `wrp-eval campaign` first")
     table = store.read_table(["trial_id", "n_views", "path_digest", "commanded_offsets", "flown_offsets",
-                              "error_m", "failed"])
+                              "error_m", "failed", "blur_px", "wind_at_views"])
     if len(table) == 0:
         raise InputError(folder, "the campaign has no stored trials yet")
     path = FlightPath.load(folder / "path.json")
@@ -121,10 +136,17 @@ def load_campaign_trials(campaign_dir: str | Path) -> TrialData:
     order = np.argsort(trial_id[complete], kind="stable")
     keep = np.flatnonzero(complete)[order]
     dropped = int((~complete).sum())
+    conditions = np.concatenate([column_array(table, "blur_px")[..., None], column_array(table, "wind_at_views")],
+                                axis=2)[keep]
+    context = None
+    if views and "config" in meta:     # a store written without its config (tests) has no ship to look at
+        trial = TrialConfig.from_stored(meta["config"])
+        ship = scored_ship(trial.ship, trial.oracle, trial.campaign.oracle, config_dir)
+        context = campaign_view_context(ship, path, conditions)
     return TrialData(offsets=flown[keep], error=error[keep], failed=failed[keep],
                      planned_pose=path_pose_features(path), trial_id=trial_id[keep],
                      path_digest=str(meta.get("path_digest", digests.pop())),
-                     deviation=flown[keep] - commanded[keep],
+                     deviation=flown[keep] - commanded[keep], conditions=conditions, views=context,
                      source=f"{folder} ({len(keep)} trials with every view taken, {dropped} without)")
 
 
@@ -156,8 +178,12 @@ def known_function_trials(n_trials: int, n_views: int, rng: np.random.Generator,
     error = known_function(offsets, params) + rng.normal(0.0, noise_m, n_trials)
     positions = np.column_stack([70.0 * np.cos(s), 20.0 * np.sin(s), 15.0 + 5.0 * np.sin(2 * s)])
     pose = planned_pose_features(positions, s + np.pi, np.full(n_views, -0.3))
+    target = positions * np.array([0.7, 0.3, 0.5])          # a patch between the view and the origin
+    normal = (positions - target) / np.linalg.norm(positions - target, axis=1, keepdims=True)
+    views = ViewContext(positions, s + np.pi, np.full(n_views, -0.3), target, normal, np.full(n_views, 0.2),
+                        np.full(n_views, 10.0), np.zeros((n_views, len(CONDITION_NAMES))))
     data = TrialData(offsets=offsets, error=error, failed=np.zeros(n_trials, bool), planned_pose=pose,
-                     trial_id=np.arange(n_trials), path_digest=None, source="known function")
+                     trial_id=np.arange(n_trials), path_digest=None, source="known function", views=views)
     return data, params
 
 

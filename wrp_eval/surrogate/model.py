@@ -1,8 +1,11 @@
 """The surrogate network, its checkpoint, and an exact incremental evaluator for one-viewpoint changes.
 
 Architecture (paper Sec. 4.1 fits "a CNN regression model"; the layout here is ours): the viewpoint sequence
-is a 1-D signal with one sample per viewpoint and input channels = the 4 standardised offsets (dx, dy, dz,
-dyaw) [+ 7 standardised planned-pose channels]; ``layers`` x (Conv1d 'same' zero padding + GELU) -> global MEAN
+is a 1-D signal with one sample per viewpoint and standardised input channels, in this order: the 4 offsets
+(dx, dy, dz, dyaw); with the ``per_view`` input set the 3 flown-geometry channels computed from them and the 4
+conditions at the shutter (:mod:`wrp_eval.surrogate.features`); the 7 planned-pose channels; with
+``per_view`` the 2 coverage channels. The offsets and the geometry are what a candidate move changes;
+``layers`` x (Conv1d 'same' zero padding + GELU) -> global MEAN
 pooling over the viewpoints -> Linear-GELU-Linear head -> standardised error [+ failure logit].
 
 Why mean pooling: a change of ONE viewpoint's offsets then changes the conv features only within the receptive
@@ -24,9 +27,11 @@ from torch.nn import functional as F
 
 from wrp_eval.atomic import write_bytes_atomic
 from wrp_eval.errors import InputError
+from wrp_eval.surrogate.features import CONDITION_NAMES, GEOMETRY_NAMES, INPUT_SETS, ViewContext
 
 CHECKPOINT_FORMAT = "wrp-eval-surrogate"
-CHECKPOINT_VERSION = 1
+CHECKPOINT_VERSION = 2    # 2: input sets and per-view inputs (issue 18); version 1 checkpoints are refused
+VARIABLE_CHANNELS = {"offsets": 4, "per_view": 4 + len(GEOMETRY_NAMES)}   # channels a candidate move changes
 
 
 class ViewSequenceCNN(nn.Module):
@@ -76,7 +81,9 @@ class SurrogateMeta:
     input standardisation; error_mean/error_std: target standardisation (of the error in m, or of its natural
     log when ``target`` is "log_error"); planned_pose (n_views, 7) or None;
     offset_low/offset_high (4,): range of the training offsets (the surrogate's domain); metrics: held-out
-    figures; extra: free-form provenance (data source, seed, epochs run).
+    figures; extra: free-form provenance (data source, seed, epochs run); inputs: the input set
+    (:data:`wrp_eval.surrogate.features.INPUT_SETS`); views: the path's ViewContext (JSON) for ``per_view``;
+    feature_mean/feature_std (9,): standardisation of the geometry, condition and coverage channels.
     """
 
     n_views: int
@@ -94,6 +101,10 @@ class SurrogateMeta:
     target: str = "error"
     metrics: dict = field(default_factory=dict)
     extra: dict = field(default_factory=dict)
+    inputs: str = "offsets"
+    views: dict | None = None
+    feature_mean: list | None = None
+    feature_std: list | None = None
 
 
 class Surrogate:
@@ -108,26 +119,58 @@ class Surrogate:
         if meta.planned_pose is not None:
             pose = (np.asarray(meta.planned_pose, float) - np.asarray(meta.pose_mean)) / np.asarray(meta.pose_std)
             self._pose = torch.tensor(pose, dtype=torch.float32).unsqueeze(0)     # (1, n, 7)
+        self.views = ViewContext.from_json_dict(meta.views) if meta.views is not None else None
+        self.variable_channels = VARIABLE_CHANNELS[meta.inputs]
+        if meta.inputs == "per_view":
+            self._feat_mean = np.asarray(meta.feature_mean, float)
+            self._feat_std = np.asarray(meta.feature_std, float)
+            cover = (self.views.coverage() - self._feat_mean[7:]) / self._feat_std[7:]
+            self._cover = torch.tensor(cover, dtype=torch.float32).unsqueeze(0)   # (1, n, 2)
 
     @property
     def n_views(self) -> int:
         return self.meta.n_views
 
-    def input_tensor(self, offsets: np.ndarray | torch.Tensor) -> torch.Tensor:
-        """(batch, n_views, 4) offsets -> (batch, n_views, in_channels) standardised network input."""
-        off = torch.as_tensor(offsets, dtype=torch.float32)
-        x = (off - self._off_mean) / self._off_std
+    @property
+    def variable_scale(self) -> np.ndarray:
+        """(variable_channels,) the standard deviations of the channels a candidate move changes."""
+        scale = np.asarray(self.meta.offset_std, float)
+        return np.concatenate([scale, self._feat_std[:3]]) if self.meta.inputs == "per_view" else scale
+
+    def conditions_or_reference(self, conditions: np.ndarray | None, shape: tuple) -> np.ndarray:
+        """(batch, n, 4) conditions with the forecast reference where None or NaN."""
+        ref = np.broadcast_to(self.views.condition_reference, (*shape[:2], len(CONDITION_NAMES)))
+        if conditions is None:
+            return ref
+        cond = np.asarray(conditions, float).reshape(ref.shape)
+        return np.where(np.isfinite(cond), cond, ref)
+
+    def input_tensor(self, offsets: np.ndarray | torch.Tensor, conditions: np.ndarray | None = None) -> torch.Tensor:
+        """(batch, n_views, 4) offsets [+ (batch, n_views, 4) conditions at the shutter, default the forecast
+        reference] -> (batch, n_views, in_channels) standardised network input."""
+        off_np = np.asarray(offsets, dtype=float)
+        x = (torch.as_tensor(off_np, dtype=torch.float32) - self._off_mean) / self._off_std
+        parts = [x]
+        if self.meta.inputs == "per_view":
+            feat = np.concatenate([self.views.geometry(off_np), self.conditions_or_reference(conditions, x.shape)],
+                                  axis=2)
+            parts.append(torch.as_tensor((feat - self._feat_mean[:7]) / self._feat_std[:7], dtype=torch.float32))
         if self._pose is not None:
-            x = torch.cat([x, self._pose.expand(x.shape[0], -1, -1)], dim=2)
-        return x
+            parts.append(self._pose.expand(x.shape[0], -1, -1))
+        if self.meta.inputs == "per_view":
+            parts.append(self._cover.expand(x.shape[0], -1, -1))
+        return torch.cat(parts, dim=2) if len(parts) > 1 else x
 
     @torch.no_grad()
-    def predict(self, offsets: np.ndarray, batch: int = 8192) -> np.ndarray:
-        """(batch, n_views, 4) offsets -> (batch,) predicted error (m)."""
+    def predict(self, offsets: np.ndarray, conditions: np.ndarray | None = None, batch: int = 8192) -> np.ndarray:
+        """(batch, n_views, 4) offsets [+ conditions (batch, n_views, 4), default the forecast reference] ->
+        (batch,) predicted error (m)."""
         offsets = np.asarray(offsets, dtype=np.float32)
         if offsets.ndim != 3 or offsets.shape[1:] != (self.n_views, 4):
             raise ValueError(f"offsets must be (batch, {self.n_views}, 4), got {offsets.shape}")
-        out = [self.net(self.input_tensor(offsets[i:i + batch]))[:, 0] for i in range(0, len(offsets), batch)]
+        cond = None if conditions is None else np.asarray(conditions, float)
+        out = [self.net(self.input_tensor(offsets[i:i + batch], None if cond is None else cond[i:i + batch]))[:, 0]
+               for i in range(0, len(offsets), batch)]
         y = torch.cat(out).double().numpy() if out else np.zeros(0)
         return self.to_error(y)
 
@@ -137,11 +180,11 @@ class Surrogate:
         return np.exp(y) if self.meta.target == "log_error" else y
 
     @torch.no_grad()
-    def predict_failure(self, offsets: np.ndarray) -> np.ndarray:
+    def predict_failure(self, offsets: np.ndarray, conditions: np.ndarray | None = None) -> np.ndarray:
         """(batch,) probability of failure (needs a model trained with ``predict_failure``)."""
         if self.meta.architecture.get("outputs", 1) < 2:
             raise InputError("surrogate", "this checkpoint was trained without a failure output")
-        logit = self.net(self.input_tensor(np.asarray(offsets, np.float32)))[:, 1]
+        logit = self.net(self.input_tensor(np.asarray(offsets, np.float32), conditions))[:, 1]
         return torch.sigmoid(logit).double().numpy()
 
     # -- checkpoint ---------------------------------------------------------------------------------------
@@ -156,11 +199,11 @@ class Surrogate:
         write_bytes_atomic(file, buf.getvalue())
 
     @classmethod
-    def load(cls, file: str | Path, *, n_views: int | None = None,
-             path_digest: str | set[str] | None = None) -> "Surrogate":
-        """Load a checkpoint (``torch.load(weights_only=True)``). A corrupt file, another format or version, or
-        one trained for another path (``n_views``, ``path_digest`` when both sides know it) is an
-        :class:`InputError`."""
+    def load(cls, file: str | Path, *, n_views: int | None = None, path_digest: str | set[str] | None = None,
+             inputs: str | None = None) -> "Surrogate":
+        """Load a checkpoint (``torch.load(weights_only=True)``). A corrupt file, another format or version, one
+        trained for another path (``n_views``, ``path_digest`` when both sides know it) or on another input set
+        than ``inputs`` (when given) is an :class:`InputError`."""
         file = Path(file)
         if not file.is_file():
             raise InputError(file, "no such surrogate checkpoint")
@@ -181,7 +224,15 @@ class Surrogate:
         except Exception as err:
             raise InputError(file, f"damaged surrogate checkpoint: {type(err).__name__}: "
                                    f"{str(err).splitlines()[0] if str(err) else ''}") from None
-        surrogate = cls(net, meta)
+        if meta.inputs not in INPUT_SETS or (meta.inputs == "per_view" and meta.views is None):
+            raise InputError(file, f"damaged surrogate checkpoint: input set {meta.inputs!r} without its views")
+        if inputs is not None and meta.inputs != inputs:
+            raise InputError(file, f"checkpoint was trained on the input set {meta.inputs!r}, the config asks for "
+                                   f"{inputs!r} (surrogate.inputs); retrain with `wrp-eval train`")
+        try:
+            surrogate = cls(net, meta)
+        except Exception as err:
+            raise InputError(file, f"damaged surrogate checkpoint: {type(err).__name__} in its metadata") from None
         surrogate.check_path(n_views, path_digest, source=file)
         return surrogate
 
@@ -219,10 +270,13 @@ class ViewQuery:
         self.n = surrogate.n_views
         self.forward_calls = 0
         self.queries = 0
-        # first layer's weights on the 4 offset channels as (4, k C): row r of the result for view c is the
-        # change of the pre-activation at position c + h - k (flipped so that column block 0 is position c - h)
-        w1 = net.convs[0].weight[:, :4, :].detach() / surrogate._off_std.view(1, 4, 1)   # (C, 4, k)
-        self._w1 = w1.permute(1, 2, 0).flip(1).reshape(4, -1).contiguous()
+        # first layer's weights on the channels a move changes (offsets [+ flown geometry]) as (m, k C): row r of
+        # the result for view c is the change of the pre-activation at position c + h - k (flipped so that
+        # column block 0 is position c - h)
+        m = surrogate.variable_channels
+        scale = torch.as_tensor(surrogate.variable_scale, dtype=torch.float32).view(1, m, 1)
+        w1 = net.convs[0].weight[:, :m, :].detach() / scale                                 # (C, m, k)
+        self._w1 = w1.permute(1, 2, 0).flip(1).reshape(m, -1).contiguous()
         # later layers as (k C_in, C) matrices over the k shifted copies (as ViewSequenceCNN.conv_pre)
         self._w = [None] + [c.weight.detach().permute(2, 1, 0).reshape(-1, c.weight.shape[0]).contiguous()
                             for c in net.convs[1:]]
@@ -246,6 +300,16 @@ class ViewQuery:
         inside[P:P + self.n] = 1.0
         self._inside = inside.view(-1, 1)
 
+    def _variables(self, index: int, candidates: np.ndarray) -> torch.Tensor:
+        """(q, m) change of the move-dependent channels (offsets [+ flown geometry], unstandardised) of viewpoint
+        ``index`` from the base to each candidate (q, 4)."""
+        base = self.base[index].astype(float)
+        delta = candidates - base
+        if self.s.variable_channels > 4:
+            geom = self.s.views.geometry(np.concatenate([candidates, base[None]])[:, None, :], views=[index])[:, 0]
+            delta = np.concatenate([delta, geom[:-1] - geom[-1]], axis=1)
+        return torch.as_tensor(delta, dtype=torch.float32)
+
     def update_view(self, index: int, offset: np.ndarray) -> None:
         """Set viewpoint ``index``'s base offset (4,) and refresh the cache."""
         base = self.base.copy()
@@ -261,7 +325,7 @@ class ViewQuery:
         self.queries += q
         h, P, n, k = self.h, self.P, self.n, self.s.net.kernel
         c = index + P                                                      # padded coordinate of the view
-        delta_in = cand - torch.as_tensor(self.base[index])                # (q, 4) m, rad
+        delta_in = self._variables(index, np.asarray(candidates, dtype=float))           # (q, m)
         dpre = (delta_in @ self._w1).view(q, 2 * h + 1, -1)                # positions c-h .. c+h, (q, w, C)
         lo, hi = c - h, c + h + 1
         delta_act = None

@@ -33,6 +33,7 @@ from wrp_eval.errors import InputError
 from wrp_eval.experiment import ExperimentContext
 from wrp_eval.surrogate.config import SurrogateSection
 from wrp_eval.surrogate.data import TrialData, load_campaign_trials, physical_variance_share, split_indices
+from wrp_eval.surrogate.features import CONDITION_NAMES, COVERAGE_NAMES, GEOMETRY_NAMES
 from wrp_eval.surrogate.model import Surrogate, SurrogateMeta, ViewSequenceCNN
 
 CHECKPOINT_NAME = "surrogate.pt"
@@ -97,6 +98,17 @@ def _standardise(values: np.ndarray, axis) -> tuple[np.ndarray, np.ndarray]:
     return mean, np.where(std > 1e-12, std, 1.0)
 
 
+def _conditions(data: TrialData, rows: np.ndarray) -> np.ndarray | None:
+    """(len(rows), n, 4) the trials' conditions at the shutter, the forecast reference where not recorded."""
+    if data.views is None:
+        return None
+    ref = np.broadcast_to(data.views.condition_reference, (len(rows), data.n_views, len(CONDITION_NAMES)))
+    if data.conditions is None:
+        return np.array(ref)
+    cond = np.asarray(data.conditions, float)[rows]
+    return np.where(np.isfinite(cond), cond, ref)
+
+
 def usable_rows(data: TrialData, section: SurrogateSection) -> tuple[np.ndarray, np.ndarray]:
     """(usable (n_trials,) bool: finite error and, unless ``use_failed_trials``, not failed; rows: the trial
     indices that take part in training -- every trial with ``predict_failure``, else the usable ones)."""
@@ -149,20 +161,32 @@ def train_surrogate(data: TrialData, section: SurrogateSection = SurrogateSectio
         pose_mean, pose_std = _standardise(pose, 0)
         planned = pose.tolist()
         pose_mean, pose_std = pose_mean.tolist(), pose_std.tolist()
+    views = feat_mean = feat_std = None
+    if section.inputs == "per_view":
+        if data.views is None:
+            raise InputError(data.source or "surrogate data", "the data has no per-view context (ship coverage); "
+                                                              "set surrogate.inputs: offsets")
+        views = data.views.to_json_dict()
+        features = np.concatenate([data.views.geometry(offsets[tr]), _conditions(data, tr),
+                                   np.broadcast_to(data.views.coverage(), (len(tr), data.n_views, 2))], axis=2)
+        feat_mean, feat_std = (v.tolist() for v in _standardise(features.reshape(-1, features.shape[-1]), 0))
     outputs = 2 if section.predict_failure else 1
-    arch = {"in_channels": 4 + (7 if section.pose_channels else 0), "channels": section.channels,
+    n_features = {"per_view": 4 + len(GEOMETRY_NAMES) + len(CONDITION_NAMES) + len(COVERAGE_NAMES), "offsets": 4}
+    arch = {"in_channels": n_features[section.inputs] + (7 if section.pose_channels else 0),
+            "channels": section.channels,
             "kernel": section.kernel, "layers": section.layers, "hidden": section.hidden, "outputs": outputs}
     meta = SurrogateMeta(n_views=data.n_views, path_digest=data.path_digest, architecture=arch,
                          offset_mean=off_mean.tolist(), offset_std=off_std.tolist(), error_mean=err_mean,
                          error_std=err_std, pose_mean=pose_mean, pose_std=pose_std, planned_pose=planned,
                          offset_low=offsets[tr].reshape(-1, 4).min(0).tolist(),
-                         offset_high=offsets[tr].reshape(-1, 4).max(0).tolist(), target=section.target)
+                         offset_high=offsets[tr].reshape(-1, 4).max(0).tolist(), target=section.target,
+                         inputs=section.inputs, views=views, feature_mean=feat_mean, feature_std=feat_std)
     with torch.random.fork_rng(devices=[]):
         torch.manual_seed(seed)
         net = ViewSequenceCNN(**arch)
     surrogate = Surrogate(net, meta)
 
-    x_all = surrogate.input_tensor(offsets)                                 # (N, Cin, n)
+    x_all = surrogate.input_tensor(offsets, data.conditions)                # (N, n, Cin)
     y_all = torch.as_tensor(np.nan_to_num((target - err_mean) / err_std), dtype=torch.float32)
     w_all = torch.as_tensor(usable, dtype=torch.float32)                     # error-loss mask
     f_all = torch.as_tensor(np.asarray(data.failed, bool), dtype=torch.float32)
@@ -224,10 +248,10 @@ def train_surrogate(data: TrialData, section: SurrogateSection = SurrogateSectio
     preds = {}
     for name, idx in (("train", tr), ("val", va), ("test", te)):
         keep = idx[usable[idx]]
-        preds[name] = (error[keep], surrogate.predict(offsets[keep]))
+        preds[name] = (error[keep], surrogate.predict(offsets[keep], _conditions(data, keep)))
         metrics[name] = regression_metrics(*preds[name])
     if outputs == 2:
-        p = surrogate.predict_failure(offsets[te])
+        p = surrogate.predict_failure(offsets[te], _conditions(data, te))
         f = np.asarray(data.failed, bool)[te]
         metrics["test"]["failure_brier"] = float(((p - f) ** 2).mean())
     seconds = time.perf_counter() - start

@@ -80,14 +80,15 @@ def resolve_inputs(ctx: ExperimentContext, section: WrpSection, checkpoint: str 
         pass
     if surrogate is None:
         ckpt = Path(checkpoint or section.checkpoint or ctx.folders.surrogate / "surrogate.pt")
-        surrogate = Surrogate.load(ckpt, n_views=len(path), path_digest=digests)
+        surrogate = Surrogate.load(ckpt, n_views=len(path), path_digest=digests,
+                                   inputs=ctx.config.surrogate.inputs)
     else:
         surrogate.check_path(len(path), digests, source="surrogate")
     radius = np.full(len(path), section.sample_radius_m)
     source = f"fixed {section.sample_radius_m} m"
     if trials is None and (section.sample_radius == "campaign" or section.neighbourhood == "measured") \
             and (camp / "campaign.json").is_file():
-        trials = load_campaign_trials(camp)
+        trials = load_campaign_trials(camp, views=False)   # only the deviations are read here
     chol = None
     if section.neighbourhood == "measured" and trials is not None and trials.deviation is not None:
         if trials.n_views != len(path):
