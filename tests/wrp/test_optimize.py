@@ -215,3 +215,29 @@ def test_measured_neighbourhood_follows_the_campaigns_offset_covariance():
     ball = iteration_draws(0, 0, 0, WrpParams("swrp", 0.01, 1.0, np.full(2, 0.5), block_iterations=500,
                                               neighbourhood_samples=8)).neighbour_offset.reshape(-1, 3)
     assert np.linalg.norm(ball, axis=1).max() <= 0.5 + 1e-12
+
+
+def test_validated_acceptance_needs_a_validated_error_and_beats_staying_by_twice_it():
+    surrogate = small_surrogate(6, seed=0, error_std=1.0, gain=20.0)
+    unvalidated = interval_optimise(surrogate, params_for(surrogate, "iswrp", 0.5, acceptance="validated"), seed=2)
+    assert not unvalidated.moved.any() and unvalidated.iterations_scored > 0     # searched, nothing justified
+    t = 0.5
+    small = interval_optimise(surrogate, params_for(surrogate, "iswrp", t, acceptance="validated",
+                                                    validated_error_m=0.01 * t), seed=2)
+    same = interval_optimise(surrogate, params_for(surrogate, "iswrp", t, acceptance="improve",
+                                                   min_improvement_fraction=0.02), seed=2)
+    np.testing.assert_array_equal(small.offsets, same.offsets)        # margin 2 x 0.01 t = 0.02 t
+    huge = interval_optimise(surrogate, params_for(surrogate, "iswrp", t, acceptance="validated",
+                                                   validated_error_m=100.0), seed=2)
+    assert small.moved.any() and not huge.moved.any()
+
+
+def test_cvar_is_the_mean_of_the_worst_tail():
+    from wrp_eval.wrp.optimize import cvar, neighbourhood_score
+    e = np.array([[1.0, 5.0, 2.0, 4.0, 3.0], [0.0, 0.0, 0.0, 0.0, 10.0]])
+    np.testing.assert_allclose(cvar(e, 0.6), [4.5, 5.0])                  # the worst 2 of 5
+    np.testing.assert_allclose(cvar(e, 0.0), e.mean(axis=1))
+    p = WrpParams("iswrp", 0.1, 1.0, np.full(2, 0.5), risk_measure="cvar", cvar_alpha=0.8)
+    np.testing.assert_allclose(neighbourhood_score(e, p), [5.0, 10.0])
+    with pytest.raises(ValueError):
+        WrpParams("iswrp", 0.1, 1.0, np.full(2, 0.5), risk_measure="var")

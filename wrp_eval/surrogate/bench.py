@@ -67,6 +67,11 @@ def bench_surrogate(cv: bool = False):
     return model, data, what, summary
 
 
+def bench_single_view_rmse() -> float | None:
+    """The single-view RMSE (m) this process's surrogate group validated (None: the group did not run it)."""
+    return _TRAINED.get("single_view_rmse_m")
+
+
 def _rate(fn, queries: int, min_s: float = 1.0) -> float:
     fn()
     count, start = 0, time.perf_counter()
@@ -125,6 +130,7 @@ def run_bench() -> list[BenchRecord]:
                f"{agree['jitters']} jitters (its noise per move {agree['oracle_noise_std_m'] * 1000:.3f} mm); "
                f"change std oracle {agree['oracle_change_std_m'] * 1000:.2f} mm, surrogate "
                f"{agree['surrogate_change_std_m'] * 1000:.2f} mm; {time.perf_counter() - start:.0f} s")
+        _TRAINED["single_view_rmse_m"] = agree["rmse_m"]
         records += [
             BenchRecord("surrogate.single_view_spearman", agree["spearman"], "", "issue 18 target", 0.7,
                         f"{how}; largest oracle changes (mm, oracle vs surrogate) {big}"),

@@ -48,6 +48,11 @@ class SurrogateSection(StrictModel):
                                                   "conditions at the shutter (blur, wind) and its coverage "
                                                   "(unique share, co-visible partners); offsets: the 4 offsets "
                                                   "only (the earlier model, the baseline of the comparison)")
+    validation_moves: int = Field(60, ge=0, le=100_000, description="after training, single-viewpoint moves "
+                                  "scored by the surrogate and by the jitter-averaged oracle: the validated "
+                                  "single-view error (metrics single_view.rmse_m) the optimiser's acceptance "
+                                  "needs (0: none, and acceptance 'validated' then moves nothing)")
+    validation_jitters: int = Field(2, ge=1, le=100, description="oracle jitters averaged per validation move")
     predict_failure: bool = Field(False, description="second output: logit of the trial failing")
     use_failed_trials: bool = Field(False, description="train the error output on failed trials whose error is "
                                     "finite too (default: only trials that did not fail)")

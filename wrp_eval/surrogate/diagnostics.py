@@ -45,7 +45,7 @@ from wrp_eval.errors import InputError
 from wrp_eval.planning.path import Path as FlightPath
 from wrp_eval.recon.capture_io import captures_from_path
 from wrp_eval.recon.scene import scored_ship
-from wrp_eval.surrogate.train import regression_metrics
+from wrp_eval.surrogate.metrics import regression_metrics
 
 
 @dataclass(frozen=True)

@@ -33,7 +33,9 @@ from wrp_eval.errors import InputError
 from wrp_eval.experiment import ExperimentContext
 from wrp_eval.surrogate.config import SurrogateSection
 from wrp_eval.surrogate.data import TrialData, load_campaign_trials, physical_variance_share, split_indices
+from wrp_eval.surrogate.diagnostics import mean_offset_baseline, single_view_agreement
 from wrp_eval.surrogate.features import CONDITION_NAMES, COVERAGE_NAMES, GEOMETRY_NAMES
+from wrp_eval.surrogate.metrics import regression_metrics
 from wrp_eval.surrogate.model import Surrogate, SurrogateMeta, ViewSequenceCNN
 
 CHECKPOINT_NAME = "surrogate.pt"
@@ -55,16 +57,6 @@ class TrainResult:
     test_pred: np.ndarray
     seconds: float
     extra: dict = field(default_factory=dict)
-
-
-def regression_metrics(y_true: np.ndarray, y_pred: np.ndarray) -> dict:
-    """R^2 (coefficient of determination), RMSE and MAE (units of y), n."""
-    y_true, y_pred = np.asarray(y_true, float), np.asarray(y_pred, float)
-    resid = y_true - y_pred
-    ss_tot = float(((y_true - y_true.mean()) ** 2).sum()) if y_true.size else 0.0
-    r2 = 1.0 - float((resid ** 2).sum()) / ss_tot if ss_tot > 0 else float("nan")
-    return {"r2": r2, "rmse": float(np.sqrt((resid ** 2).mean())) if resid.size else float("nan"),
-            "mae": float(np.abs(resid).mean()) if resid.size else float("nan"), "n": int(y_true.size)}
 
 
 class _Progress:
@@ -354,9 +346,16 @@ def train_from_campaign(ctx: ExperimentContext, campaign_dir: str | Path | None 
     ``wrp-eval train``, ``wrp-eval run`` and the studies all do; the trials are returned so that the caller
     does not read the campaign again."""
     section = ctx.config.surrogate
-    data = load_campaign_trials(campaign_dir if campaign_dir is not None else ctx.training_campaign_dir)
+    folder = campaign_dir if campaign_dir is not None else ctx.training_campaign_dir
+    data = load_campaign_trials(folder)
     result, cv = train_with_folds(data, section, section.seed_or(ctx.run_seed), folds, workers, progress=progress)
     result.metrics["physical_variance_share"] = physical_variance_share(data)
+    result.metrics["baseline"] = mean_offset_baseline(data, result.split)
+    if section.validation_moves > 0 and data.views is not None:
+        # the validated single-view error the optimiser's acceptance rule needs (issue 18 item 3)
+        result.metrics["single_view"] = single_view_agreement(
+            result.surrogate, folder, n_moves=section.validation_moves, jitters=section.validation_jitters,
+            seed=section.seed_or(ctx.run_seed))
     write_outputs(result, out_dir if out_dir is not None else ctx.folders.surrogate)
     return result, data, cv
 

@@ -74,10 +74,18 @@ class WrpSection(StrictModel):
     block_iterations: int = Field(64, ge=1, le=100_000, description="iterations drawn and scored per batch")
     stage2_batch: int = Field(8, ge=1, le=100_000, description="stage-1 survivors whose neighbourhoods are "
                               "scored per batch")
-    acceptance: Literal["paper", "improve"] = Field("paper", description="paper: Alg. 3 as written (the "
-                                                    "last accepted candidate is kept); improve: move a viewpoint "
-                                                    "only to the best accepted candidate, and only when it beats "
-                                                    "the unmoved viewpoint (see README)")
+    acceptance: Literal["paper", "improve", "validated"] = Field(
+        "validated", description="validated (issue 18): move a viewpoint only to the best accepted candidate, only "
+                                 "when its neighbourhood score beats the unmoved viewpoint's by twice the "
+                                 "surrogate's validated single-view error, and only when the oracle confirms it; "
+                                 "paper: Alg. 3 as written (the last accepted candidate is kept); improve: as "
+                                 "validated with a margin of min_improvement_fraction x t and no oracle (see README)")
+    confirm_samples: int = Field(8, ge=2, le=1000, description="acceptance validated: neighbourhood draws per "
+                                 "moved viewpoint the oracle scores, with and without the move")
+    risk_measure: Literal["mean", "cvar"] = Field("mean", description="ISWRP's neighbourhood score under "
+                                                  "improve / validated: the mean error, or its CVaR (the mean of "
+                                                  "the worst 1 - cvar_alpha share)")
+    cvar_alpha: float = Field(0.8, ge=0, lt=1)
     min_improvement_fraction: float = Field(0.1, ge=0, le=10, description="acceptance improve: the least gain "
                                             "of the neighbourhood score, as a fraction of t")
     improve_candidates: int = Field(16, ge=1, le=100_000, description="acceptance improve: stage-1 survivors "

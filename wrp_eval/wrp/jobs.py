@@ -14,7 +14,7 @@ shared by both optimisations of ``evaluate``; a caller that holds them already (
 from __future__ import annotations
 
 import json
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from pathlib import Path
 
 import numpy as np
@@ -32,11 +32,13 @@ from wrp_eval.recon.scene import ScoredShip
 from wrp_eval.surrogate.data import TrialData, load_campaign_trials
 from wrp_eval.surrogate.model import Surrogate
 from wrp_eval.wrp.config import WrpSection
+from wrp_eval.wrp.confirm import confirm_moves
 from wrp_eval.ship.nofly import flyable
 from wrp_eval.wrp.evaluate import PathTrials, box_plot, read_trials, summarise
 from wrp_eval.wrp.placebo import placebo_offsets
 from wrp_eval.wrp.optimize import (
     WrpParams,
+    WrpResult,
     apply_offsets,
     interval_optimise,
     offset_cholesky,
@@ -159,11 +161,19 @@ def run_optimize(ctx: ExperimentContext, section: WrpSection, out: Path, inputs:
                        step_m=step_from_surrogate(surrogate, section), swrp_spread=section.swrp_spread,
                        block_iterations=section.block_iterations, stage2_batch=section.stage2_batch,
                        acceptance=section.acceptance, min_improvement_fraction=section.min_improvement_fraction,
-                       improve_candidates=section.improve_candidates,
+                       improve_candidates=section.improve_candidates, validated_error_m=validated_error(surrogate),
+                       risk_measure=section.risk_measure, cvar_alpha=section.cvar_alpha,
                        neighbour_cholesky=inputs.neighbour_cholesky, **safety_constraints(ctx, path))
     seed = section.seed if section.seed is not None else ctx.run_seed
     result = interval_optimise(surrogate, params, seed=seed)
+    confirmation = None
+    if params.acceptance == "validated" and result.moved.any() and use_oracle:
+        confirmation = confirm_moves(ctx.scored_ship, path, result.offsets, result.moved, params, seed,
+                                     section.confirm_samples, forecast_blur(surrogate))
+        result = revert(result, confirmation.rejected, surrogate)
     table = result.table3()
+    if confirmation is not None:
+        table["oracle_confirm_s"] = confirmation.seconds
     wrp_path = apply_offsets(path, result.offsets, {"wrp": {"kind": section.kind, "threshold_m": threshold,
                                                             "seed": seed}})
     if use_oracle and section.oracle_error:
@@ -181,6 +191,10 @@ def run_optimize(ctx: ExperimentContext, section: WrpSection, out: Path, inputs:
            "neighbourhood": "measured" if params.neighbour_cholesky is not None else "ball",
            "swrp_spread": params.swrp_spread, "acceptance": params.acceptance,
            "min_improvement_fraction": params.min_improvement_fraction,
+           "validated_single_view_error_m": params.validated_error_m,
+           "improvement_margin_m": params.improvement_margin_m() if params.acceptance != "paper" else None,
+           "risk_measure": params.risk_measure,
+           "confirmation": confirmation.to_json_dict() if confirmation is not None else None,
            "surrogate": {"path_digest": surrogate.meta.path_digest, "metrics": surrogate.meta.metrics.get("test")},
            "viewpoints": [{"index": i, "moved": bool(result.moved[i]), "dx_m": float(o[0]), "dy_m": float(o[1]),
                            "dz_m": float(o[2]), "dyaw_deg": float(np.degrees(o[3])),
@@ -195,6 +209,31 @@ def run_optimize(ctx: ExperimentContext, section: WrpSection, out: Path, inputs:
               + (f"{err:.4f} m" if err is not None else "n/a") + f", surrogate {table['surrogate_error_m']:.4f} m "
               f"(E_original {e0:.4f} m) -> {out}")
     return doc
+
+
+def validated_error(surrogate: Surrogate) -> float | None:
+    """The surrogate's validated single-view error (m): the RMSE of its one-viewpoint changes against the
+    jitter-averaged oracle, measured after training (``surrogate.validation_moves``); None if not measured."""
+    value = (surrogate.meta.metrics.get("single_view") or {}).get("rmse_m")
+    return float(value) if value is not None and np.isfinite(value) else None
+
+
+def forecast_blur(surrogate: Surrogate) -> np.ndarray | None:
+    """(n,) px: the blur the surrogate's forecast expects at each view (None: offsets-only surrogate)."""
+    return None if surrogate.views is None else np.asarray(surrogate.views.condition_reference[:, 0], float)
+
+
+def revert(result: WrpResult, rejected: np.ndarray, surrogate: Surrogate) -> WrpResult:
+    """``result`` with the ``rejected`` (n,) viewpoints back at their planned pose (and its predicted error)."""
+    if not rejected.any():
+        return result
+    offsets = np.where(rejected[:, None], 0.0, result.offsets)
+    keep = ~rejected
+    return replace(result, offsets=offsets, moved=result.moved & keep,
+                   accepted_iteration=np.where(keep, result.accepted_iteration, -1),
+                   stage1_error=np.where(keep, result.stage1_error, np.nan),
+                   neighbourhood_stat=np.where(keep, result.neighbourhood_stat, np.nan),
+                   predicted_error_m=float(surrogate.predict(offsets[None])[0]))
 
 
 def with_kind(section: WrpSection, kind: str | None = None, threshold_m: float | None = None) -> WrpSection:

@@ -63,6 +63,14 @@ class WrpParams:
     acceptance: str = "paper"
     min_improvement_fraction: float = 0.1
     improve_candidates: int = 16
+    # "validated" (issue 18): as "improve", but the least gain is an absolute margin, twice the surrogate's
+    # validated single-view error (m; None: unvalidated surrogate, nothing moves); the oracle then confirms
+    # each move (wrp_eval.wrp.confirm)
+    validated_error_m: float | None = None
+    # what the neighbourhood's errors are summarised by for ISWRP's score: their mean, or the CVaR (the mean of
+    # the worst 1 - cvar_alpha share: the tail the operator fears)
+    risk_measure: str = "mean"
+    cvar_alpha: float = 0.8
     # flight-safety constraints of the moved viewpoints (the planner's, Sec. 3.1): planned positions (n, 3) m,
     # the lowest allowed height above the sea (m) and the no-fly box (2, 3); None: unconstrained
     base_positions: np.ndarray | None = None
@@ -84,8 +92,17 @@ class WrpParams:
             raise ValueError(f"kind must be iswrp or swrp, got {self.kind!r}")
         if self.swrp_spread not in ("variance", "std"):
             raise ValueError(f"swrp_spread must be variance or std, got {self.swrp_spread!r}")
-        if self.acceptance not in ("paper", "improve"):
-            raise ValueError(f"acceptance must be paper or improve, got {self.acceptance!r}")
+        if self.acceptance not in ("paper", "improve", "validated"):
+            raise ValueError(f"acceptance must be paper, improve or validated, got {self.acceptance!r}")
+        if self.risk_measure not in ("mean", "cvar") or not 0.0 <= self.cvar_alpha < 1.0:
+            raise ValueError(f"risk_measure must be mean or cvar with 0 <= cvar_alpha < 1, got "
+                             f"{self.risk_measure!r} / {self.cvar_alpha}")
+
+    def improvement_margin_m(self) -> float:
+        """The least gain of the neighbourhood score for a move (m; inf: no move can be justified)."""
+        if self.acceptance == "validated":
+            return 2.0 * self.validated_error_m if self.validated_error_m is not None else float("inf")
+        return self.min_improvement_fraction * self.threshold_m
 
 
 @dataclass(frozen=True)
@@ -184,19 +201,29 @@ def stage_one(query: ViewQuery, view: int, params: WrpParams, seed: int, block: 
     return lo, d, pos, yaw_best, e1, np.flatnonzero(ok)
 
 
+def cvar(errors: np.ndarray, alpha: float) -> np.ndarray:
+    """(..., M) -> (...) the conditional value at risk: the mean of the worst ceil((1 - alpha) M) errors."""
+    m = errors.shape[-1]
+    k = max(1, int(np.ceil((1.0 - alpha) * m - 1e-9)))
+    return np.sort(errors, axis=-1)[..., m - k:].mean(axis=-1)
+
+
 def neighbourhood_score(errors: np.ndarray, params: WrpParams) -> np.ndarray:
-    """(..., M) sample errors -> (...) what ``acceptance: improve`` minimises: the mean error of the
-    neighbourhood (ISWRP: the error expected under the wind) or its spread (SWRP, as the statistic)."""
-    return errors.mean(axis=-1) if params.kind == "iswrp" else neighbourhood_statistic(errors, params)
+    """(..., M) sample errors -> (...) what ``acceptance: improve | validated`` minimises: the mean error of the
+    neighbourhood (ISWRP: the error expected under the wind; its CVaR with ``risk_measure: cvar``) or its
+    spread (SWRP, as the statistic)."""
+    if params.kind == "iswrp":
+        return cvar(errors, params.cvar_alpha) if params.risk_measure == "cvar" else errors.mean(axis=-1)
+    return neighbourhood_statistic(errors, params)
 
 
 def optimise_view_improve(query: ViewQuery, view: int, params: WrpParams,
                           seed: int) -> tuple[int, np.ndarray, float, float, int]:
-    """``acceptance: improve``: every iteration passes stage 1; of the survivors, the ``improve_candidates``
-    with the lowest stage-1 error (ties: earlier iteration) get the stage-2 neighbourhood, and the one with
-    the best :func:`neighbourhood_score` among those passing stage 2 is kept when it beats the unmoved
-    viewpoint's score (a neighbourhood draw around offset 0) by ``min_improvement_fraction * t``. Same return
-    as :func:`optimise_view`."""
+    """``acceptance: improve | validated``: every iteration passes stage 1; of the survivors, the
+    ``improve_candidates`` with the lowest stage-1 error (ties: earlier iteration) get the stage-2 neighbourhood,
+    and the one with the best :func:`neighbourhood_score` among those passing stage 2 is kept when it beats the
+    unmoved viewpoint's score (a neighbourhood draw around offset 0) by :meth:`WrpParams.improvement_margin_m`.
+    Same return as :func:`optimise_view`."""
     b = params.block_iterations
     n_blocks = -(-params.iterations // b)
     t = params.threshold_m
@@ -220,7 +247,7 @@ def optimise_view_improve(query: ViewQuery, view: int, params: WrpParams,
     score = neighbourhood_score(ek, params)
     home_score, stat, score = score[0], stat[1:], np.where(stat[1:] <= t, score[1:], np.inf)
     k = int(np.argmin(score))
-    if np.isfinite(score[k]) and score[k] < home_score - params.min_improvement_fraction * t:
+    if np.isfinite(score[k]) and score[k] < home_score - params.improvement_margin_m():
         j = pick[k]
         return int(it[j]), np.array([*pos[j], yaw[j]]), float(e1[j]), float(stat[k]), scored
     return -1, np.zeros(4), float("nan"), float("nan"), scored
@@ -229,7 +256,7 @@ def optimise_view_improve(query: ViewQuery, view: int, params: WrpParams,
 def optimise_view(query: ViewQuery, view: int, params: WrpParams, seed: int) -> tuple[int, np.ndarray, float, float, int]:
     """Alg. 3 for one viewpoint against ``query``'s base. Returns (accepted iteration or -1, offset (4,),
     stage-1 error, stage-2 statistic, iterations scored)."""
-    if params.acceptance == "improve":
+    if params.acceptance in ("improve", "validated"):
         return optimise_view_improve(query, view, params, seed)
     b = params.block_iterations
     n_blocks = -(-params.iterations // b)
