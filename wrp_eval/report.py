@@ -117,6 +117,32 @@ def _design_text(design: str) -> str:
     return f"commanded offsets from the campaign's `{design}` perturbation design"
 
 
+def operator_section(ev: dict) -> list[str]:
+    """The first thing an operator reads (issue 18 item 5): go / no-go for the forecast wind, P(meets spec) with
+    its CI, views not taken and sorties, where the per-view risk is."""
+    fc = ev.get("forecast")
+    if not fc:
+        return []
+    ci = fc.get("p_meets_spec_ci")
+    sorties_ci = fc.get("expected_sorties_ci")
+    return [
+        f"## Go / no-go: **{'GO' if fc['go'] else 'NO-GO'}** (path `{fc['path']}`)",
+        "",
+        f"In the forecast wind ({fc['wind_speed_10m_mps']:g} m/s at 10 m from {fc['wind_direction_deg']:g} deg, "
+        f"turbulence as the campaign draws it), {fc['trials']} simulated flights of the path to fly:",
+        "",
+        "| P(meets spec) | CI | views not taken (mean) | expected sorties | CI |",
+        "|---|---|---|---|---|",
+        f"| {fmt(fc.get('p_meets_spec'), 3)} | {_ci(ci)} | {fmt(fc.get('mean_views_not_taken'), 2)} | "
+        f"{fmt(fc.get('expected_sorties'), 3)} | {_ci(sorties_ci)} |",
+        "",
+        f"Spec: error <= {fmt(fc.get('spec_error_m'), 4)} m and completeness >= {fmt(fc.get('spec_completeness'), 2)}. "
+        f"GO needs the lower {ev['confidence']:.0%} bound of P(meets spec) >= {fc['go_probability']:g}. Where the "
+        "error's spread comes from: the per-view risk map below (and `risk/viewpoints` in run.rrd).",
+        "",
+    ]
+
+
 def write_report(ctx: ExperimentContext, path, summary: dict, trials: TrialData, risk: ViewRisk | None = None) -> Path:
     """Figures under ``<run>/figures`` and ``<run>/report.md``; returns the report's path. path: the planned
     Path; summary: the run summary so far; trials: the campaign's trials (as the surrogate was trained on);
@@ -143,6 +169,7 @@ def write_report(ctx: ExperimentContext, path, summary: dict, trials: TrialData,
         f"waterline, no-fly margin {ship.proxy.no_fly_margin_m:g} m). The paper's figures are anchors from "
         "another system (Unity scene, ContextCapture, Xeon + RTX 3090), not targets.",
         "",
+        *operator_section(ev),
         "## Ship and path (paper Sec. 3)",
         "",
         "![ship and path](figures/ship_path.png)",

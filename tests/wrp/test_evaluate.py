@@ -122,3 +122,32 @@ def test_expected_sorties_cover_the_views_flights_leave():
     s = path_summary(p, np.random.default_rng(0), 200, 0.9)
     assert s["mean_views_not_taken"] == 10.0
     assert s["expected_sorties"] == pytest.approx(40 / 30)      # a flight takes 30 of 40 views on average
+
+
+def test_forecast_verdict_goes_only_when_the_ci_clears_the_bar():
+    from types import SimpleNamespace
+
+    from wrp_eval.wrp.config import EvaluateSection
+    from wrp_eval.wrp.jobs import forecast_verdict
+    wind = SimpleNamespace(speed_10m_mps=7.0, direction_deg=250.0)
+    errors = np.r_[np.full(57, 0.02), np.full(3, 0.05)]               # 57 of 60 flights meet 0.03 m
+    good = PathTrials("initial", np.arange(60), errors, np.zeros(60, bool), np.full(60, 0.99), np.zeros(60), 40)
+    ev = EvaluateSection(go_probability=0.8, bootstrap=500)
+    v = forecast_verdict(good, ev, (0.03, 0.95), 0, wind)
+    assert v["p_meets_spec"] == pytest.approx(0.95) and v["p_meets_spec_ci"][0] >= 0.8 and v["go"]
+    assert "GO" in v["summary"] and v["wind_speed_10m_mps"] == 7.0 and v["expected_sorties"] == 1.0
+    marginal = PathTrials("initial", np.arange(60), np.r_[np.full(50, 0.02), np.full(10, 0.05)],
+                          np.zeros(60, bool), np.full(60, 0.99), np.zeros(60), 40)
+    m = forecast_verdict(marginal, ev, (0.03, 0.95), 0, wind)
+    assert m["p_meets_spec"] == pytest.approx(50 / 60) and m["p_meets_spec_ci"][0] < 0.8 and not m["go"]
+    assert "NO-GO" in m["summary"]
+
+
+def test_forecast_config_flies_every_trial_in_the_forecast_wind():
+    from wrp_eval.campaign.config import TrialConfig
+    from wrp_eval.wind.config import WindSection
+    from wrp_eval.wrp.jobs import forecast_config
+    cfg = forecast_config(TrialConfig(), WindSection(speed_10m_mps=9.5, direction_deg=120.0), 12)
+    assert cfg.campaign.n_trials == 12
+    assert cfg.campaign.wind.speed_10m_m_s == 9.5 and cfg.campaign.wind.direction_deg == 120.0
+    assert cfg.campaign.wind.turbulence == TrialConfig().campaign.wind.turbulence

@@ -26,6 +26,11 @@ class EvaluateSection(StrictModel):
     spec_completeness: float = Field(0.95, ge=0, le=1, description="reconstruction spec: completeness at least "
                                      "this")
     confidence: float = Field(0.95, gt=0.5, lt=1)
+    forecast_trials: int = Field(64, ge=0, le=1_000_000, description="flights of the recommended path in the "
+                                 "forecast wind (the wind: section's speed and direction): the operator's "
+                                 "P(meets spec) with its CI and the go / no-go (0: none)")
+    go_probability: float = Field(0.8, gt=0, le=1, description="GO when the lower confidence bound of P(meets "
+                                  "spec) in the forecast wind reaches this")
     out_dir: str | None = Field(None, description="none: logs/<run.name>/evaluate")
 
 

@@ -34,7 +34,7 @@ from wrp_eval.surrogate.model import Surrogate
 from wrp_eval.wrp.config import WrpSection
 from wrp_eval.wrp.confirm import confirm_moves
 from wrp_eval.ship.nofly import flyable
-from wrp_eval.wrp.evaluate import PathTrials, box_plot, read_trials, summarise
+from wrp_eval.wrp.evaluate import PathTrials, box_plot, path_summary, read_trials, summarise
 from wrp_eval.wrp.placebo import placebo_offsets
 from wrp_eval.wrp.optimize import (
     WrpParams,
@@ -306,6 +306,14 @@ def evaluate_job(ctx: ExperimentContext, out: Path | None = None, *, n_trials: i
     result["placebos"] = {"per_wrp": ev.placebos, "moves_without_a_flyable_direction": infeasible,
                           "how": "as many viewpoints as the WRP moved, chosen at random, moved by the WRP's move "
                                  "magnitudes in random directions with its yaw offsets (wrp/placebo.py)"}
+    if ev.forecast_trials > 0:
+        chosen = result["recommended_path"]
+        forecast = forecast_config(flown, ctx.config.wind, ev.forecast_trials)
+        folder = evaluated_campaign_dir(out, "forecast")
+        run_campaign(forecast, paths[chosen], folder, root_seed=ctx.campaign_seed, config_dir=ctx.config_dir,
+                     progress=not quiet, evaluator=evaluator or DEFAULT_EVALUATOR)
+        result["forecast"] = forecast_verdict(read_trials(chosen, folder), ev, (spec_error, ev.spec_completeness),
+                                              seed, ctx.config.wind)
     result["wrp"] = {kind: d["table3"] for kind, d in optimised.items()}
     result["common_random_numbers"] = (f"every path flown with campaign seed {seed}: trial k of every path "
                                        "draws the same wind")
@@ -326,7 +334,35 @@ def evaluate_job(ctx: ExperimentContext, out: Path | None = None, *, n_trials: i
                   f"{1e3 * verdict['placebo_gain_p95_m']:+.2f} mm: "
                   + ("RECOMMENDED" if verdict["recommended"] else f"not recommended ({verdict['reason']})"))
         print(f"recommended path: {result['recommended_path']}")
+        if "forecast" in result:
+            print(result["forecast"]["summary"])
     return result
+
+
+def forecast_config(flown, wind, n_trials: int):
+    """The evaluation's trial config with every trial in the forecast wind (the ``wind:`` section's speed and
+    direction; turbulence and the rest as the campaign draws them) and ``n_trials`` trials."""
+    doc = flown.campaign.model_dump()
+    doc["n_trials"] = n_trials
+    doc["wind"].update({"speed_10m_m_s": float(wind.speed_10m_mps), "direction_deg": float(wind.direction_deg)})
+    return flown.model_copy(update={"campaign": type(flown.campaign).model_validate(doc)})
+
+
+def forecast_verdict(trials: PathTrials, ev, spec: tuple[float, float], seed: int, wind) -> dict:
+    """What the operator reads (issue 18 item 5): the chosen path in the forecast wind, P(meets spec) with its
+    CI, views not taken and sorties, and GO when the CI's lower bound reaches ``ev.go_probability``."""
+    rng = np.random.default_rng(np.random.SeedSequence(seed, spawn_key=(8,)))
+    row = path_summary(trials, rng, ev.bootstrap, ev.confidence, spec)
+    ci = row.get("p_meets_spec_ci")
+    low = ci[0] if ci else float("nan")
+    go = bool(np.isfinite(low) and low >= ev.go_probability)
+    summary = (f"forecast wind {wind.speed_10m_mps:g} m/s from {wind.direction_deg:g} deg, path {trials.name}: "
+               f"P(meets spec) {row['p_meets_spec']:.2f}"
+               + (f" [{ci[0]:.2f}, {ci[1]:.2f}]" if ci else "")
+               + f" over {row['trials']} flights -> {'GO' if go else 'NO-GO'} (needs the CI's lower bound >= "
+               f"{ev.go_probability:g})")
+    return {**row, "go": go, "go_probability": ev.go_probability, "wind_speed_10m_mps": float(wind.speed_10m_mps),
+            "wind_direction_deg": float(wind.direction_deg), "summary": summary}
 
 
 SPEC_ERROR_FACTOR = 1.1   # wrp.evaluate.spec_error_m unset: 1.1 x the initial path's wind-free error
