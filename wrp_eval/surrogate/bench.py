@@ -36,7 +36,7 @@ from wrp_eval.surrogate.config import SurrogateSection
 from wrp_eval.surrogate.data import known_function_trials, load_campaign_trials
 from wrp_eval.surrogate.diagnostics import mean_offset_baseline, oracle_roughness, single_view_agreement
 from wrp_eval.surrogate.model import ViewQuery
-from wrp_eval.surrogate.train import train_with_folds
+from wrp_eval.surrogate.train import train_surrogate, train_with_folds
 
 BENCH_ENV = "WRP_EVAL_BENCH_SURROGATE_CAMPAIGN"
 SINGLE_VIEW_MOVES = 200     # issue 18: >= 200 single-view moves against a jitter-averaged oracle
@@ -65,6 +65,22 @@ def bench_surrogate(cv: bool = False):
     model, summary = train_with_folds(data, SurrogateSection(), 0, 5 if cv else 0, default_workers())
     _TRAINED.update(model=model, data=data, what=what, cv=summary)
     return model, data, what, summary
+
+
+def offsets_only_records(data, result, folder: str, oracle: dict) -> list[BenchRecord]:
+    """The same network with the offsets-only input set (the earlier model), on the same split and the same
+    single-view oracle scores: what the per-view inputs change."""
+    start = time.perf_counter()
+    section = SurrogateSection(inputs="offsets")
+    split = tuple(np.asarray(result.split[k], dtype=np.int64) for k in ("train", "val", "test"))
+    plain = train_surrogate(data, section, seed=0, split=split)
+    agree = single_view_agreement(plain.surrogate, folder, oracle=oracle)
+    note = (f"offsets + planned pose only, same split and the same {agree['n_moves']} oracle-scored moves; "
+            f"{time.perf_counter() - start:.0f} s")
+    return [BenchRecord("surrogate.offsets_only.r2_test", plain.metrics["test"]["r2"], "", None, None, note),
+            BenchRecord("surrogate.offsets_only.single_view_spearman", agree["spearman"], "", None, None, note),
+            BenchRecord("surrogate.offsets_only.single_view_sign_top_decile", agree["sign_top_decile"], "", None,
+                        None, note)]
 
 
 def bench_single_view_rmse() -> float | None:
@@ -131,6 +147,7 @@ def run_bench() -> list[BenchRecord]:
                f"change std oracle {agree['oracle_change_std_m'] * 1000:.2f} mm, surrogate "
                f"{agree['surrogate_change_std_m'] * 1000:.2f} mm; {time.perf_counter() - start:.0f} s")
         _TRAINED["single_view_rmse_m"] = agree["rmse_m"]
+        records += offsets_only_records(data, result, folder, agree["oracle"])
         records += [
             BenchRecord("surrogate.single_view_spearman", agree["spearman"], "", "issue 18 target", 0.7,
                         f"{how}; largest oracle changes (mm, oracle vs surrogate) {big}"),

@@ -64,6 +64,11 @@ class CampaignOracle:
         residual ``roll`` (n,) rad (a trial's; None or NaN: level), its motion ``blur_px`` (n,) (None or NaN:
         sharp) and the navigation's ``estimated_offsets`` (n, 4) from the plan (the photos' recorded positions,
         the position priors; None or NaN: the true positions)."""
+        return float(self.ship.score(self.captures(offsets, pitch, roll, blur_px, estimated_offsets), seed).error_m)
+
+    def captures(self, offsets: np.ndarray, pitch: np.ndarray | None = None, roll: np.ndarray | None = None,
+                 blur_px: np.ndarray | None = None, estimated_offsets: np.ndarray | None = None):
+        """The :class:`CaptureSet` that :meth:`error` scores (same arguments)."""
         if roll is not None:
             roll = np.nan_to_num(np.asarray(roll, dtype=float), nan=0.0)
         if blur_px is not None:
@@ -71,8 +76,7 @@ class CampaignOracle:
         prior = None
         if estimated_offsets is not None and np.all(np.isfinite(estimated_offsets)):
             prior = self.planned[:, :3] + np.asarray(estimated_offsets, dtype=float)[:, :3]
-        captures = captures_from_path(self.path, offsets, pitch, roll=roll, prior_positions=prior, blur_px=blur_px)
-        return float(self.ship.score(captures, seed).error_m)
+        return captures_from_path(self.path, offsets, pitch, roll=roll, prior_positions=prior, blur_px=blur_px)
 
 
 def campaign_oracle(campaign_dir: str | Path, config_dir: str | Path = ".") -> tuple[CampaignOracle, object]:
@@ -153,7 +157,7 @@ def single_view_moves(campaign_dir: str | Path, n_views: int, n_moves: int, seed
 
 def single_view_agreement(surrogate, campaign_dir: str | Path, *, n_moves: int = 200, jitters: int = 4,
                           position_jitter_m: float = 0.02, yaw_jitter_rad: float = 0.002, seed: int = 0,
-                          config_dir: str | Path = ".") -> dict:
+                          config_dir: str | Path = ".", oracle: dict | None = None) -> dict:
     """Surrogate vs a jitter-averaged oracle on single-viewpoint moves from the planned path (the optimiser's
     queries; issue 18 item 2).
 
@@ -166,8 +170,39 @@ def single_view_agreement(surrogate, campaign_dir: str | Path, *, n_moves: int =
     rmse_m (the surrogate's validated single-view error: RMSE of its change against the oracle's),
     oracle_change_std_m, surrogate_change_std_m, oracle_noise_std_m (std over jitters of one move's change,
     mean over moves), the largest oracle changes with the surrogate's answer (view, oracle, surrogate; m),
-    n_moves, jitters, seed.
+    n_moves, jitters, seed, and ``oracle`` (views, offsets, changes): pass it back to compare another surrogate
+    of the same path with the same oracle scores (its moves, jitters and blur are then reused).
     """
+    if oracle is None:
+        oracle = single_view_oracle(surrogate, campaign_dir, n_moves=n_moves, jitters=jitters,
+                                    position_jitter_m=position_jitter_m, yaw_jitter_rad=yaw_jitter_rad, seed=seed,
+                                    config_dir=config_dir)
+    views, offsets, changes = oracle["views"], oracle["offsets"], oracle["changes"]
+    n = offsets.shape[1]
+    if surrogate.n_views != n:
+        raise InputError(campaign_dir, f"the surrogate has {surrogate.n_views} viewpoints, the moves {n}")
+    oracle_change = changes.mean(axis=1)
+    surrogate_change = surrogate.predict(offsets) - surrogate.predict(np.zeros((1, n, 4)))[0]
+    ok = np.isfinite(oracle_change)
+    rho = float(spearmanr(oracle_change[ok], surrogate_change[ok]).statistic) if ok.sum() > 2 else float("nan")
+    idx = np.flatnonzero(ok)
+    top = idx[np.argsort(-np.abs(surrogate_change[idx]))[:max(1, idx.size // 10)]]
+    largest = idx[np.argsort(-np.abs(oracle_change[idx]))[:5]]
+    return {"spearman": rho,
+            "sign_top_decile": float(np.mean(np.sign(surrogate_change[top]) == np.sign(oracle_change[top]))),
+            "rmse_m": float(np.sqrt(np.mean((oracle_change[ok] - surrogate_change[ok]) ** 2))),
+            "oracle_change_std_m": float(np.std(oracle_change[ok])),
+            "surrogate_change_std_m": float(np.std(surrogate_change[ok])),
+            "oracle_noise_std_m": float(np.nanmean(np.std(changes[ok], axis=1))) if changes.shape[1] > 1
+            else float("nan"),
+            "largest": [[int(views[k]), float(oracle_change[k]), float(surrogate_change[k])] for k in largest],
+            "n_moves": int(ok.sum()), "jitters": int(changes.shape[1]), "seed": oracle["seed"], "oracle": oracle}
+
+
+def single_view_oracle(surrogate, campaign_dir: str | Path, *, n_moves: int, jitters: int, position_jitter_m: float,
+                       yaw_jitter_rad: float, seed: int, config_dir: str | Path = ".") -> dict:
+    """The oracle side of :func:`single_view_agreement`: views (n_moves,), offsets (n_moves, n, 4) and the
+    changes (n_moves, jitters) m, one per jitter; seed."""
     scorer, _ = campaign_oracle(campaign_dir, config_dir)
     n = len(scorer.planned)
     if surrogate.n_views != n:
@@ -185,21 +220,7 @@ def single_view_agreement(surrogate, campaign_dir: str | Path, *, n_moves: int =
                           rng.normal(0.0, yaw_jitter_rad, (jitters, n, 1))], axis=2)
     base = np.array([scorer.error(j, 0, blur_px=blur) for j in jit])          # the oracle is not batched
     changes = np.array([[scorer.error(o + j, 0, blur_px=blur) for j in jit] for o in offsets]) - base
-    oracle_change = changes.mean(axis=1)
-    surrogate_change = surrogate.predict(offsets) - surrogate.predict(np.zeros((1, n, 4)))[0]
-    ok = np.isfinite(oracle_change)
-    rho = float(spearmanr(oracle_change[ok], surrogate_change[ok]).statistic) if ok.sum() > 2 else float("nan")
-    idx = np.flatnonzero(ok)
-    top = idx[np.argsort(-np.abs(surrogate_change[idx]))[:max(1, idx.size // 10)]]
-    largest = idx[np.argsort(-np.abs(oracle_change[idx]))[:5]]
-    return {"spearman": rho,
-            "sign_top_decile": float(np.mean(np.sign(surrogate_change[top]) == np.sign(oracle_change[top]))),
-            "rmse_m": float(np.sqrt(np.mean((oracle_change[ok] - surrogate_change[ok]) ** 2))),
-            "oracle_change_std_m": float(np.std(oracle_change[ok])),
-            "surrogate_change_std_m": float(np.std(surrogate_change[ok])),
-            "oracle_noise_std_m": float(np.nanmean(np.std(changes[ok], axis=1))) if jitters > 1 else float("nan"),
-            "largest": [[int(views[k]), float(oracle_change[k]), float(surrogate_change[k])] for k in largest],
-            "n_moves": int(ok.sum()), "jitters": int(jitters), "seed": seed}
+    return {"views": views, "offsets": offsets, "changes": changes, "seed": seed}
 
 
 def mean_offset_baseline(data, split: dict, degree: int = 4, ridge: float = 1e-6) -> dict:
