@@ -32,8 +32,11 @@ def test_paired_difference_uses_common_trials():
     assert d["wins"] == 2 and d["losses"] == 0
 
 
-def test_evaluate_flies_all_paths_with_the_same_winds(tmp_path):
-    """End to end with the campaign's analytic stand-in evaluator (no MuJoCo): three campaigns, same seed."""
+@pytest.mark.parametrize("acceptance", ["paper", "validated"])
+def test_evaluate_flies_all_paths_with_the_same_winds(tmp_path, acceptance):
+    """End to end with the campaign's analytic stand-in evaluator (no MuJoCo): three campaigns, same seed. With
+    acceptance validated and a surrogate that was never validated nothing moves: no placebos are flown and
+    the WRPs are not recommended for that reason."""
     from wrp_eval.campaign.evaluators import ANALYTIC_EVALUATOR
     from wrp_eval.campaign.store import TrialStore
     from wrp_eval.surrogate.data import load_campaign_trials
@@ -49,10 +52,10 @@ def test_evaluate_flies_all_paths_with_the_same_winds(tmp_path):
         "run": {"seed": 2},
         "campaign": {"backend": {"workers": 0}, "batch_size": 4},
         "wrp": {"iterations": 16, "attitude_samples": 3, "neighbourhood_samples": 3, "block_iterations": 8,
-                "oracle_error": False, "threshold_m": 0.2,
-                "evaluate": {"n_trials": 6, "bootstrap": 200, "placebos": 2}}})
+                "oracle_error": False, "threshold_m": 0.2, "acceptance": acceptance,
+                "evaluate": {"n_trials": 6, "bootstrap": 200, "placebos": 2, "forecast_trials": 4}}})
     doc = evaluate_job(ExperimentContext(config, tmp_path), tmp_path / "ev", checkpoint=str(tmp_path / "s.pt"), campaign=str(camp),
-                       e_original=0.6, quiet=True, evaluator=ANALYTIC_EVALUATOR)
+                       e_original=1.45, quiet=True, evaluator=ANALYTIC_EVALUATOR)   # the known function's scale
     assert [p["path"] for p in doc["paths"]] == ["initial", "iswrp", "swrp"]
     assert all(p["trials"] == 6 for p in doc["paths"])
     winds = [TrialStore(tmp_path / "ev" / f"campaign-{n}").read_table(["trial_id", "wind_seed",
@@ -60,13 +63,22 @@ def test_evaluate_flies_all_paths_with_the_same_winds(tmp_path):
              for n in ("initial", "iswrp", "swrp")]
     assert winds[0].equals(winds[1]) and winds[0].equals(winds[2])       # common random numbers
     assert json.loads((tmp_path / "ev" / "evaluate.json").read_text())["paired"][0]["paired_trials"] == 6
+    assert doc["forecast"]["trials"] == 4 and isinstance(doc["forecast"]["go"], bool)
+    assert doc["forecast"]["path"] == doc["recommended_path"]
+    if acceptance == "validated":
+        assert doc["wrp"]["iswrp"]["moved"] == 0 and doc["recommended_path"] == "initial"
+        assert doc["placebos"]["not_flown_for"] == ["iswrp", "swrp"]
+        assert not (tmp_path / "ev" / "campaign-placebo-iswrp-00").exists()
+        assert all("moved no viewpoint" in doc["robustness"][k]["reason"] for k in ("iswrp", "swrp"))
+        return
     # the placebos of each WRP fly the same winds and enter its verdict
     placebo = TrialStore(tmp_path / "ev" / "campaign-placebo-iswrp-00").read_table(
         ["trial_id", "wind_seed", "wind_speed_10m_m_s"]).sort_by("trial_id")
     assert placebo.equals(winds[0])
     for kind in ("iswrp", "swrp"):
         verdict = doc["robustness"][kind]
-        assert len(verdict["placebo_gains_m"]) == 2 and isinstance(verdict["recommended"], bool)
+        assert verdict["placebos_flown"] == 2 and 1 <= len(verdict["placebo_gains_m"]) <= 2   # gains: paired successes
+        assert isinstance(verdict["recommended"], bool)
         assert verdict["recommended"] or verdict["reason"]
     assert doc["recommended_path"] in ("initial", "iswrp", "swrp")
     assert all("p_meets_spec" in p and "mean_views_not_taken" in p and p["expected_sorties"] >= 1.0

@@ -283,7 +283,10 @@ def evaluate_job(ctx: ExperimentContext, out: Path | None = None, *, n_trials: i
     campaign_doc["perturbation"]["targeted_share"] = 0.0  # ... and nothing else (no training-data targets)
     campaign_doc["outputs"].update({"dir": None, "rerun": False})
     flown = trial.model_copy(update={"campaign": type(trial.campaign).model_validate(campaign_doc)})
-    placebo_paths, infeasible = placebo_paths_of(ctx, paths, ev.placebos)
+    unmoved = [kind for kind in optimised if not optimised[kind]["table3"]["moved"]]
+    # a WRP that moved nothing is the initial path: its placebos would all be the initial path too
+    placebo_paths, infeasible = placebo_paths_of(ctx, {k: p for k, p in paths.items() if k not in unmoved},
+                                                 ev.placebos)
 
     def fly(name: str, path: FlightPath) -> PathTrials:
         folder = evaluated_campaign_dir(out, name)
@@ -303,7 +306,13 @@ def evaluate_job(ctx: ExperimentContext, out: Path | None = None, *, n_trials: i
     seed = ctx.campaign_seed
     result = summarise(flown_trials, seed, ev.bootstrap, ev.confidence, (spec_error, ev.spec_completeness),
                        windfree, placebo_trials)
-    result["placebos"] = {"per_wrp": ev.placebos, "moves_without_a_flyable_direction": infeasible,
+    for kind in unmoved:
+        result["robustness"][kind].update(recommended=False, reason="it moved no viewpoint: it is the initial path")
+    result["recommended_path"] = next((k for k in sorted(result["robustness"],
+                                                         key=lambda k: -result["robustness"][k]["gain_m"])
+                                       if result["robustness"][k]["recommended"]), "initial")
+    result["placebos"] = {"per_wrp": ev.placebos, "not_flown_for": unmoved,
+                          "moves_without_a_flyable_direction": infeasible,
                           "how": "as many viewpoints as the WRP moved, chosen at random, moved by the WRP's move "
                                  "magnitudes in random directions with its yaw offsets (wrp/placebo.py)"}
     if ev.forecast_trials > 0:
