@@ -155,7 +155,7 @@ def write_report(ctx: ExperimentContext, path, summary: dict, trials: TrialData,
     x, y, z, velocity = sample_mean_field(config.wind, ship.particulars, ctx.config_dir)
     figures.mkdir(parents=True, exist_ok=True)
     quiver_png(figures / "wind_field.png", x, y, z, velocity, config.wind.source)
-    offsets_figure(trials.offsets, figures / "offsets.png")
+    offsets_figure(trials.offsets[trials.complete()], figures / "offsets.png")
 
     plan_m = summary["plan"]
     t = plan_m["timings"]

@@ -42,7 +42,7 @@ def random_views(n_views: int, rng: np.random.Generator) -> ViewContext:
     target = 20 * ring + rng.normal(0, 2, (n_views, 3))
     return ViewContext(position, angle + np.pi, np.full(n_views, -0.2), target, ring,
                        rng.uniform(0, 1, n_views), rng.integers(0, 8, n_views).astype(float),
-                       rng.normal(0, 3, (n_views, 4)))
+                       np.column_stack([rng.normal(0, 3, (n_views, 4)), np.ones(n_views)]))
 
 
 def random_surrogate(n_views: int, channels: int = 8, kernel: int = 3, layers: int = 2, seed: int = 0,
@@ -50,7 +50,7 @@ def random_surrogate(n_views: int, channels: int = 8, kernel: int = 3, layers: i
     """An untrained network with non-trivial standardisation (for exactness and checkpoint tests); ``per_view``:
     the per-view input set with random views."""
     rng = np.random.default_rng(seed)
-    arch = {"in_channels": (11 if pose else 4) + (9 if per_view else 0), "channels": channels, "kernel": kernel,
+    arch = {"in_channels": (11 if pose else 4) + (10 if per_view else 0), "channels": channels, "kernel": kernel,
             "layers": layers, "hidden": 16, "outputs": 1}
     with torch.random.fork_rng(devices=[]):
         torch.manual_seed(seed)
@@ -64,7 +64,7 @@ def random_surrogate(n_views: int, channels: int = 8, kernel: int = 3, layers: i
                          planned_pose=planned.tolist() if pose else None,
                          offset_low=[-2, -2, -2, -0.35], offset_high=[2, 2, 2, 0.35],
                          **({"inputs": "per_view", "views": random_views(n_views, rng).to_json_dict(),
-                             "feature_mean": rng.normal(0, 1, 9).tolist(),
-                             "feature_std": rng.uniform(0.2, 3, 9).tolist()} if per_view else {}))
+                             "feature_mean": rng.normal(0, 1, 10).tolist(),
+                             "feature_std": rng.uniform(0.2, 3, 10).tolist()} if per_view else {}))
     return Surrogate(net, meta)
 

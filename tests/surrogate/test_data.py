@@ -10,14 +10,19 @@ from .helpers import make_campaign
 def test_load_campaign_trials_reads_the_store(tmp_path):
     path, digest, commanded, flown, error = make_campaign(tmp_path, 20, 5, nan_trials=(3,), failed_trials=(4,))
     data = load_campaign_trials(tmp_path)
-    keep = [k for k in range(20) if k != 3]
-    assert data.n_trials == 19 and data.n_views == 5
-    np.testing.assert_allclose(data.offsets, flown[keep])
-    np.testing.assert_allclose(data.deviation, flown[keep] - commanded[keep])
-    assert np.isnan(data.error[keep.index(4)]) and data.failed[keep.index(4)]
+    # trial 3 did not take view 0: kept, with offset 0 and the condition 'taken' 0 there
+    assert data.n_trials == 20 and data.n_views == 5 and "1 of them with views not taken" in data.source
+    expected = flown.copy()
+    expected[3, 0] = 0.0
+    np.testing.assert_allclose(data.offsets, expected)
+    taken = data.conditions[..., -1]
+    assert taken[3, 0] == 0.0 and taken.sum() == 20 * 5 - 1
+    np.testing.assert_allclose(data.deviation[np.arange(20) != 3], (flown - commanded)[np.arange(20) != 3])
+    assert np.isnan(data.error[4]) and data.failed[4]
     assert data.path_digest == digest
     np.testing.assert_allclose(data.planned_pose[:, :3], path.positions)
-    assert list(data.trial_id) == keep
+    assert list(data.trial_id) == list(range(20))
+    assert data.views is not None and np.all(data.views.condition_reference[:, -1] == 1.0)
 
 
 def test_load_campaign_refuses_non_campaign(tmp_path):

@@ -114,9 +114,9 @@ def test_checkpoint_refuses_an_older_format_and_another_input_set(tmp_path):
 def test_per_view_inputs_see_the_conditions_and_default_to_the_forecast():
     s = random_surrogate(6, per_view=True)
     off = np.random.default_rng(0).normal(0, 0.5, (3, 6, 4))
-    ref = np.broadcast_to(s.views.condition_reference, (3, 6, 4))
+    ref = np.broadcast_to(s.views.condition_reference, (3, 6, 5))
     np.testing.assert_allclose(s.predict(off), s.predict(off, ref), atol=1e-6)
-    windy = np.array(ref) + [20.0, 8.0, 0.0, 0.0]
+    windy = np.array(ref) + [20.0, 8.0, 0.0, 0.0, 0.0]
     assert np.all(np.abs(s.predict(off, windy) - s.predict(off)) > 1e-6)
     nan = np.array(windy)
     nan[:, 2] = np.nan                     # not recorded at view 2: the forecast stands in

@@ -158,3 +158,17 @@ def test_learning_rate_is_reduced_on_a_plateau_only_when_enabled(known_data):
     constant = train_surrogate(data, SurrogateSection(**base, lr_decay_patience=0), seed=0)
     assert constant.metrics["final_lr"] == pytest.approx(3e-2)
     assert decayed.metrics["final_lr"] < 3e-2 / 2 - 1e-12
+
+
+def test_missing_views_are_dropped_or_taken_as_an_input(known_data):
+    """Trials whose flight did not take every view: left out by default, kept with missing_views: input."""
+    data, _ = known_data
+    cond = np.zeros((data.n_trials, data.n_views, 5))
+    cond[..., -1] = 1.0
+    cond[::4, 2, -1] = 0.0                      # a quarter of the trials missed view 2
+    partial = TrialData(data.offsets, data.error, data.failed, data.planned_pose, conditions=cond, views=data.views)
+    assert partial.complete().sum() == data.n_trials - len(range(0, data.n_trials, 4))
+    section = SurrogateSection(epochs=2, channels=4)
+    dropped = train_surrogate(partial, section, seed=0)
+    kept = train_surrogate(partial, section.model_copy(update={"missing_views": "input"}), seed=0)
+    assert dropped.metrics["n_used"] == partial.complete().sum() and kept.metrics["n_used"] == data.n_trials

@@ -18,7 +18,7 @@ from wrp_eval.campaign.store import TrialStore
 from wrp_eval.errors import InputError
 from wrp_eval.planning.path import Path as FlightPath
 from wrp_eval.recon.scene import scored_ship
-from wrp_eval.surrogate.features import CONDITION_NAMES, ViewContext, campaign_view_context
+from wrp_eval.surrogate.features import CONDITION_NAMES, ViewContext, campaign_view_context, reference_conditions
 
 OFFSET_NAMES = ("dx_m", "dy_m", "dz_m", "dyaw_rad")
 POSE_NAMES = ("x_m", "y_m", "z_m", "cos_yaw", "sin_yaw", "pitch_rad", "index")
@@ -28,13 +28,14 @@ POSE_NAMES = ("x_m", "y_m", "z_m", "cos_yaw", "sin_yaw", "pitch_rad", "index")
 class TrialData:
     """Trials of one path.
 
-    offsets (n_trials, n_views, 4): flown offsets (dx, dy, dz m, dyaw rad); error (n_trials,) m: the oracle's
+    offsets (n_trials, n_views, 4): flown offsets (dx, dy, dz m, dyaw rad; 0 where a view was not taken, see
+    ``conditions``); error (n_trials,) m: the oracle's
     reconstruction error (NaN where none); failed (n_trials,) bool; planned_pose (n_views, 7) or None: the
     planned pose features of every viewpoint (:data:`POSE_NAMES`); trial_id (n_trials,) int;
     path_digest: the campaign's content hash of the path (None for data not tied to a stored path);
     deviation (n_trials, n_views, 4) or None: the wind-induced part (flown - commanded), for r_s;
-    conditions (n_trials, n_views, 4) or None: blur px and wind m/s at each view (:data:`CONDITION_NAMES`; NaN
-    where not recorded; None: none recorded); views: the path's :class:`ViewContext` (None: per-view inputs
+    conditions (n_trials, n_views, 5) or None: blur px and wind m/s at each view and whether it was taken
+    (:data:`CONDITION_NAMES`; NaN where not recorded; None: none recorded); views: the path's :class:`ViewContext` (None: per-view inputs
     unavailable, only the ``offsets`` input set can be trained).
     """
 
@@ -57,6 +58,12 @@ class TrialData:
     def n_views(self) -> int:
         return int(self.offsets.shape[1])
 
+    def complete(self) -> np.ndarray:
+        """(n_trials,) bool: the flight took every view (True where the data does not record it)."""
+        if self.conditions is None:
+            return np.ones(self.n_trials, bool)
+        return ~(np.asarray(self.conditions, float)[..., -1] < 0.5).any(axis=1)
+
     def __post_init__(self) -> None:
         off = np.asarray(self.offsets)
         if off.ndim != 3 or off.shape[2] != 4:
@@ -67,7 +74,8 @@ class TrialData:
         if self.planned_pose is not None and np.asarray(self.planned_pose).shape[0] != off.shape[1]:
             raise InputError(self.source or "trial data", "planned_pose has a different number of viewpoints")
         if self.conditions is not None and np.asarray(self.conditions).shape != (*off.shape[:2], len(CONDITION_NAMES)):
-            raise InputError(self.source or "trial data", f"conditions must be {(*off.shape[:2], 4)}")
+            raise InputError(self.source or "trial data",
+                             f"conditions must be {(*off.shape[:2], len(CONDITION_NAMES))}")
         if self.views is not None and len(self.views) != off.shape[1]:
             raise InputError(self.source or "trial data", "views has a different number of viewpoints")
 
@@ -107,9 +115,10 @@ def load_campaign_trials(campaign_dir: str | Path, *, views: bool = True, config
     oracle of the campaign's stored config, resolved relative to ``config_dir``: ~1 s; None without a stored
     config).
 
-    Trials whose flown offsets are not all finite (views never taken, or a trial that raised) have no input
-    the network can take: they are dropped here and counted in ``source``. The planned pose comes from the
-    folder's path.json; trials are returned in trial-id order.
+    A view a flight did not take (it turned home, or the trial raised) gets offset 0 and the condition
+    ``taken`` 0 (its other conditions NaN): such trials stay, since what a missing view costs is what each
+    view's coverage is worth; trials without any view are dropped and counted in ``source``. The planned pose
+    comes from the folder's path.json; trials are returned in trial-id order.
     """
 
     folder = Path(campaign_dir)
@@ -132,22 +141,25 @@ def load_campaign_trials(campaign_dir: str | Path, *, views: bool = True, config
     error = table.column("error_m").to_numpy(zero_copy_only=False).astype(float)
     failed = table.column("failed").to_numpy(zero_copy_only=False).astype(bool)
     trial_id = table.column("trial_id").to_numpy().astype(int)
-    complete = np.all(np.isfinite(flown), axis=(1, 2))
-    order = np.argsort(trial_id[complete], kind="stable")
-    keep = np.flatnonzero(complete)[order]
-    dropped = int((~complete).sum())
-    conditions = np.concatenate([column_array(table, "blur_px")[..., None], column_array(table, "wind_at_views")],
-                                axis=2)[keep]
+    taken = np.all(np.isfinite(flown), axis=2)                     # (trials, views): the view was photographed
+    usable = taken.any(axis=1)
+    order = np.argsort(trial_id[usable], kind="stable")
+    keep = np.flatnonzero(usable)[order]
+    dropped = int((~usable).sum())
+    incomplete = int((~taken[keep].all(axis=1)).sum())
+    conditions = np.concatenate([column_array(table, "blur_px")[..., None], column_array(table, "wind_at_views"),
+                                 taken[..., None].astype(float)], axis=2)[keep]
     context = None
     if views and "config" in meta:     # a store written without its config (tests) has no ship to look at
         trial = TrialConfig.from_stored(meta["config"])
         ship = scored_ship(trial.ship, trial.oracle, trial.campaign.oracle, config_dir)
         context = campaign_view_context(ship, path, conditions)
-    return TrialData(offsets=flown[keep], error=error[keep], failed=failed[keep],
+    return TrialData(offsets=np.nan_to_num(flown[keep]), error=error[keep], failed=failed[keep],
                      planned_pose=path_pose_features(path), trial_id=trial_id[keep],
                      path_digest=str(meta.get("path_digest", digests.pop())),
                      deviation=flown[keep] - commanded[keep], conditions=conditions, views=context,
-                     source=f"{folder} ({len(keep)} trials with every view taken, {dropped} without)")
+                     source=f"{folder} ({len(keep)} trials, {incomplete} of them with views not taken; "
+                            f"{dropped} without any view)")
 
 
 def split_indices(n: int, val_fraction: float, test_fraction: float,
@@ -181,7 +193,7 @@ def known_function_trials(n_trials: int, n_views: int, rng: np.random.Generator,
     target = positions * np.array([0.7, 0.3, 0.5])          # a patch between the view and the origin
     normal = (positions - target) / np.linalg.norm(positions - target, axis=1, keepdims=True)
     views = ViewContext(positions, s + np.pi, np.full(n_views, -0.3), target, normal, np.full(n_views, 0.2),
-                        np.full(n_views, 10.0), np.zeros((n_views, len(CONDITION_NAMES))))
+                        np.full(n_views, 10.0), reference_conditions(None, n_views))
     data = TrialData(offsets=offsets, error=error, failed=np.zeros(n_trials, bool), planned_pose=pose,
                      trial_id=np.arange(n_trials), path_digest=None, source="known function", views=views)
     return data, params

@@ -8,8 +8,10 @@ covers, or along a face twenty others see. Each viewpoint i therefore carries, b
   incidence (rad) of that sight line on the patch's mean normal, and the pointing error (rad) between the flown
   optical axis and the sight line (how far the patch moves off the image centre);
 * **conditions at the shutter** (:data:`CONDITION_NAMES`, from the flight: motion blur px and the wind felt
-  at the view, m/s, ship frame); the optimiser, which cannot know a future flight's, queries with the
-  campaign's per-view mean (the forecast's expectation, :attr:`ViewContext.condition_reference`);
+  at the view, m/s, ship frame; and whether the view was taken at all: a flight that turned home leaves the
+  rest of the tour, and those trials teach the network what each view's coverage is worth); the optimiser,
+  which cannot know a future flight's, queries with the campaign's per-view mean blur and wind (the
+  forecast's expectation, :attr:`ViewContext.condition_reference`) and every view taken;
 * **coverage** (:data:`COVERAGE_NAMES`, of the planned path, from the oracle's observation model,
   :func:`wrp_eval.recon.coverage.view_coverage`): the view's unique-coverage share and its co-visible
   partner count.
@@ -20,6 +22,7 @@ graph enters through the partner count and unique share (see README: measured ag
 
 from __future__ import annotations
 
+import warnings
 from dataclasses import asdict, dataclass
 
 import numpy as np
@@ -28,7 +31,7 @@ from wrp_eval.camera import optical_axes
 from wrp_eval.recon.capture_io import captures_from_path
 
 GEOMETRY_NAMES = ("standoff_m", "incidence_rad", "pointing_rad")
-CONDITION_NAMES = ("blur_px", "wind_x_mps", "wind_y_mps", "wind_z_mps")
+CONDITION_NAMES = ("blur_px", "wind_x_mps", "wind_y_mps", "wind_z_mps", "taken")
 COVERAGE_NAMES = ("unique_share", "partners")
 INPUT_SETS = ("per_view", "offsets")     # "offsets": the 4 offsets + planned pose only (the earlier model)
 
@@ -37,7 +40,8 @@ INPUT_SETS = ("per_view", "offsets")     # "offsets": the 4 offsets + planned po
 class ViewContext:
     """The per-view facts of one path (n views): planned position (n, 3) m, yaw (n,) rad, pitch (n,) rad; the
     planned view's target centroid (n, 3) m and unit normal (n, 3); unique_share (n,), partners (n,); and
-    condition_reference (n, 4): blur px and wind m/s at each view in the forecast (the campaign's mean)."""
+    condition_reference (n, 5): blur px and wind m/s at each view in the forecast (the campaign's mean), and
+    taken (1)."""
 
     position: np.ndarray
     yaw: np.ndarray
@@ -88,16 +92,24 @@ def flown_geometry(position: np.ndarray, yaw: np.ndarray, pitch: np.ndarray, tar
                     axis=-1)
 
 
+def reference_conditions(conditions: np.ndarray | None, n_views: int) -> np.ndarray:
+    """(n, 5) the forecast's conditions at each view: the mean blur and wind of ``conditions`` (trials, n, 5) over
+    the trials that took the view (0 without any), and the view taken."""
+    reference = np.zeros((n_views, len(CONDITION_NAMES)))
+    if conditions is not None:
+        cond = np.asarray(conditions, float)[..., :-1]
+        with np.errstate(invalid="ignore"), warnings.catch_warnings():
+            warnings.simplefilter("ignore", RuntimeWarning)      # a view no trial took: mean of nothing
+            reference[:, :-1] = np.nan_to_num(np.nanmean(cond, axis=0))
+    reference[:, -1] = 1.0
+    return reference
+
+
 def campaign_view_context(scored_ship, path, conditions: np.ndarray | None) -> ViewContext:
     """The :class:`ViewContext` of ``path`` (a :class:`wrp_eval.planning.path.Path`) on ``scored_ship``
     (:class:`wrp_eval.recon.scene.ScoredShip`), with the per-view mean of ``conditions`` (trials, n, 4) as the
     reference (zeros without)."""
     cover = scored_ship.coverage(captures_from_path(path))
-    n = len(path)
-    if conditions is None or not np.isfinite(conditions).any():
-        reference = np.zeros((n, len(CONDITION_NAMES)))
-    else:
-        with np.errstate(invalid="ignore"):
-            reference = np.nan_to_num(np.nanmean(np.asarray(conditions, float), axis=0))
+    reference = reference_conditions(conditions, len(path))
     return ViewContext(np.asarray(path.positions, float), np.asarray(path.yaw, float), np.asarray(path.pitch, float),
                        cover.target, cover.normal, cover.unique_share, cover.partners, reference)

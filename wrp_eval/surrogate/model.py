@@ -32,6 +32,7 @@ from wrp_eval.surrogate.features import CONDITION_NAMES, GEOMETRY_NAMES, INPUT_S
 CHECKPOINT_FORMAT = "wrp-eval-surrogate"
 CHECKPOINT_VERSION = 2    # 2: input sets and per-view inputs (issue 18); version 1 checkpoints are refused
 VARIABLE_CHANNELS = {"offsets": 4, "per_view": 4 + len(GEOMETRY_NAMES)}   # channels a candidate move changes
+N_GEOMETRY, N_VARYING = len(GEOMETRY_NAMES), len(GEOMETRY_NAMES) + len(CONDITION_NAMES)  # feature layout
 
 
 class ViewSequenceCNN(nn.Module):
@@ -83,7 +84,7 @@ class SurrogateMeta:
     offset_low/offset_high (4,): range of the training offsets (the surrogate's domain); metrics: held-out
     figures; extra: free-form provenance (data source, seed, epochs run); inputs: the input set
     (:data:`wrp_eval.surrogate.features.INPUT_SETS`); views: the path's ViewContext (JSON) for ``per_view``;
-    feature_mean/feature_std (9,): standardisation of the geometry, condition and coverage channels.
+    feature_mean/feature_std (10,): standardisation of the geometry, condition and coverage channels.
     """
 
     n_views: int
@@ -124,7 +125,7 @@ class Surrogate:
         if meta.inputs == "per_view":
             self._feat_mean = np.asarray(meta.feature_mean, float)
             self._feat_std = np.asarray(meta.feature_std, float)
-            cover = (self.views.coverage() - self._feat_mean[7:]) / self._feat_std[7:]
+            cover = (self.views.coverage() - self._feat_mean[N_VARYING:]) / self._feat_std[N_VARYING:]
             self._cover = torch.tensor(cover, dtype=torch.float32).unsqueeze(0)   # (1, n, 2)
 
     @property
@@ -135,10 +136,10 @@ class Surrogate:
     def variable_scale(self) -> np.ndarray:
         """(variable_channels,) the standard deviations of the channels a candidate move changes."""
         scale = np.asarray(self.meta.offset_std, float)
-        return np.concatenate([scale, self._feat_std[:3]]) if self.meta.inputs == "per_view" else scale
+        return np.concatenate([scale, self._feat_std[:N_GEOMETRY]]) if self.meta.inputs == "per_view" else scale
 
     def conditions_or_reference(self, conditions: np.ndarray | None, shape: tuple) -> np.ndarray:
-        """(batch, n, 4) conditions with the forecast reference where None or NaN."""
+        """(batch, n, 5) conditions with the forecast reference where None or NaN."""
         ref = np.broadcast_to(self.views.condition_reference, (*shape[:2], len(CONDITION_NAMES)))
         if conditions is None:
             return ref
@@ -146,7 +147,7 @@ class Surrogate:
         return np.where(np.isfinite(cond), cond, ref)
 
     def input_tensor(self, offsets: np.ndarray | torch.Tensor, conditions: np.ndarray | None = None) -> torch.Tensor:
-        """(batch, n_views, 4) offsets [+ (batch, n_views, 4) conditions at the shutter, default the forecast
+        """(batch, n_views, 4) offsets [+ (batch, n_views, 5) conditions at the shutter, default the forecast
         reference] -> (batch, n_views, in_channels) standardised network input."""
         off_np = np.asarray(offsets, dtype=float)
         x = (torch.as_tensor(off_np, dtype=torch.float32) - self._off_mean) / self._off_std
@@ -154,7 +155,8 @@ class Surrogate:
         if self.meta.inputs == "per_view":
             feat = np.concatenate([self.views.geometry(off_np), self.conditions_or_reference(conditions, x.shape)],
                                   axis=2)
-            parts.append(torch.as_tensor((feat - self._feat_mean[:7]) / self._feat_std[:7], dtype=torch.float32))
+            parts.append(torch.as_tensor((feat - self._feat_mean[:N_VARYING]) / self._feat_std[:N_VARYING],
+                                         dtype=torch.float32))
         if self._pose is not None:
             parts.append(self._pose.expand(x.shape[0], -1, -1))
         if self.meta.inputs == "per_view":
@@ -163,7 +165,7 @@ class Surrogate:
 
     @torch.no_grad()
     def predict(self, offsets: np.ndarray, conditions: np.ndarray | None = None, batch: int = 8192) -> np.ndarray:
-        """(batch, n_views, 4) offsets [+ conditions (batch, n_views, 4), default the forecast reference] ->
+        """(batch, n_views, 4) offsets [+ conditions (batch, n_views, 5), default the forecast reference] ->
         (batch,) predicted error (m)."""
         offsets = np.asarray(offsets, dtype=np.float32)
         if offsets.ndim != 3 or offsets.shape[1:] != (self.n_views, 4):

@@ -106,6 +106,8 @@ def usable_rows(data: TrialData, section: SurrogateSection) -> tuple[np.ndarray,
     indices that take part in training -- every trial with ``predict_failure``, else the usable ones)."""
     error = np.asarray(data.error, float)
     usable = np.isfinite(error) & (section.use_failed_trials | ~np.asarray(data.failed, bool))
+    if section.missing_views == "drop":
+        usable &= data.complete()
     rows = np.arange(data.n_trials) if section.predict_failure else np.flatnonzero(usable)
     return usable, rows
 
