@@ -113,8 +113,8 @@ def run_bench() -> list[BenchRecord]:
     records = [
         BenchRecord("surrogate.r2_test", test["r2"], "", "paper Sec. 4.1 (300 experiments, MATLAB CNN)", 0.98, note),
         BenchRecord("surrogate.r2_baseline", baseline["r2"], "", None, None,
-                    f"a quartic in the trial's 4 mean offsets, least squares on the same train + val trials, the same "
-                    f"{baseline['n']} test trials"),
+                    f"a degree-{baseline['degree']} polynomial in the trial's 4 mean offsets, least squares on the "
+                    f"same train + val trials, the same {baseline['n']} test trials"),
         BenchRecord("surrogate.r2_gain", test["r2"] - baseline["r2"], "", None, None,
                     "r2_test - r2_baseline: what the per-view network adds to the trial's mean offsets"),
         BenchRecord("surrogate.r2_cv", cv["r2_mean"], "", "paper Sec. 4.1 (300 experiments, MATLAB CNN)", 0.98,

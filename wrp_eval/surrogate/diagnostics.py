@@ -19,9 +19,9 @@ over a few sub-tracking-precision jitters (its smooth trend), and compares the c
 path: Spearman rank correlation, the sign agreement on the moves the surrogate rates largest, the RMSE (the
 validated single-view error the optimiser's acceptance rule uses) and both spreads.
 
-**Baseline** (:func:`mean_offset_baseline`): a quartic in the trial's four mean offsets, on the surrogate's own
-split. Issue 18 measured that the mean yaw alone explained 0.87 of the variance of the earlier campaigns: the
-network's R^2 only counts for what it adds to this.
+**Baseline** (:func:`mean_offset_baseline`): a polynomial (up to a quartic, as the data allow) in the trial's
+four mean offsets, on the surrogate's own split. Issue 18 measured that the mean yaw alone explained 0.87 of
+the variance of the earlier campaigns: the network's R^2 only counts for what it adds to this.
 
 The roughness re-scores each trial with the gimbal pitch it achieved (the store's ``camera_pitch``; campaigns
 stored before that column fall back to the planned pitch, which differs only where the gimbal saturated); the
@@ -33,6 +33,7 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 from itertools import combinations_with_replacement
+from math import comb
 from pathlib import Path
 
 import numpy as np
@@ -223,21 +224,24 @@ def single_view_oracle(surrogate, campaign_dir: str | Path, *, n_moves: int, jit
     return {"views": views, "offsets": offsets, "changes": changes, "seed": seed}
 
 
-def mean_offset_baseline(data, split: dict, degree: int = 4, ridge: float = 1e-6) -> dict:
-    """The small model the surrogate must beat (issue 18 item 2: ``surrogate.r2_baseline``): a polynomial of
-    ``degree`` in the trial's four MEAN offsets (over its viewpoints), least squares with a tiny ridge, fitted on
-    the split's train + val trials and scored on its test trials (``split``: a TrainResult's). Returns r2, rmse
-    (m), n, degree."""
+def mean_offset_baseline(data, split: dict, max_degree: int = 4, ridge: float = 1e-6,
+                         trials_per_term: int = 10) -> dict:
+    """The small model the surrogate must beat (issue 18 item 2: ``surrogate.r2_baseline``): a polynomial in the
+    trial's four MEAN offsets (over its viewpoints), least squares with a tiny ridge, fitted on the split's
+    train + val trials and scored on its test trials (``split``: a TrainResult's). Its degree is the highest
+    <= ``max_degree`` with at least ``trials_per_term`` fitted trials per coefficient (a quartic has 70: on the
+    quickstart's ~220 trials it would fit noise), so the baseline stays small. Returns r2, rmse (m), n, degree."""
     mean = np.asarray(data.offsets, float).mean(axis=1)
     scale = mean.std(axis=0)
     z = (mean - mean.mean(axis=0)) / np.where(scale > 0, scale, 1.0)
+    y = np.asarray(data.error, float)
+    fit = np.asarray(list(split["train"]) + list(split["val"]), dtype=int)
+    test = np.asarray(split["test"], dtype=int)
+    fit, test = fit[np.isfinite(y[fit])], test[np.isfinite(y[test])]
+    degree = max([1] + [d for d in range(1, max_degree + 1) if comb(4 + d, d) * trials_per_term <= len(fit)])
     terms = [np.ones(len(z))] + [np.prod(z[:, list(c)], axis=1) for d in range(1, degree + 1)
                                  for c in combinations_with_replacement(range(4), d)]
     X = np.column_stack(terms)
-    y = np.asarray(data.error, float)
-    fit = np.asarray(split["train"] + split["val"], dtype=int)
-    test = np.asarray(split["test"], dtype=int)
-    fit, test = fit[np.isfinite(y[fit])], test[np.isfinite(y[test])]
     A = X[fit]
     coef = np.linalg.solve(A.T @ A + ridge * len(fit) * np.eye(A.shape[1]), A.T @ y[fit])
     return {**regression_metrics(y[test], X[test] @ coef), "degree": degree}
