@@ -35,8 +35,8 @@ class TrialData:
     path_digest: the campaign's content hash of the path (None for data not tied to a stored path);
     deviation (n_trials, n_views, 4) or None: the wind-induced part (flown - commanded), for r_s;
     conditions (n_trials, n_views, 5) or None: blur px and wind m/s at each view and whether it was taken
-    (:data:`CONDITION_NAMES`; NaN where not recorded; None: none recorded); views: the path's :class:`ViewContext` (None: per-view inputs
-    unavailable, only the ``offsets`` input set can be trained).
+    (:data:`CONDITION_NAMES`; NaN where not recorded; None: none recorded); views: the path's
+    :class:`ViewContext` (None: per-view inputs unavailable, only the ``offsets`` input set can be trained).
     """
 
     offsets: np.ndarray
