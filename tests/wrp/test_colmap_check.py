@@ -18,6 +18,10 @@ def test_rows_and_summary_count_sign_agreement_per_wrp():
     assert s["iswrp"]["sign_agreement_above_noise"] == 1.0
     assert s["iswrp"]["synthetic_mean_diff_m"] == pytest.approx(0.0) and s["iswrp"]["colmap_mean_diff_m"] > 0
     assert s["swrp"]["moved"] is False and COLMAP_NOISE_M == pytest.approx(0.0012)
+    scores["initial"][3], scores["iswrp"][3] = (0.02, 0.03), (0.021, float("nan"))    # COLMAP failed: no vote
+    s = _summary(_rows(scores, {"iswrp": True, "swrp": False}), {"iswrp": True, "swrp": False})
+    assert s["iswrp"]["winds"] == 2 and s["iswrp"]["winds_without_a_result"] == 1
+    assert s["iswrp"]["sign_agreement"] == 0.5
 
 
 def test_common_winds_needs_a_finished_evaluation(tmp_path):

@@ -3,6 +3,7 @@
 from types import SimpleNamespace
 
 import numpy as np
+import pytest
 
 from wrp_eval.wrp.confirm import confirm_moves, neighbour_draws
 from wrp_eval.wrp.optimize import WrpParams
@@ -43,3 +44,39 @@ def test_confirmation_keeps_moves_the_oracle_agrees_with_and_reverts_the_others(
     again = confirm_moves(KnownOracle(best), path, offsets, moved, params, seed=4, samples=6)
     np.testing.assert_array_equal(again.oracle_gain_m, c.oracle_gain_m)           # seeded
     assert np.all(np.linalg.norm(neighbour_draws(params, 1, 50, 0), axis=1) <= 0.2 + 1e-12)   # the r_s ball
+
+
+def test_oracle_verdicts_need_a_gain_beyond_the_oracles_noise_and_count_failures():
+    from wrp_eval.wrp.confirm import oracle_verdicts
+    rng = np.random.default_rng(0)
+    base = 0.03 + rng.normal(0, 0.002, 8)
+    errors = np.stack([
+        np.stack([base - 0.001, base]),                          # 1 mm better in every draw: confirmed
+        np.stack([base - 0.002 * np.array([1, -1, 1, -1, 1, -1, 0.5, -0.3]), base]),   # +0.05 mm < 2 SE
+        np.stack([base, np.r_[base[:7], np.nan]]),               # without it one draw fails: confirmed
+        np.stack([np.r_[np.nan, base[1:]], base]),               # with it one draw fails: rejected
+    ])
+    gain, ok = oracle_verdicts(errors, WrpParams("iswrp", 0.1, 0.03, np.full(4, 0.2)))
+    assert ok.tolist() == [True, False, True, False]
+    assert gain[0] == pytest.approx(0.001) and gain[1] == pytest.approx(0.00005) and np.isnan(gain[2:]).all()
+    swrp = WrpParams("swrp", 0.1, 0.03, np.full(4, 0.2), acceptance="validated", validated_error_m=1e-4)
+    spread = np.stack([np.stack([np.full(8, 0.03), 0.03 + np.linspace(-0.003, 0.003, 8)])])
+    g, ok = oracle_verdicts(spread, swrp)                       # the spread drops by ~2.2 mm > 2 x 0.1 mm
+    assert ok.tolist() == [True] and g[0] > 2e-4
+
+
+def test_revert_puts_rejected_views_back_and_keeps_the_rest():
+    from wrp_eval.wrp.jobs import revert
+    from wrp_eval.wrp.optimize import WrpResult
+    from .conftest import small_surrogate
+    s = small_surrogate(4, seed=0, error_std=1.0, gain=20.0)
+    offsets = np.array([[0.5, 0, 0, 0.1], [0, 0, 0, 0], [0, 1.0, 0, 0], [0, 0, -1.0, 0]])
+    moved = np.array([True, False, True, True])
+    r = WrpResult(offsets, moved, np.array([3, -1, 5, 7]), np.array([1.0, np.nan, 2.0, 3.0]),
+                  np.array([0.1, np.nan, 0.2, 0.3]), 0.0, 1.0, 1, 1, WrpParams("iswrp", 0.1, 1.0, np.full(4, 0.5)))
+    out = revert(r, np.array([False, False, True, False]), s)
+    assert out.moved.tolist() == [True, False, False, True]
+    np.testing.assert_array_equal(out.offsets[2], 0.0)
+    np.testing.assert_array_equal(out.offsets[[0, 3]], offsets[[0, 3]])
+    assert out.accepted_iteration.tolist() == [3, -1, -1, 7] and np.isnan(out.stage1_error[2])
+    assert out.predicted_error_m == pytest.approx(float(s.predict(out.offsets[None])[0]))

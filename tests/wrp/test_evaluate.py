@@ -163,3 +163,18 @@ def test_forecast_config_flies_every_trial_in_the_forecast_wind():
     assert cfg.campaign.n_trials == 12
     assert cfg.campaign.wind.speed_10m_m_s == 9.5 and cfg.campaign.wind.direction_deg == 120.0
     assert cfg.campaign.wind.turbulence == TrialConfig().campaign.wind.turbulence
+
+
+def test_five_perfect_forecast_flights_are_not_enough_to_go():
+    """An exact (Clopper-Pearson) interval: 5 of 5 flights in spec has a 95 % lower bound of 0.478, not 1."""
+    from types import SimpleNamespace
+
+    from wrp_eval.wrp.config import EvaluateSection
+    from wrp_eval.wrp.evaluate import proportion_ci
+    from wrp_eval.wrp.jobs import forecast_verdict
+    assert proportion_ci(5, 5, 0.95)[0] == pytest.approx(0.025 ** (1 / 5), abs=1e-9)   # the exact bound
+    five = PathTrials("initial", np.arange(5), np.full(5, 0.02), np.zeros(5, bool), np.full(5, 0.99),
+                      np.zeros(5), 40)
+    v = forecast_verdict(five, EvaluateSection(go_probability=0.8), (0.03, 0.95), 0,
+                         SimpleNamespace(speed_10m_mps=6.0, direction_deg=270.0))
+    assert v["p_meets_spec"] == 1.0 and not v["go"]

@@ -231,13 +231,14 @@ def mean_offset_baseline(data, split: dict, max_degree: int = 4, ridge: float = 
     train + val trials and scored on its test trials (``split``: a TrainResult's). Its degree is the highest
     <= ``max_degree`` with at least ``trials_per_term`` fitted trials per coefficient (a quartic has 70: on the
     quickstart's ~220 trials it would fit noise), so the baseline stays small. Returns r2, rmse (m), n, degree."""
-    mean = np.asarray(data.offsets, float).mean(axis=1)
-    scale = mean.std(axis=0)
-    z = (mean - mean.mean(axis=0)) / np.where(scale > 0, scale, 1.0)
     y = np.asarray(data.error, float)
+    scored = np.isfinite(y) & ~np.asarray(data.failed, bool) & data.complete()    # what the network's R^2 counts
     fit = np.asarray(list(split["train"]) + list(split["val"]), dtype=int)
     test = np.asarray(split["test"], dtype=int)
-    fit, test = fit[np.isfinite(y[fit])], test[np.isfinite(y[test])]
+    fit, test = fit[scored[fit]], test[scored[test]]
+    mean = np.asarray(data.offsets, float).mean(axis=1)
+    centre, scale = mean[fit].mean(axis=0), mean[fit].std(axis=0)                  # the fit trials only
+    z = (mean - centre) / np.where(scale > 0, scale, 1.0)
     degree = max([1] + [d for d in range(1, max_degree + 1) if comb(4 + d, d) * trials_per_term <= len(fit)])
     terms = [np.ones(len(z))] + [np.prod(z[:, list(c)], axis=1) for d in range(1, degree + 1)
                                  for c in combinations_with_replacement(range(4), d)]

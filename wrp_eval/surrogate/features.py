@@ -107,7 +107,7 @@ def reference_conditions(conditions: np.ndarray | None, n_views: int) -> np.ndar
 
 def campaign_view_context(scored_ship, path, conditions: np.ndarray | None) -> ViewContext:
     """The :class:`ViewContext` of ``path`` (a :class:`wrp_eval.planning.path.Path`) on ``scored_ship``
-    (:class:`wrp_eval.recon.scene.ScoredShip`), with the per-view mean of ``conditions`` (trials, n, 4) as the
+    (:class:`wrp_eval.recon.scene.ScoredShip`), with the per-view mean of ``conditions`` (trials, n, 5) as the
     reference (zeros without)."""
     cover = scored_ship.coverage(captures_from_path(path))
     reference = reference_conditions(conditions, len(path))

@@ -2,7 +2,7 @@
 
 Architecture (paper Sec. 4.1 fits "a CNN regression model"; the layout here is ours): the viewpoint sequence
 is a 1-D signal with one sample per viewpoint and standardised input channels, in this order: the 4 offsets
-(dx, dy, dz, dyaw); with the ``per_view`` input set the 3 flown-geometry channels computed from them and the 4
+(dx, dy, dz, dyaw); with the ``per_view`` input set the 3 flown-geometry channels computed from them and the 5
 conditions at the shutter (:mod:`wrp_eval.surrogate.features`); the 7 planned-pose channels; with
 ``per_view`` the 2 coverage channels. The offsets and the geometry are what a candidate move changes;
 ``layers`` x (Conv1d 'same' zero padding + GELU) -> global MEAN

@@ -91,7 +91,7 @@ def _standardise(values: np.ndarray, axis) -> tuple[np.ndarray, np.ndarray]:
 
 
 def _conditions(data: TrialData, rows: np.ndarray) -> np.ndarray | None:
-    """(len(rows), n, 4) the trials' conditions at the shutter, the forecast reference where not recorded."""
+    """(len(rows), n, 5) the trials' conditions at the shutter, the forecast reference where not recorded."""
     if data.views is None:
         return None
     ref = np.broadcast_to(data.views.condition_reference, (len(rows), data.n_views, len(CONDITION_NAMES)))
@@ -349,15 +349,18 @@ def train_from_campaign(ctx: ExperimentContext, campaign_dir: str | Path | None 
     does not read the campaign again."""
     section = ctx.config.surrogate
     folder = campaign_dir if campaign_dir is not None else ctx.training_campaign_dir
-    data = load_campaign_trials(folder)
+    data = load_campaign_trials(folder, config_dir=ctx.config_dir)
     result, cv = train_with_folds(data, section, section.seed_or(ctx.run_seed), folds, workers, progress=progress)
     result.metrics["physical_variance_share"] = physical_variance_share(data)
     result.metrics["baseline"] = mean_offset_baseline(data, result.split)
     if section.validation_moves > 0 and data.views is not None:
         # the validated single-view error the optimiser's acceptance rule needs (issue 18 item 3)
         agreement = single_view_agreement(result.surrogate, folder, n_moves=section.validation_moves,
-                                          jitters=section.validation_jitters, seed=section.seed_or(ctx.run_seed))
-        result.metrics["single_view"] = {k: v for k, v in agreement.items() if k != "oracle"}
+                                          jitters=section.validation_jitters, seed=section.seed_or(ctx.run_seed),
+                                          config_dir=ctx.config_dir)
+        validated = {k: v for k, v in agreement.items() if k != "oracle"}
+        result.metrics["single_view"] = validated
+        result.surrogate.meta.metrics["single_view"] = validated      # what the checkpoint carries
     write_outputs(result, out_dir if out_dir is not None else ctx.folders.surrogate)
     return result, data, cv
 

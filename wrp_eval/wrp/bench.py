@@ -57,7 +57,7 @@ def run_bench() -> list[BenchRecord]:
                            iterations=1000, attitude_samples=50, neighbourhood_samples=16, step_m=step,
                            acceptance="validated", validated_error_m=rmse, neighbour_cholesky=chol)
         records.append(_timed(s, params, name, "issue 18 target (surrogate time, oracle confirmation apart)", limit,
-                              f"acceptance validated, margin {'2 x %.3f mm' % (rmse * 1e3) if rmse else 'none'}, "
+                              f"acceptance validated, margin {'2 x %.3f mm' % (rmse * 1e3) if rmse is not None else 'none'}, "
                               f"{'measured' if chol is not None else 'ball'} neighbourhoods; surrogate: {what}"))
     return records
 

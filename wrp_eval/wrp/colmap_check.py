@@ -120,16 +120,18 @@ def _rows(scores: dict, moved: dict) -> list[dict]:
                 continue
             syn, col = scores[name][trial]
             d_syn, d_col = syn - syn0, col - col0
+            scored = bool(np.isfinite(d_syn) and np.isfinite(d_col))     # an oracle without a result: no vote
             rows.append({"wind": trial, "wrp": name, "synthetic_diff_m": d_syn, "colmap_diff_m": d_col,
-                         "signs_agree": bool(np.sign(d_syn) == np.sign(d_col)),
-                         "colmap_above_noise": bool(abs(d_col) > COLMAP_NOISE_M)})
+                         "scored": scored, "signs_agree": bool(scored and np.sign(d_syn) == np.sign(d_col)),
+                         "colmap_above_noise": bool(scored and abs(d_col) > COLMAP_NOISE_M)})
     return rows
 
 
 def _summary(rows: list[dict], moved: dict) -> dict:
     out = {}
     for name in PATHS[1:]:
-        mine = [r for r in rows if r["wrp"] == name]
+        every = [r for r in rows if r["wrp"] == name]
+        mine = [r for r in every if r["scored"]]
         if not moved[name]:
             out[name] = {"moved": False, "note": "no viewpoint moved: the WRP flies the initial path's flights"}
             continue
@@ -138,7 +140,7 @@ def _summary(rows: list[dict], moved: dict) -> dict:
         d_syn = np.array([r["synthetic_diff_m"] for r in mine], float)
         d_col = np.array([r["colmap_diff_m"] for r in mine], float)
         above = [r for r in mine if r["colmap_above_noise"]]
-        out[name] = {"moved": True, "winds": len(mine), "synthetic_mean_diff_m": float(np.nanmean(d_syn)),
+        out[name] = {"moved": True, "winds": len(mine), "winds_without_a_result": len(every) - len(mine), "synthetic_mean_diff_m": float(np.nanmean(d_syn)),
                      "colmap_mean_diff_m": float(np.nanmean(d_col)),
                      "mean_signs_agree": bool(np.sign(np.nanmean(d_syn)) == np.sign(np.nanmean(d_col))),
                      "sign_agreement": float(np.mean([r["signs_agree"] for r in mine])),

@@ -6,9 +6,14 @@ surrogate moved, ``samples`` neighbourhood draws of view i are taken from its me
 draws around the moved and around the planned position (common random numbers). With every other viewpoint at
 the WRP's offsets, the oracle scores the 2 x ``samples`` capture sets, and the kind's neighbourhood score
 (:func:`wrp_eval.wrp.optimize.neighbourhood_score`: ISWRP the mean error or its CVaR, SWRP the spread) is
-compared: the move stands when the oracle's score with it is lower than without it. Moves it does not
-confirm are reverted. Every capture set of every moved view is built first and scored in one pass (the oracle
-scores one set per call); the pass is timed apart from the surrogate's search.
+compared. The move stands when the oracle's gain (score without it minus with it) clears the oracle's own
+noise: for ISWRP, ``CONFIRM_Z`` standard errors of the paired differences (without - with, draw by draw); for
+SWRP, whose spread has no paired standard error, the optimiser's own margin (twice the surrogate's validated
+single-view error). A capture set the oracle cannot reconstruct counts as a failure: the side with fewer
+failures wins; with as many, the scores are taken over the reconstructed draws. Moves it does not confirm are
+reverted, and the caller confirms the remaining ones again (``CONFIRM_ROUNDS``), since each was judged beside
+moves that may since have been reverted. Every capture set of every moved view is built first and scored in
+one pass (the oracle scores one set per call); the pass is timed apart from the surrogate's search.
 """
 
 from __future__ import annotations
@@ -22,6 +27,8 @@ from wrp_eval.recon.capture_io import captures_from_path
 from wrp_eval.wrp.optimize import WrpParams, neighbourhood_score
 
 CONFIRM_STREAM = 1_000_003    # spawn key of the confirmation's draws (apart from the optimiser's blocks)
+CONFIRM_Z = 2.0               # ISWRP: the paired gain must exceed this many standard errors (one-sided ~98 %)
+CONFIRM_ROUNDS = 3            # confirm, revert, confirm the rest again: at most this many rounds
 
 
 @dataclass(frozen=True)
@@ -72,14 +79,34 @@ def confirm_moves(scored_ship, path, offsets: np.ndarray, moved: np.ndarray, par
                 sets.append(o)
     errors = np.array([scored_ship.score(captures_from_path(path, o, blur_px=blur_px), seed=0).error_m
                        for o in sets])    # one oracle call per capture set: the oracle is not batched
-    errors = np.where(np.isfinite(errors), errors, np.inf).reshape(len(views), 2, samples)
-    with np.errstate(invalid="ignore"):
-        score = neighbourhood_score(errors, params)         # (moves, 2): with, without
-        gain = score[:, 1] - score[:, 0]
+    errors = errors.reshape(len(views), 2, samples)                        # (moves, with / without, draws)
+    gain, ok = oracle_verdicts(errors, params)
     n = len(moved)
     oracle_gain = np.full(n, np.nan)
     oracle_gain[views] = gain
     confirmed = np.zeros(n, bool)
-    confirmed[views] = gain > 0          # +inf: the oracle fails without the move only; NaN: fails both
+    confirmed[views] = ok
     return Confirmation(confirmed, np.asarray(moved, bool) & ~confirmed, oracle_gain, len(sets),
                         time.perf_counter() - start)
+
+
+def oracle_verdicts(errors: np.ndarray, params: WrpParams) -> tuple[np.ndarray, np.ndarray]:
+    """errors (moves, 2, samples) m (index 0: with the move, 1: without; NaN: not reconstructed) -> (gain (moves,)
+    m: the score without minus with; confirmed (moves,) bool) by the rule of the module docstring."""
+    finite = np.isfinite(errors)
+    failures = (~finite).sum(axis=2)                                       # (moves, 2)
+    gain = np.full(len(errors), np.nan)
+    confirmed = failures[:, 0] < failures[:, 1]                            # fewer failed reconstructions wins
+    for m in np.flatnonzero(failures[:, 0] == failures[:, 1]):
+        both = finite[m, 0] & finite[m, 1]
+        if both.sum() < 2:
+            continue
+        score = neighbourhood_score(errors[m][:, both], params)            # (2,): with, without
+        gain[m] = score[1] - score[0]
+        if params.kind == "iswrp":
+            diff = errors[m, 1, both] - errors[m, 0, both]
+            noise = CONFIRM_Z * diff.std(ddof=1) / np.sqrt(diff.size)
+        else:
+            noise = params.improvement_margin_m()
+        confirmed[m] = gain[m] > noise
+    return gain, confirmed

@@ -88,6 +88,15 @@ def meets_spec(p: PathTrials, spec_error_m: float, spec_completeness: float) -> 
         return ~p.failed & (p.error_m <= spec_error_m) & (comp >= spec_completeness)
 
 
+def proportion_ci(successes: int, trials: int, confidence: float) -> list | None:
+    """The exact (Clopper-Pearson) CI of a proportion: a bootstrap of 0/1 outcomes collapses to [1, 1] when
+    every trial succeeds, which would let 5 of 5 flights say 'surely above 0.8'."""
+    if trials < 1:
+        return None
+    ci = stats.binomtest(successes, trials).proportion_ci(confidence_level=confidence, method="exact")
+    return [float(ci.low), float(ci.high)]
+
+
 def path_summary(p: PathTrials, rng: np.random.Generator, resamples: int, confidence: float,
                  spec: tuple[float, float] | None = None) -> dict:
     """mean / std / p95 of the error over trials that did not fail, failure rate; with ``spec`` (error m,
@@ -104,10 +113,10 @@ def path_summary(p: PathTrials, rng: np.random.Generator, resamples: int, confid
         out[key + "_ci"] = _ci((ok,), fn, rng, resamples, confidence) if ok.size > 2 else None
     mean = lambda x, axis: x.mean(axis=axis)  # noqa: E731
     if spec is not None:
-        met = meets_spec(p, *spec).astype(float)
+        met = meets_spec(p, *spec)
         out.update({"spec_error_m": spec[0], "spec_completeness": spec[1],
                     "p_meets_spec": float(met.mean()) if met.size else float("nan"),
-                    "p_meets_spec_ci": _ci((met,), mean, rng, resamples, confidence)})
+                    "p_meets_spec_ci": proportion_ci(int(met.sum()), int(met.size), confidence)})
     if p.views_not_taken is not None:
         out["mean_views_not_taken"] = float(p.views_not_taken.mean()) if p.views_not_taken.size else float("nan")
         out["mean_views_not_taken_ci"] = _ci((p.views_not_taken,), mean, rng, resamples, confidence)

@@ -32,7 +32,7 @@ from wrp_eval.recon.scene import ScoredShip
 from wrp_eval.surrogate.data import TrialData, load_campaign_trials
 from wrp_eval.surrogate.model import Surrogate
 from wrp_eval.wrp.config import WrpSection
-from wrp_eval.wrp.confirm import confirm_moves
+from wrp_eval.wrp.confirm import CONFIRM_ROUNDS, confirm_moves
 from wrp_eval.ship.nofly import flyable
 from wrp_eval.wrp.evaluate import PathTrials, box_plot, path_summary, read_trials, summarise
 from wrp_eval.wrp.placebo import placebo_offsets
@@ -46,6 +46,7 @@ from wrp_eval.wrp.optimize import (
 )
 
 EVALUATED_PATHS = ("initial", "iswrp", "swrp")
+WRP_KINDS = EVALUATED_PATHS[1:]
 
 
 @dataclass(frozen=True)
@@ -166,14 +167,20 @@ def run_optimize(ctx: ExperimentContext, section: WrpSection, out: Path, inputs:
                        neighbour_cholesky=inputs.neighbour_cholesky, **safety_constraints(ctx, path))
     seed = section.seed if section.seed is not None else ctx.run_seed
     result = interval_optimise(surrogate, params, seed=seed)
-    confirmation = None
+    confirmation, rounds = None, []
     if params.acceptance == "validated" and result.moved.any() and use_oracle:
-        confirmation = confirm_moves(ctx.scored_ship, path, result.offsets, result.moved, params, seed,
-                                     section.confirm_samples, forecast_blur(surrogate))
-        result = revert(result, confirmation.rejected, surrogate)
+        # confirm, revert the rejected moves, and confirm the rest again against what remains (a move confirmed
+        # beside one that was then reverted is judged anew), until nothing more is rejected
+        for _ in range(CONFIRM_ROUNDS):
+            confirmation = confirm_moves(ctx.scored_ship, path, result.offsets, result.moved, params, seed,
+                                         section.confirm_samples, forecast_blur(surrogate))
+            rounds.append(confirmation.to_json_dict())
+            result = revert(result, confirmation.rejected, surrogate)
+            if not confirmation.rejected.any() or not result.moved.any():
+                break
     table = result.table3()
-    if confirmation is not None:
-        table["oracle_confirm_s"] = confirmation.seconds
+    if rounds:
+        table["oracle_confirm_s"] = sum(r["seconds"] for r in rounds)
     wrp_path = apply_offsets(path, result.offsets, {"wrp": {"kind": section.kind, "threshold_m": threshold,
                                                             "seed": seed}})
     if use_oracle and section.oracle_error:
@@ -192,9 +199,11 @@ def run_optimize(ctx: ExperimentContext, section: WrpSection, out: Path, inputs:
            "swrp_spread": params.swrp_spread, "acceptance": params.acceptance,
            "min_improvement_fraction": params.min_improvement_fraction,
            "validated_single_view_error_m": params.validated_error_m,
-           "improvement_margin_m": params.improvement_margin_m() if params.acceptance != "paper" else None,
+           "improvement_margin_m": (params.improvement_margin_m() if params.acceptance != "paper"
+                                    and np.isfinite(params.improvement_margin_m()) else None),
            "risk_measure": params.risk_measure,
-           "confirmation": confirmation.to_json_dict() if confirmation is not None else None,
+           "confirmation": rounds or ("not run: moves NOT confirmed by the oracle (no oracle in this run)"
+                                      if params.acceptance == "validated" and result.moved.any() else None),
            "surrogate": {"path_digest": surrogate.meta.path_digest, "metrics": surrogate.meta.metrics.get("test")},
            "viewpoints": [{"index": i, "moved": bool(result.moved[i]), "dx_m": float(o[0]), "dy_m": float(o[1]),
                            "dz_m": float(o[2]), "dyaw_deg": float(np.degrees(o[3])),
@@ -391,7 +400,8 @@ def placebo_paths_of(ctx: ExperimentContext, paths: dict[str, FlightPath],
     initial = paths["initial"]
     safety = safety_constraints(ctx, initial)
     out, infeasible = {}, 0
-    for index, (kind, wrp) in enumerate((k, p) for k, p in paths.items() if k != "initial"):
+    for kind, wrp in ((k, p) for k, p in paths.items() if k != "initial"):
+        index = WRP_KINDS.index(kind)    # a fixed stream per kind, whichever other WRPs are flown
         offsets = np.concatenate([np.asarray(wrp.positions) - np.asarray(initial.positions),
                                   np.angle(np.exp(1j * (np.asarray(wrp.yaw) - np.asarray(initial.yaw))))[:, None]],
                                  axis=1)

@@ -101,7 +101,11 @@ class WrpParams:
     def improvement_margin_m(self) -> float:
         """The least gain of the neighbourhood score for a move (m; inf: no move can be justified)."""
         if self.acceptance == "validated":
-            return 2.0 * self.validated_error_m if self.validated_error_m is not None else float("inf")
+            if self.validated_error_m is None:
+                return float("inf")
+            margin = 2.0 * self.validated_error_m
+            # SWRP on the literal variance scores in m^2: the margin in the same unit
+            return margin ** 2 if self.kind == "swrp" and self.swrp_spread == "variance" else margin
         return self.min_improvement_fraction * self.threshold_m
 
 

@@ -41,7 +41,7 @@ class ViewRisk:
 
 def campaign_flown_offsets(campaign_dir: str | Path) -> np.ndarray:
     """(n_trials, n_views, 4) every stored trial's flown offsets, NaN rows for views not taken (the surrogate's
-    :class:`wrp_eval.surrogate.data.TrialData` keeps only complete trials, which never miss a view)."""
+    :class:`wrp_eval.surrogate.data.TrialData` sets a view not taken to offset 0 and flags it in its conditions)."""
     return column_array(TrialStore(campaign_dir).read_table(["n_views", "flown_offsets"]), "flown_offsets")
 
 
