@@ -52,12 +52,13 @@ def run_bench() -> list[BenchRecord]:
     # search still runs, and nothing can be accepted)
     chol = offset_cholesky(data.deviation) if data.deviation is not None else None
     rmse = bench_single_view_rmse()
+    margin = f"2 x {rmse * 1e3:.3f} mm" if rmse is not None else "none"
     for kind, name, limit in (("iswrp", "wrp.iswrp_validated_s", 1.0), ("swrp", "wrp.swrp_validated_s", 2.0)):
         params = WrpParams(kind=kind, threshold_m=0.08 * e0, e_original_m=e0, sample_radius_m=radius,
                            iterations=1000, attitude_samples=50, neighbourhood_samples=16, step_m=step,
                            acceptance="validated", validated_error_m=rmse, neighbour_cholesky=chol)
         records.append(_timed(s, params, name, "issue 18 target (surrogate time, oracle confirmation apart)", limit,
-                              f"acceptance validated, margin {'2 x %.3f mm' % (rmse * 1e3) if rmse is not None else 'none'}, "
+                              f"acceptance validated, margin {margin}, "
                               f"{'measured' if chol is not None else 'ball'} neighbourhoods; surrogate: {what}"))
     return records
 

@@ -140,7 +140,8 @@ def _summary(rows: list[dict], moved: dict) -> dict:
         d_syn = np.array([r["synthetic_diff_m"] for r in mine], float)
         d_col = np.array([r["colmap_diff_m"] for r in mine], float)
         above = [r for r in mine if r["colmap_above_noise"]]
-        out[name] = {"moved": True, "winds": len(mine), "winds_without_a_result": len(every) - len(mine), "synthetic_mean_diff_m": float(np.nanmean(d_syn)),
+        out[name] = {"moved": True, "winds": len(mine), "winds_without_a_result": len(every) - len(mine),
+                     "synthetic_mean_diff_m": float(np.nanmean(d_syn)),
                      "colmap_mean_diff_m": float(np.nanmean(d_col)),
                      "mean_signs_agree": bool(np.sign(np.nanmean(d_syn)) == np.sign(np.nanmean(d_col))),
                      "sign_agreement": float(np.mean([r["signs_agree"] for r in mine])),
