@@ -36,7 +36,7 @@ BENCH_TRIALS = int(os.environ.get("WRP_EVAL_BENCH_CAMPAIGN_TRIALS", "512"))
 OVERHEAD_TRIALS = 200
 
 
-def _reference_config(path_file: Path, n_trials: int, out: Path, rerun: bool, workers: int | None):
+def reference_config(path_file: Path, n_trials: int, out: Path, rerun: bool, workers: int | None):
     return ExperimentConfig.model_validate({"campaign": {
         "path": str(path_file), "n_trials": n_trials, "batch_size": BENCH_BATCH, "seed": 1,
         "wind": {"speed_10m_m_s": {"dist": "uniform", "low": 4, "high": 10}, "turbulence": {"severity": "moderate"}},
@@ -54,7 +54,7 @@ def run_bench() -> list[BenchRecord]:
         path_file = tmp / "path.json"
         path.save(path_file)
 
-        real = campaign_job(ExperimentContext(_reference_config(path_file, BENCH_TRIALS, tmp / "real", True, None)),
+        real = campaign_job(ExperimentContext(reference_config(path_file, BENCH_TRIALS, tmp / "real", True, None)),
                             progress=False)
         table = TrialStore(real.out_dir).read_table(["finished_unix", "worker", "failed", "flight_s", "oracle_s"])
         finished = np.sort(table.column("finished_unix").to_numpy())

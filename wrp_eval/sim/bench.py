@@ -111,7 +111,7 @@ def raw_rollout_rate(section: SimSection, batch: int, sim_seconds: float,
     return steps / wall, steps / cpu
 
 
-def _moderate_wind(section: SimSection, batch: int, seed: int):
+def moderate_wind(section: SimSection, batch: int, seed: int):
     """Synthetic marine wind 6 m/s at 10 m from the west + moderate Dryden turbulence, one stream per flight,
     with the default ship's air wake."""
     wind = WindSection(speed_10m_mps=6.0, turbulence=TurbulenceSection(severity="moderate"))
@@ -120,7 +120,7 @@ def _moderate_wind(section: SimSection, batch: int, seed: int):
                             section.timestep_s * section.chunk_steps)
 
 
-def _ship_in_scene() -> ShipInScene:
+def ship_in_scene() -> ShipInScene:
     """The default ship (the paper's stylized 140 x 20 x 25 m) as the simulator sees it, swinging in sea
     state 3 (the quickstart's)."""
     particulars, _ = resolve_particulars(ShipSection(), ".")
@@ -132,11 +132,11 @@ def closed_loop_rate(section: SimSection, batch: int, sim_seconds: float) -> tup
     (fly-through, the default) around the swinging ship in its air wake, moderate turbulence, every default
     of ``sim:`` on (navigation, gimbal, battery, wind limit), for ``sim_seconds`` (the flights then end as
     timed out: the simulator's own limit)."""
-    wind = _moderate_wind(section, batch, 0)
+    wind = moderate_wind(section, batch, 0)
     section = section.model_copy(update={"max_flight_time_s": sim_seconds})
     with FlightSimulator(section) as sim:
         start, start_cpu = time.perf_counter(), time.process_time()
-        result = sim.fly(bench_path(), wind, batch, ship=_ship_in_scene(), flight_rngs=0)
+        result = sim.fly(bench_path(), wind, batch, ship=ship_in_scene(), flight_rngs=0)
         wall, cpu = time.perf_counter() - start, time.process_time() - start_cpu
     steps = batch * result.flight_time_s.max() / section.timestep_s
     return steps / wall, steps / cpu
@@ -178,10 +178,10 @@ def run_bench() -> list[BenchRecord]:
         ]
     path = bench_path()
     batch = 32
-    wind = _moderate_wind(section, batch, 1)
+    wind = moderate_wind(section, batch, 1)
     with FlightSimulator(section) as sim:
         start = time.perf_counter()
-        result = sim.fly(path, wind, batch, ship=_ship_in_scene(), flight_rngs=1)
+        result = sim.fly(path, wind, batch, ship=ship_in_scene(), flight_rngs=1)
         wall = time.perf_counter() - start
     rec.append(BenchRecord("sim.path_flight_s", wall / batch, "s wall per flight",
                            anchor="paper Table 1 flight time (s), 51 views", anchor_value=170.832,
