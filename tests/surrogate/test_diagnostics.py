@@ -127,3 +127,15 @@ def test_mean_offset_baseline_fits_a_function_of_the_mean_and_misses_a_per_view_
     assert doc["r2"] < 0.3 and doc["n"] == 60
     assert doc["degree"] == 2          # 340 fitted trials: 15 terms x 10 fit, a cubic's 35 would not
     assert mean_offset_baseline(per_view, split, trials_per_term=1)["degree"] == 4
+
+
+def test_mean_offset_baseline_without_enough_trials_gives_nan_not_an_error():
+    from wrp_eval.surrogate.data import TrialData
+    from wrp_eval.surrogate.diagnostics import mean_offset_baseline
+    offsets = np.random.default_rng(1).normal(0, 1, (10, 3, 4))
+    failed = np.ones(10, bool)                         # every flight failed: nothing the default counts
+    data = TrialData(offsets, np.full(10, 0.03), failed)
+    split = {"train": list(range(6)), "val": [6, 7], "test": [8, 9]}
+    assert np.isnan(mean_offset_baseline(data, split)["r2"])
+    with_failed = mean_offset_baseline(data, split, usable=np.ones(10, bool))   # use_failed_trials: they count
+    assert with_failed["n"] == 2 and with_failed["degree"] == 1 and np.isnan(with_failed["r2"])   # constant error

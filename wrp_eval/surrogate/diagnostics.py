@@ -224,18 +224,24 @@ def single_view_oracle(surrogate, campaign_dir: str | Path, *, n_moves: int, jit
     return {"views": views, "offsets": offsets, "changes": changes, "seed": seed}
 
 
-def mean_offset_baseline(data, split: dict, max_degree: int = 4, ridge: float = 1e-6,
-                         trials_per_term: int = 10) -> dict:
+def mean_offset_baseline(data, split: dict, usable: np.ndarray | None = None, max_degree: int = 4,
+                         ridge: float = 1e-6, trials_per_term: int = 10) -> dict:
     """The small model the surrogate must beat (issue 18 item 2: ``surrogate.r2_baseline``): a polynomial in the
     trial's four MEAN offsets (over its viewpoints), least squares with a tiny ridge, fitted on the split's
     train + val trials and scored on its test trials (``split``: a TrainResult's). Its degree is the highest
     <= ``max_degree`` with at least ``trials_per_term`` fitted trials per coefficient (a quartic has 70: on the
-    quickstart's ~220 trials it would fit noise), so the baseline stays small. Returns r2, rmse (m), n, degree."""
+    quickstart's ~220 trials it would fit noise), so the baseline stays small. ``usable`` (n_trials,) bool: the
+    trials the network's error fit and R^2 count (:func:`wrp_eval.surrogate.train.usable_rows`; default: finite
+    error, not failed, every view taken). Returns r2, rmse (m), n, degree; NaN figures when fewer than 2 trials
+    are left to fit or to test."""
     y = np.asarray(data.error, float)
-    scored = np.isfinite(y) & ~np.asarray(data.failed, bool) & data.complete()    # what the network's R^2 counts
+    scored = (np.isfinite(y) & ~np.asarray(data.failed, bool) & data.complete() if usable is None
+              else np.asarray(usable, bool) & np.isfinite(y))
     fit = np.asarray(list(split["train"]) + list(split["val"]), dtype=int)
     test = np.asarray(split["test"], dtype=int)
     fit, test = fit[scored[fit]], test[scored[test]]
+    if fit.size < 2 or test.size < 2:
+        return {"r2": float("nan"), "rmse": float("nan"), "mae": float("nan"), "n": int(test.size), "degree": 0}
     mean = np.asarray(data.offsets, float).mean(axis=1)
     centre, scale = mean[fit].mean(axis=0), mean[fit].std(axis=0)                  # the fit trials only
     z = (mean - centre) / np.where(scale > 0, scale, 1.0)

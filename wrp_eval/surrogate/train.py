@@ -352,7 +352,7 @@ def train_from_campaign(ctx: ExperimentContext, campaign_dir: str | Path | None 
     data = load_campaign_trials(folder, config_dir=ctx.config_dir)
     result, cv = train_with_folds(data, section, section.seed_or(ctx.run_seed), folds, workers, progress=progress)
     result.metrics["physical_variance_share"] = physical_variance_share(data)
-    result.metrics["baseline"] = mean_offset_baseline(data, result.split)
+    result.metrics["baseline"] = mean_offset_baseline(data, result.split, usable_rows(data, section)[0])
     if section.validation_moves > 0 and data.views is not None:
         # the validated single-view error the optimiser's acceptance rule needs (issue 18 item 3)
         agreement = single_view_agreement(result.surrogate, folder, n_moves=section.validation_moves,
