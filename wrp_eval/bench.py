@@ -32,6 +32,7 @@ BENCH_GROUPS: dict[str, str] = {
     "wrp": "wrp_eval.wrp.bench",
     "robustness": "wrp_eval.wrp.robustness_bench",
     "scaling": "wrp_eval.campaign.scaling_bench",
+    "cluster": "wrp_eval.campaign.cluster_bench",
 }
 
 
