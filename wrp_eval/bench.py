@@ -33,6 +33,7 @@ BENCH_GROUPS: dict[str, str] = {
     "robustness": "wrp_eval.wrp.robustness_bench",
     "scaling": "wrp_eval.campaign.scaling_bench",
     "cluster": "wrp_eval.campaign.cluster_bench",
+    "peers": "wrp_eval.sim.peers_bench",
 }
 
 
