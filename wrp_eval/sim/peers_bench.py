@@ -19,7 +19,8 @@ Records per batch B: ``peers.ours_drone_s_per_s.bB`` and ``peers.rotorpy_drone_s
 drone-seconds per wall second), ``peers.rotorpy_ratio.bB`` (ours / RotorPy; target >= 10 at 1,024) and the
 tracking error of each (``peers.*_tracking_rms_m.bB``: RMS distance of the true position from the hover point
 over the second half; ours includes the navigation estimate's error, which RotorPy's true-state controller does
-not have). Skipped with one line when RotorPy is not installed (``pip install .[peers]``).
+not have, so ours is also flown with ideal navigation: ``peers.ours_ideal_navigation_tracking_rms_m.bB``).
+Skipped with one line when RotorPy is not installed (``pip install .[peers]``).
 """
 
 from __future__ import annotations
@@ -33,6 +34,7 @@ from wrp_eval.ship.config import ShipSection
 from wrp_eval.ship.resolve import resolve_particulars
 from wrp_eval.sim.config import SimSection
 from wrp_eval.sim.flight import FlightSimulator
+from wrp_eval.sim.navigation import NavigationSection
 from wrp_eval.sim.vehicle import GRAVITY_M_S2, PHANTOM4
 from wrp_eval.wind.config import TurbulenceSection, WindSection
 from wrp_eval.wind.field import build_wind_field
@@ -144,6 +146,8 @@ def run_bench() -> list[BenchRecord]:
         note = (f"batch {batch}, {SIM_S:g} s hover in moderate Dryden turbulence (6 m/s mean), Phantom 4 mass and "
                 f"drag; ours MuJoCo {section.timestep_s * 1e3:g} ms with every sim default on, RotorPy 3.0.0 "
                 f"BatchedMultirotor rk4 {ROTORPY_DT_S * 1e3:g} ms + BatchedSE3Control, 1 torch thread")
+        ideal = section.model_copy(update={"navigation": NavigationSection(preset="ideal")})
+        _, ideal_err = ours_hover(batch, wind_field(batch, section.timestep_s * section.chunk_steps), ideal)
         target = ("issue 19 target", 10.0) if batch == 1024 else (None, None)
         records += [
             BenchRecord(f"peers.ours_drone_s_per_s.b{batch}", ours_rate, "drone-s/s", None, None, note),
@@ -151,6 +155,9 @@ def run_bench() -> list[BenchRecord]:
             BenchRecord(f"peers.rotorpy_ratio.b{batch}", ours_rate / peer_rate, "ratio", *target, note),
             BenchRecord(f"peers.ours_tracking_rms_m.b{batch}", ours_err, "m", None, None,
                         "true position vs hover point, second half; includes the navigation estimate's error"),
+            BenchRecord(f"peers.ours_ideal_navigation_tracking_rms_m.b{batch}", ideal_err, "m", None, None,
+                        "the same flights with navigation estimate = truth (preset ideal): the controller's own "
+                        "tracking, comparable with RotorPy's"),
             BenchRecord(f"peers.rotorpy_tracking_rms_m.b{batch}", peer_err, "m", None, None,
                         "true position vs hover point, second half; controller on the true state"),
         ]
