@@ -140,7 +140,7 @@ def test_forecast_verdict_goes_only_when_the_ci_clears_the_bar():
     from types import SimpleNamespace
 
     from wrp_eval.wrp.config import EvaluateSection
-    from wrp_eval.wrp.jobs import forecast_verdict
+    from wrp_eval.wrp.evaluate import forecast_verdict
     wind = SimpleNamespace(speed_10m_mps=7.0, direction_deg=250.0)
     errors = np.r_[np.full(57, 0.02), np.full(3, 0.05)]               # 57 of 60 flights meet 0.03 m
     good = PathTrials("initial", np.arange(60), errors, np.zeros(60, bool), np.full(60, 0.99), np.zeros(60), 40)
@@ -171,7 +171,7 @@ def test_five_perfect_forecast_flights_are_not_enough_to_go():
 
     from wrp_eval.wrp.config import EvaluateSection
     from wrp_eval.wrp.evaluate import proportion_ci
-    from wrp_eval.wrp.jobs import forecast_verdict
+    from wrp_eval.wrp.evaluate import forecast_verdict
     assert proportion_ci(5, 5, 0.95)[0] == pytest.approx(0.025 ** (1 / 5), abs=1e-9)   # the exact bound
     five = PathTrials("initial", np.arange(5), np.full(5, 0.02), np.zeros(5, bool), np.full(5, 0.99),
                       np.zeros(5), 40)

@@ -91,8 +91,9 @@ def rotorpy_hover(batch: int, series: np.ndarray, section: SimSection) -> tuple[
 
     torch.set_num_threads(1)
     device = torch.device("cpu")
-    params = BatchedMultirotorParams([rotorpy_params(section)] * batch, batch, device)
-    hover_speed = float(np.sqrt(PHANTOM4.mass_kg * GRAVITY_M_S2 / 4.0 / rotorpy_params(section)["k_eta"]))
+    quad = rotorpy_params(section)
+    params = BatchedMultirotorParams([quad] * batch, batch, device)
+    hover_speed = float(np.sqrt(PHANTOM4.mass_kg * GRAVITY_M_S2 / 4.0 / quad["k_eta"]))
     state = {"x": torch.tensor(np.repeat(HOVER_POINT[None], batch, 0), dtype=torch.double),
              "v": torch.zeros(batch, 3, dtype=torch.double),
              "q": torch.tensor([[0.0, 0.0, 0.0, 1.0]] * batch, dtype=torch.double),

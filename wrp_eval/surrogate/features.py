@@ -105,6 +105,16 @@ def reference_conditions(conditions: np.ndarray | None, n_views: int) -> np.ndar
     return reference
 
 
+def conditions_or_reference(conditions: np.ndarray | None, reference: np.ndarray, batch: int) -> np.ndarray:
+    """(batch, n, 5) ``conditions`` (None, or (batch, n, 5) with NaN where not recorded) with the forecast
+    ``reference`` (n, 5) in every gap."""
+    ref = np.broadcast_to(reference, (batch, *np.shape(reference)))
+    if conditions is None:
+        return ref
+    cond = np.asarray(conditions, float).reshape(ref.shape)
+    return np.where(np.isfinite(cond), cond, ref)
+
+
 def campaign_view_context(scored_ship, path, conditions: np.ndarray | None) -> ViewContext:
     """The :class:`ViewContext` of ``path`` (a :class:`wrp_eval.planning.path.Path`) on ``scored_ship``
     (:class:`wrp_eval.recon.scene.ScoredShip`), with the per-view mean of ``conditions`` (trials, n, 5) as the

@@ -27,7 +27,8 @@ from torch.nn import functional as F
 
 from wrp_eval.atomic import write_bytes_atomic
 from wrp_eval.errors import InputError
-from wrp_eval.surrogate.features import CONDITION_NAMES, GEOMETRY_NAMES, INPUT_SETS, ViewContext
+from wrp_eval.surrogate.features import (CONDITION_NAMES, GEOMETRY_NAMES, INPUT_SETS, ViewContext,
+                                         conditions_or_reference)
 
 CHECKPOINT_FORMAT = "wrp-eval-surrogate"
 CHECKPOINT_VERSION = 2    # 2: input sets and per-view inputs (issue 18); version 1 checkpoints are refused
@@ -138,14 +139,6 @@ class Surrogate:
         scale = np.asarray(self.meta.offset_std, float)
         return np.concatenate([scale, self._feat_std[:N_GEOMETRY]]) if self.meta.inputs == "per_view" else scale
 
-    def conditions_or_reference(self, conditions: np.ndarray | None, shape: tuple) -> np.ndarray:
-        """(batch, n, 5) conditions with the forecast reference where None or NaN."""
-        ref = np.broadcast_to(self.views.condition_reference, (*shape[:2], len(CONDITION_NAMES)))
-        if conditions is None:
-            return ref
-        cond = np.asarray(conditions, float).reshape(ref.shape)
-        return np.where(np.isfinite(cond), cond, ref)
-
     def input_tensor(self, offsets: np.ndarray | torch.Tensor, conditions: np.ndarray | None = None) -> torch.Tensor:
         """(batch, n_views, 4) offsets [+ (batch, n_views, 5) conditions at the shutter, default the forecast
         reference] -> (batch, n_views, in_channels) standardised network input."""
@@ -153,8 +146,8 @@ class Surrogate:
         x = (torch.as_tensor(off_np, dtype=torch.float32) - self._off_mean) / self._off_std
         parts = [x]
         if self.meta.inputs == "per_view":
-            feat = np.concatenate([self.views.geometry(off_np), self.conditions_or_reference(conditions, x.shape)],
-                                  axis=2)
+            cond = conditions_or_reference(conditions, self.views.condition_reference, x.shape[0])
+            feat = np.concatenate([self.views.geometry(off_np), cond], axis=2)
             parts.append(torch.as_tensor((feat - self._feat_mean[:N_VARYING]) / self._feat_std[:N_VARYING],
                                          dtype=torch.float32))
         if self._pose is not None:

@@ -34,7 +34,7 @@ from wrp_eval.experiment import ExperimentContext
 from wrp_eval.surrogate.config import SurrogateSection
 from wrp_eval.surrogate.data import TrialData, load_campaign_trials, physical_variance_share, split_indices
 from wrp_eval.surrogate.diagnostics import mean_offset_baseline, single_view_agreement
-from wrp_eval.surrogate.features import CONDITION_NAMES, COVERAGE_NAMES, GEOMETRY_NAMES
+from wrp_eval.surrogate.features import CONDITION_NAMES, COVERAGE_NAMES, GEOMETRY_NAMES, conditions_or_reference
 from wrp_eval.surrogate.metrics import regression_metrics
 from wrp_eval.surrogate.model import Surrogate, SurrogateMeta, ViewSequenceCNN
 
@@ -94,11 +94,8 @@ def _conditions(data: TrialData, rows: np.ndarray) -> np.ndarray | None:
     """(len(rows), n, 5) the trials' conditions at the shutter, the forecast reference where not recorded."""
     if data.views is None:
         return None
-    ref = np.broadcast_to(data.views.condition_reference, (len(rows), data.n_views, len(CONDITION_NAMES)))
-    if data.conditions is None:
-        return np.array(ref)
-    cond = np.asarray(data.conditions, float)[rows]
-    return np.where(np.isfinite(cond), cond, ref)
+    cond = None if data.conditions is None else np.asarray(data.conditions, float)[rows]
+    return np.array(conditions_or_reference(cond, data.views.condition_reference, len(rows)))
 
 
 def usable_rows(data: TrialData, section: SurrogateSection) -> tuple[np.ndarray, np.ndarray]:

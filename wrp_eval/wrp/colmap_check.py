@@ -8,7 +8,8 @@ poses, achieved gimbal pitch, roll, blur and recorded position priors) and score
 and with COLMAP (:class:`wrp_eval.recon.colmap.ColmapOracle`, rendered images; the ``photogrammetry`` extra).
 Per wind and WRP: d = error(WRP) - error(initial) for each oracle and whether their signs agree; per WRP the
 mean d of each oracle and the share of agreeing winds. A WRP that moved no viewpoint flies exactly the initial
-path's flights (same winds, same seeds): d is 0 for both oracles and nothing is scored for it.
+path's flights (same winds, same seeds): d is 0 for both oracles and nothing is scored for it; a capture set
+two paths share (ISWRP and SWRP can give the same path) is scored once.
 
 Slow (one COLMAP reconstruction per capture set, ~1 min each on 2 cores): a validation command, not a test.
 COLMAP's own noise on this ship is ~1.2 mm (recon/README.md, issue 17): differences below it are a coin flip
@@ -28,6 +29,7 @@ from wrp_eval.experiment import evaluated_campaign_dir
 from wrp_eval.planning.path import Path as FlightPath
 from wrp_eval.recon.colmap import ColmapOracle
 from wrp_eval.recon.synthetic import SyntheticOracle
+from wrp_eval.recon.validate import capture_sha
 from wrp_eval.surrogate.diagnostics import campaign_oracle
 from wrp_eval.wrp.evaluate import read_trials
 
@@ -83,16 +85,18 @@ def colmap_sign_check(evaluate_dir: str | Path, oracle_section, mesh, out: str |
                 for name in PATHS}
     moved = {name: _path_differs(evaluate_dir, name) for name in PATHS[1:]}
     scores: dict = {name: {} for name in PATHS}
+    scored: dict[str, tuple[float, float]] = {}      # capture set -> scores: ISWRP and SWRP may fly one path
     doc = {"winds": ids.tolist(), "colmap_noise_m": COLMAP_NOISE_M, "rows": [], "wrp": {}}
     for trial in ids:
         for name in PATHS:
             if name != "initial" and not moved[name]:
                 continue
             cs = captures[name][int(trial)]
-            colmap.work_dir = out / "colmap" / f"{name}-{trial}"
-            syn = _error(synthetic.evaluate(cs, mesh, seed=0))
-            col = _error(colmap.evaluate(cs, mesh, seed=0))
-            scores[name][int(trial)] = (syn, col)
+            key = capture_sha(cs)
+            if key not in scored:
+                colmap.work_dir = out / "colmap" / f"{name}-{trial}"
+                scored[key] = (_error(synthetic.evaluate(cs, mesh, seed=0)), _error(colmap.evaluate(cs, mesh, seed=0)))
+            syn, col = scores[name][int(trial)] = scored[key]
             print(f"wind {trial} {name:8s} synthetic {syn * 1e3:8.2f} mm  colmap {col * 1e3:8.2f} mm", flush=True)
         doc["rows"] = _rows(scores, moved)
         doc["wrp"] = _summary(doc["rows"], moved)

@@ -28,6 +28,7 @@ Issue 18 adds what tells a WRP's gain from chance (``robustness`` of :func:`summ
 
 from __future__ import annotations
 
+from collections.abc import Collection
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -205,10 +206,11 @@ def box_plot(paths: list[PathTrials], file: Path) -> None:
 
 def summarise(paths: list[PathTrials], seed: int, resamples: int, confidence: float,
               spec: tuple[float, float] | None = None, windfree_m: dict[str, float] | None = None,
-              placebos: dict[str, list[PathTrials]] | None = None) -> dict:
+              placebos: dict[str, list[PathTrials]] | None = None, unmoved: Collection[str] = ()) -> dict:
     """Tables 4/5 analogues: per-path summaries and paired differences against the first path; with
     ``windfree_m`` (path name -> wind-free error, placebos included) and ``placebos`` (WRP name -> its placebo
-    paths' trials) the robustness gain of every other path and its verdict (module docstring)."""
+    paths' trials) the robustness gain of every other path and its verdict (module docstring). A path named in
+    ``unmoved`` (a WRP that moved no viewpoint: the first path again) is never recommended, for that reason."""
     rng = np.random.default_rng(np.random.SeedSequence(seed, spawn_key=(7,)))
     out = {"confidence": confidence, "bootstrap_resamples": resamples,
            "paths": [path_summary(p, rng, resamples, confidence, spec) for p in paths],
@@ -224,8 +226,29 @@ def summarise(paths: list[PathTrials], seed: int, resamples: int, confidence: fl
         placebo_means = [g.mean() if g.size else np.nan for g in placebo_gains]
         robustness[p.name] = robustness_verdict(gains, np.array(placebo_means), rng, resamples, confidence)
         robustness[p.name]["windfree_error_m"] = windfree_m[p.name]
+        if p.name in unmoved:
+            robustness[p.name].update(recommended=False, reason="it moved no viewpoint: it is the initial path")
     out["windfree_error_m"] = {k: v for k, v in windfree_m.items()}
     out["robustness"] = robustness
     recommended = [k for k, v in robustness.items() if v["recommended"]]
     out["recommended_path"] = max(recommended, key=lambda k: robustness[k]["gain_m"]) if recommended else base.name
     return out
+
+
+def forecast_verdict(trials: PathTrials, ev, spec: tuple[float, float], seed: int, wind) -> dict:
+    """What the operator reads (issue 18 item 5): the chosen path in the forecast wind (``wind``: the config's
+    ``wind:`` section), P(meets spec) with its CI, views not taken and sorties, and GO when the CI's lower bound
+    reaches ``ev.go_probability`` (``ev``: the ``wrp.evaluate`` section, for its bootstrap and confidence)."""
+    go_probability = ev.go_probability
+    rng = np.random.default_rng(np.random.SeedSequence(seed, spawn_key=(8,)))
+    row = path_summary(trials, rng, ev.bootstrap, ev.confidence, spec)
+    ci = row.get("p_meets_spec_ci")
+    low = ci[0] if ci else float("nan")
+    go = bool(np.isfinite(low) and low >= go_probability)
+    summary = (f"forecast wind {wind.speed_10m_mps:g} m/s from {wind.direction_deg:g} deg, path {trials.name}: "
+               f"P(meets spec) {row['p_meets_spec']:.2f}"
+               + (f" [{ci[0]:.2f}, {ci[1]:.2f}]" if ci else "")
+               + f" over {row['trials']} flights -> {'GO' if go else 'NO-GO'} (needs the CI's lower bound >= "
+               f"{go_probability:g})")
+    return {**row, "go": go, "go_probability": go_probability, "wind_speed_10m_mps": float(wind.speed_10m_mps),
+            "wind_direction_deg": float(wind.direction_deg), "summary": summary}

@@ -34,7 +34,7 @@ from wrp_eval.surrogate.model import Surrogate
 from wrp_eval.wrp.config import WrpSection
 from wrp_eval.wrp.confirm import CONFIRM_ROUNDS, confirm_moves
 from wrp_eval.ship.nofly import flyable
-from wrp_eval.wrp.evaluate import PathTrials, box_plot, path_summary, read_trials, summarise
+from wrp_eval.wrp.evaluate import PathTrials, box_plot, forecast_verdict, read_trials, summarise
 from wrp_eval.wrp.placebo import placebo_offsets
 from wrp_eval.wrp.optimize import (
     WrpParams,
@@ -314,12 +314,7 @@ def evaluate_job(ctx: ExperimentContext, out: Path | None = None, *, n_trials: i
     spec_error = ev.spec_error_m if ev.spec_error_m is not None else SPEC_ERROR_FACTOR * windfree["initial"]
     seed = ctx.campaign_seed
     result = summarise(flown_trials, seed, ev.bootstrap, ev.confidence, (spec_error, ev.spec_completeness),
-                       windfree, placebo_trials)
-    for kind in unmoved:
-        result["robustness"][kind].update(recommended=False, reason="it moved no viewpoint: it is the initial path")
-    result["recommended_path"] = next((k for k in sorted(result["robustness"],
-                                                         key=lambda k: -result["robustness"][k]["gain_m"])
-                                       if result["robustness"][k]["recommended"]), "initial")
+                       windfree, placebo_trials, unmoved)
     result["placebos"] = {"per_wrp": ev.placebos, "not_flown_for": unmoved,
                           "moves_without_a_flyable_direction": infeasible,
                           "how": "as many viewpoints as the WRP moved, chosen at random, moved by the WRP's move "
@@ -364,23 +359,6 @@ def forecast_config(flown, wind, n_trials: int):
     doc["n_trials"] = n_trials
     doc["wind"].update({"speed_10m_m_s": float(wind.speed_10m_mps), "direction_deg": float(wind.direction_deg)})
     return flown.model_copy(update={"campaign": type(flown.campaign).model_validate(doc)})
-
-
-def forecast_verdict(trials: PathTrials, ev, spec: tuple[float, float], seed: int, wind) -> dict:
-    """What the operator reads (issue 18 item 5): the chosen path in the forecast wind, P(meets spec) with its
-    CI, views not taken and sorties, and GO when the CI's lower bound reaches ``ev.go_probability``."""
-    rng = np.random.default_rng(np.random.SeedSequence(seed, spawn_key=(8,)))
-    row = path_summary(trials, rng, ev.bootstrap, ev.confidence, spec)
-    ci = row.get("p_meets_spec_ci")
-    low = ci[0] if ci else float("nan")
-    go = bool(np.isfinite(low) and low >= ev.go_probability)
-    summary = (f"forecast wind {wind.speed_10m_mps:g} m/s from {wind.direction_deg:g} deg, path {trials.name}: "
-               f"P(meets spec) {row['p_meets_spec']:.2f}"
-               + (f" [{ci[0]:.2f}, {ci[1]:.2f}]" if ci else "")
-               + f" over {row['trials']} flights -> {'GO' if go else 'NO-GO'} (needs the CI's lower bound >= "
-               f"{ev.go_probability:g})")
-    return {**row, "go": go, "go_probability": ev.go_probability, "wind_speed_10m_mps": float(wind.speed_10m_mps),
-            "wind_direction_deg": float(wind.direction_deg), "summary": summary}
 
 
 SPEC_ERROR_FACTOR = 1.1   # wrp.evaluate.spec_error_m unset: 1.1 x the initial path's wind-free error

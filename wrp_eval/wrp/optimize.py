@@ -138,7 +138,8 @@ def iteration_draws(seed: int, view: int, block: int, params: WrpParams) -> Iter
     return IterationDraws(position, yaw, neighbour, neighbour_yaw)
 
 
-def best_attitude(query: ViewQuery, view: int, positions: np.ndarray, yaws: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+def best_attitude(query: ViewQuery, view: int, positions: np.ndarray,
+                  yaws: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """Alg. 4 for many positions in ONE surrogate pass: positions (..., 3), yaws (..., A) ->
     (best yaw (...), its error (...))."""
     lead = positions.shape[:-1]
@@ -257,7 +258,8 @@ def optimise_view_improve(query: ViewQuery, view: int, params: WrpParams,
     return -1, np.zeros(4), float("nan"), float("nan"), scored
 
 
-def optimise_view(query: ViewQuery, view: int, params: WrpParams, seed: int) -> tuple[int, np.ndarray, float, float, int]:
+def optimise_view(query: ViewQuery, view: int, params: WrpParams,
+                  seed: int) -> tuple[int, np.ndarray, float, float, int]:
     """Alg. 3 for one viewpoint against ``query``'s base. Returns (accepted iteration or -1, offset (4,),
     stage-1 error, stage-2 statistic, iterations scored)."""
     if params.acceptance in ("improve", "validated"):
