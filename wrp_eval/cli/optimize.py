@@ -5,7 +5,8 @@
 
 Writes <out>/path.json (the WRP) and <out>/wrp_metrics.json (the paper's Table 3 columns: offset rate,
 total position / rotation offset, time, and the WRP's error from the ORACLE; plus the surrogate's figures,
-per-viewpoint offsets and where E_original and r_s came from).
+per-viewpoint offsets and where E_original and r_s came from). With the default acceptance (validated) the
+oracle confirms every move; --no-oracle leaves the moves unconfirmed and wrp_metrics.json says so.
 """
 
 from __future__ import annotations

@@ -3,7 +3,9 @@
     wrp-eval train CONFIG [--campaign DIR] [--out DIR] [--cv K [--workers W]] [--quiet]
 
 Writes <out>/surrogate.pt (state_dict + metadata, loaded with torch.load(weights_only=True)),
-<out>/metrics.json (R^2, RMSE, MAE of the held-out test trials; train/val too) and <out>/parity.png.
+<out>/metrics.json (R^2, RMSE, MAE of the held-out test trials; train/val too; the mean-offset baseline on the
+same split; the single-view validation against the jitter-averaged oracle, surrogate.validation_moves, whose
+RMSE the optimiser's acceptance uses) and <out>/parity.png.
 With --cv K also K-fold cross-validation (K more trainings; every trial tested once) into <out>/cv.json:
 one test split's R^2 scatters widely on heavy-tailed errors, the fold mean and range do not. The folds train
 with the model itself, W at a time in separate processes (default: one per CPU core); the figures do not depend
