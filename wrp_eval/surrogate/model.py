@@ -275,8 +275,6 @@ class ViewQuery:
         # later layers as (k C_in, C) matrices over the k shifted copies (as ViewSequenceCNN.conv_pre)
         self._w = [None] + [c.weight.detach().permute(2, 1, 0).reshape(-1, c.weight.shape[0]).contiguous()
                             for c in net.convs[1:]]
-        self._w_shift = [None] + [[w[j * c.weight.shape[1]:(j + 1) * c.weight.shape[1]] for j in range(net.kernel)]
-                                  for w, c in zip(self._w[1:], net.convs[1:])]     # (C_in, C) per shift
         self.set_base(base_offsets)
 
     @torch.no_grad()
@@ -331,10 +329,8 @@ class ViewQuery:
                 # 'full' convolution of the activation change: positions lo-h .. hi+h-1
                 w = hi - lo + 2 * h
                 dp = F.pad(delta_act, (0, 0, 2 * h, 2 * h))
-                # sum over the k shifts of (shifted change) x (that shift's weight block): no (q, w, k C) copy
-                dpre = dp[:, 0:w] @ self._w_shift[layer][0]
-                for j in range(1, k):
-                    dpre = dpre + dp[:, j:j + w] @ self._w_shift[layer][j]
+                cols = torch.cat([dp[:, j:j + w] for j in range(k)], dim=-1)      # (q, w, k C)
+                dpre = (cols.reshape(-1, cols.shape[-1]) @ self._w[layer]).view(q, w, -1)
                 lo, hi = lo - h, hi + h
             new = F.gelu(self.pre[layer][lo:hi] + dpre) * self._inside[lo:hi]
             delta_act = new - self.act[layer][lo:hi]
