@@ -49,6 +49,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from wrp_eval.compiled import kernel
+
 # PRIME constants (AERMOD prime.f): cavity top H + 0.22 R (Wilson 1979 / ASHRAE), wake height coefficient 1.2
 # (Weil 1996), far-wake decay exponent 2/3 (prime1 ``xdecay``), Fackrell's cavity-length coefficients.
 CAVITY_TOP_R = 0.22
@@ -63,36 +65,120 @@ MIN_LATERAL_TAPER_R = 0.1
 CALM_MPS = 1e-9
 
 
-def smoothstep(u: np.ndarray) -> np.ndarray:
+@kernel
+def smoothstep(u: float) -> float:
     """3u^2 - 2u^3 on [0, 1], 0 below, 1 above: a C1 ramp."""
-    u = np.clip(u, 0.0, 1.0)
+    u = min(max(u, 0.0), 1.0)
     return u * u * (3.0 - 2.0 * u)
 
 
-def wilson_scale_length(height_m, width_m) -> np.ndarray:
+@kernel
+def wilson_scale_length(height_m: float, width_m: float) -> float:
     """Wilson (1979) wake scale length R = min(H, W)^(2/3) max(H, W)^(1/3) (m), each side limited to 8 times
     the other (beyond that the block is already two-dimensional; PRIME ``wake_scales``)."""
-    h = np.minimum(height_m, 8.0 * np.asarray(width_m, float))
-    w = np.minimum(width_m, 8.0 * np.asarray(height_m, float))
-    return np.minimum(h, w) ** (2.0 / 3.0) * np.maximum(h, w) ** (1.0 / 3.0)
+    h = min(height_m, 8.0 * width_m)
+    w = min(width_m, 8.0 * height_m)
+    return min(h, w) ** (2.0 / 3.0) * max(h, w) ** (1.0 / 3.0)
 
 
-def cavity_length(height_m, width_m, length_m) -> np.ndarray:
+@kernel
+def cavity_length(height_m: float, width_m: float, length_m: float) -> float:
     """Recirculation cavity length behind the lee face (m): Fackrell (1984) as PRIME uses it,
     L_R = 1.8 W / ((L/H)^e (1 + 0.24 W/H)), L/H clipped to 0.3..3, e = 0.3 for W/H >= 1 and falling to 0 at
     W/H = 0.33 (Snyder: the cavity stops growing as W/H = L/H goes from 1 to 1/3)."""
-    height = np.asarray(height_m, float)
-    rw = width_m / height
-    rl = np.clip(length_m / height, 0.3, 3.0)
-    exponent = np.where(rw < 1.0, np.maximum(0.0, FACKRELL_LENGTH_EXP * (rw - 0.33) / 0.67), FACKRELL_LENGTH_EXP)
+    rw = width_m / height_m
+    rl = min(max(length_m / height_m, 0.3), 3.0)
+    exponent = max(0.0, FACKRELL_LENGTH_EXP * (rw - 0.33) / 0.67) if rw < 1.0 else FACKRELL_LENGTH_EXP
     return FACKRELL_COEF * width_m / (rl**exponent * (1.0 + FACKRELL_WIDTH_COEF * rw))
 
 
-def wake_height(x_m, height_m, scale_m) -> np.ndarray:
+@kernel
+def wake_height(x_m: float, height_m: float, scale_m: float) -> float:
     """PRIME wake height (m) at x (m) downwind of the upwind face: 1.2 R (x/R + (H/(1.2 R))^3)^(1/3), = H at
     x = 0 (Wilson 1979 / Weil 1996 limits for a uniform approach wind)."""
-    x = np.maximum(x_m, 0.0)
+    x = max(x_m, 0.0)
     return WAKE_HEIGHT_COEF * scale_m * np.cbrt(x / scale_m + (height_m / (WAKE_HEIGHT_COEF * scale_m)) ** 3)
+
+
+@kernel
+def _row_geometry(wind_x: float, wind_y: float, half_length: float, half_breadth: float, height: float):
+    """(dx, dy, half_along, half_across, scale, cavity, cavity_top, calm) of the wake in one mean wind's
+    horizontal direction (module docstring)."""
+    speed = np.hypot(wind_x, wind_y)
+    calm = speed < CALM_MPS
+    dx, dy = (1.0, 0.0) if calm else (wind_x / speed, wind_y / speed)
+    ax, ay = abs(dx), abs(dy)
+    half_along = half_length * ax + half_breadth * ay
+    half_across = half_length * ay + half_breadth * ax
+    scale = wilson_scale_length(height, 2.0 * half_across)
+    cavity = cavity_length(height, 2.0 * half_across, 2.0 * half_along)
+    return dx, dy, half_along, half_across, scale, cavity, height + CAVITY_TOP_R * scale, calm
+
+
+@kernel
+def _geometry_rows(wind, half_length, half_breadth, height):
+    """:func:`_row_geometry` of every row of ``wind`` (n, 3): (d (n, 2), (n, 5) half_along ... cavity_top,
+    calm (n,))."""
+    n = wind.shape[0]
+    d, lengths, calm = np.empty((n, 2)), np.empty((n, 5)), np.empty(n, np.bool_)
+    for row in range(n):
+        dx, dy, half_along, half_across, scale, cavity, cavity_top, calm[row] = _row_geometry(
+            wind[row, 0], wind[row, 1], half_length, half_breadth, height)
+        d[row, 0], d[row, 1] = dx, dy
+        lengths[row, 0], lengths[row, 1], lengths[row, 2] = half_along, half_across, scale
+        lengths[row, 3], lengths[row, 4] = cavity, cavity_top
+    return d, lengths, calm
+
+
+@kernel
+def footprint(c: float, dx: float, dy: float, half_length: float, half_breadth: float):
+    """(lee, windward): the largest / smallest s of the footprint on the line at crosswind position c (within
+    the footprint's crosswind extent), for the downwind direction (dx, dy). A point s d + c n (n = d turned
+    90 deg left) is inside when |s dx - c dy| <= L/2 and |s dy + c dx| <= B/2: two intervals in s, centred at
+    c dy/dx and -c dx/dy with half-widths (L/2)/|dx| and (B/2)/|dy|."""
+    ax, ay = abs(dx), abs(dy)
+    # wind along y: no limit in s from x (and vice versa)
+    mid_x, half_x = (c * dy / dx, half_length / ax) if ax > 1e-12 else (0.0, np.inf)
+    mid_y, half_y = (-c * dx / dy, half_breadth / ay) if ay > 1e-12 else (0.0, np.inf)
+    return min(mid_x + half_x, mid_y + half_y), max(mid_x - half_x, mid_y - half_y)
+
+
+@kernel
+def _factor_rows(points, wind, centre_x, centre_y, half_length, half_breadth, height, lee_deficit,
+                 turbulence_ratio, extent_scale_lengths):
+    """(deficit (n,), turbulence gain (n,)) at points (n, 3) in mean winds (n, 3): :meth:`ShipAirWake.factors`."""
+    n = points.shape[0]
+    deficit, gain = np.empty(n), np.empty(n)
+    for row in range(n):
+        dx, dy, half_along, half_across, r, cavity, cavity_top, calm = _row_geometry(
+            wind[row, 0], wind[row, 1], half_length, half_breadth, height)
+        # along-wind distances past the footprint's lee and windward boundaries at the point's crosswind
+        # position (beside the footprint: at its side), from its upwind-most point; the crosswind distance
+        # beyond its side; the fetch over it (at least MIN_RAMP_R R)
+        rel_x, rel_y = points[row, 0] - centre_x, points[row, 1] - centre_y
+        s = rel_x * dx + rel_y * dy
+        c = -rel_x * dy + rel_y * dx
+        lee, windward = footprint(min(max(c, -half_across), half_across), dx, dy, half_length, half_breadth)
+        fetch = max(lee - windward, MIN_RAMP_R * r)
+        x_lee, x_wind, x_up, lateral = s - lee, s - windward, s + half_along, abs(c) - half_across
+        # streamwise: ramp over the roof, cavity plateau, PRIME's (x/R)^(-2/3) decay, taper over the last half
+        # of the extent; the ramp ends at the lee boundary, or a little past it where the fetch is < 0.25 R
+        roof = smoothstep(x_wind / fetch)
+        decay = (max(x_lee - cavity, 0.0) / r + 1.0) ** -DECAY_EXPONENT
+        start = cavity + 0.5 * extent_scale_lengths * r
+        taper = 1.0 - smoothstep((x_lee - start) / (0.5 * extent_scale_lengths * r))
+        stream = roof * decay * taper
+        # lateral: PRIME's half-width growth (R/3)(x/R)^(1/3) beyond the shadow of the footprint
+        width = max(r / 3.0 * np.cbrt(max(x_up, 0.0) / r), MIN_LATERAL_TAPER_R * r)
+        shape = 0.0 if calm else stream * (1.0 - smoothstep(lateral / width))
+        # vertical: deficit full to H, turbulence full to the cavity top, both gone at the wake height
+        top = max(wake_height(x_up, height, r), cavity_top + CAVITY_TOP_R * r)
+        z = points[row, 2]
+        mean_part = 1.0 - smoothstep((z - height) / (top - height))
+        turb_part = 1.0 - smoothstep((z - cavity_top) / (top - cavity_top))
+        deficit[row] = lee_deficit * shape * mean_part
+        gain[row] = 1.0 + (turbulence_ratio - 1.0) * shape * turb_part
+    return deficit, gain
 
 
 @dataclass(frozen=True)
@@ -144,68 +230,18 @@ class ShipAirWake:
     def geometry(self, mean_wind: np.ndarray) -> WakeGeometry:
         """The wake's geometry for each row of ``mean_wind`` (n, 3) m/s (only its horizontal direction counts)."""
         wind = np.atleast_2d(np.asarray(mean_wind, dtype=float))
-        speed = np.hypot(wind[:, 0], wind[:, 1])
-        calm = speed < CALM_MPS
-        d = np.where(calm[:, None], [1.0, 0.0], wind[:, :2] / np.where(calm, 1.0, speed)[:, None])
-        ax, ay = np.abs(d[:, 0]), np.abs(d[:, 1])
-        half_along = self.half_length * ax + self.half_breadth * ay
-        half_across = self.half_length * ay + self.half_breadth * ax
-        scale = wilson_scale_length(self.height, 2.0 * half_across)
-        cavity = cavity_length(self.height, 2.0 * half_across, 2.0 * half_along)
-        return WakeGeometry(d, half_along, half_across, scale, cavity, self.height + CAVITY_TOP_R * scale, calm)
-
-    def _footprint(self, c: np.ndarray, d: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-        """(lee, windward): the largest / smallest s of the footprint on the line at crosswind position c (n,)
-        (c within the footprint's crosswind extent), for downwind directions d (n, 2). A point s d + c n
-        (n = d turned 90 deg left) is inside when |s dx - c dy| <= L/2 and |s dy + c dx| <= B/2: two intervals
-        in s, centred at c dy/dx and -c dx/dy with half-widths (L/2)/|dx| and (B/2)/|dy|."""
-        dx, dy = d[:, 0], d[:, 1]
-        ax, ay = np.abs(dx), np.abs(dy)
-        with np.errstate(divide="ignore", invalid="ignore"):
-            mid_x = np.where(ax > 1e-12, c * dy / dx, 0.0)
-            half_x = np.where(ax > 1e-12, self.half_length / ax, np.inf)   # wind along y: no limit in s from x
-            mid_y = np.where(ay > 1e-12, -c * dx / dy, 0.0)
-            half_y = np.where(ay > 1e-12, self.half_breadth / ay, np.inf)
-        return np.minimum(mid_x + half_x, mid_y + half_y), np.maximum(mid_x - half_x, mid_y - half_y)
-
-    def _coordinates(self, points: np.ndarray, geo: WakeGeometry):
-        """(past_lee, past_windward, from_upwind, lateral_excess, fetch) (n,) m for points (n, 3): along-wind
-        distances past the footprint's lee and windward boundaries at the point's crosswind position (beside
-        the footprint: at its side), from its upwind-most point, the crosswind distance beyond its side, and
-        the fetch over it (at least ``MIN_RAMP_R`` R)."""
-        rel = points[:, :2] - self.centre
-        d = geo.d
-        s = rel[:, 0] * d[:, 0] + rel[:, 1] * d[:, 1]
-        c = -rel[:, 0] * d[:, 1] + rel[:, 1] * d[:, 0]
-        lee, windward = self._footprint(np.clip(c, -geo.half_across, geo.half_across), d)
-        fetch = np.maximum(lee - windward, MIN_RAMP_R * geo.scale)
-        return s - lee, s - windward, s + geo.half_along, np.abs(c) - geo.half_across, fetch
+        d, lengths, calm = _geometry_rows(wind, self.half_length, self.half_breadth, self.height)
+        return WakeGeometry(d, *lengths.T, calm)
 
     # --- fields ---------------------------------------------------------------------------------------
     def factors(self, points: np.ndarray, mean_wind: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """(deficit (n,), turbulence gain (n,)) at points (n, 3) m in mean winds (n, 3) m/s: one geometry for
-        both (what :class:`wrp_eval.wind.field.WindField` calls once per step)."""
+        both (what :class:`wrp_eval.wind.field.WindField` calls once per step); one compiled loop over the rows."""
         points = np.atleast_2d(np.asarray(points, dtype=float))
-        wind = np.broadcast_to(np.asarray(mean_wind, dtype=float), points.shape)
-        geo = self.geometry(wind)
-        x_lee, x_wind, x_up, lateral, fetch = self._coordinates(points, geo)
-        r = geo.scale
-        # streamwise: ramp over the roof, cavity plateau, PRIME's (x/R)^(-2/3) decay, taper over the last half
-        # of the extent; the ramp ends at the lee boundary, or a little past it where the fetch is < 0.25 R
-        roof = smoothstep(x_wind / fetch)
-        decay = (np.maximum(x_lee - geo.cavity, 0.0) / r + 1.0) ** -DECAY_EXPONENT
-        start = geo.cavity + 0.5 * self.extent_scale_lengths * r
-        taper = 1.0 - smoothstep((x_lee - start) / (0.5 * self.extent_scale_lengths * r))
-        stream = roof * decay * taper
-        # lateral: PRIME's half-width growth (R/3)(x/R)^(1/3) beyond the shadow of the footprint
-        width = np.maximum(r / 3.0 * np.cbrt(np.maximum(x_up, 0.0) / r), MIN_LATERAL_TAPER_R * r)
-        shape = np.where(geo.calm, 0.0, stream * (1.0 - smoothstep(lateral / width)))
-        # vertical: deficit full to H, turbulence full to the cavity top, both gone at the wake height
-        top = np.maximum(wake_height(x_up, self.height, r), geo.cavity_top + CAVITY_TOP_R * r)
-        z = points[:, 2]
-        mean_part = 1.0 - smoothstep((z - self.height) / (top - self.height))
-        turb_part = 1.0 - smoothstep((z - geo.cavity_top) / (top - geo.cavity_top))
-        return self.lee_deficit * shape * mean_part, 1.0 + (self.turbulence_ratio - 1.0) * shape * turb_part
+        wind = np.ascontiguousarray(np.broadcast_to(np.asarray(mean_wind, dtype=float), points.shape))
+        return _factor_rows(points, wind, float(self.centre[0]), float(self.centre[1]), float(self.half_length),
+                            float(self.half_breadth), self.height, self.lee_deficit, self.turbulence_ratio,
+                            self.extent_scale_lengths)
 
     def deficit(self, points: np.ndarray, mean_wind: np.ndarray) -> np.ndarray:
         """(n,) fraction of the mean wind removed at points (n, 3): ``lee_deficit`` in the cavity, 0 outside
@@ -221,6 +257,6 @@ class ShipAirWake:
         half a cavity length behind the lee face, at half the block height; there the deficit is exactly
         ``lee_deficit`` and the gain ``turbulence_ratio``."""
         geo = self.geometry(np.asarray(mean_wind, dtype=float)[None, :])
-        lee, _ = self._footprint(np.zeros(1), geo.d)
-        s = lee[0] + 0.5 * geo.cavity[0]
+        lee, _ = footprint(0.0, geo.d[0, 0], geo.d[0, 1], float(self.half_length), float(self.half_breadth))
+        s = lee + 0.5 * geo.cavity[0]
         return np.array([*(self.centre + s * geo.d[0]), 0.5 * self.height])

@@ -32,6 +32,7 @@ from collections.abc import Sequence
 import numpy as np
 from scipy.signal import lfilter
 
+from wrp_eval.compiled import kernel
 from wrp_eval.streams import BlockNormals, flight_generators
 from wrp_eval.wind.boundary_layer import log_law_factor
 
@@ -51,21 +52,59 @@ def severity_w20_mps(severity: str) -> float:
     return SEVERITY_W20_KT[severity] * KNOT_MPS
 
 
+@kernel
+def _intensity_and_scale(altitude_m: float, w20_mps: float):
+    """(sigma_uv, sigma_w, L_uv, L_w) in m/s and m at one altitude (clipped to 10..1000 ft) for W20 m/s."""
+    h_ft = min(max(altitude_m / FT_M, MIN_ALTITUDE_FT), MAX_ALTITUDE_FT)
+    base = 0.177 + 0.000823 * h_ft
+    sigma_w = 0.1 * w20_mps
+    return sigma_w / base**0.4, sigma_w, h_ft / base**1.2 * FT_M, h_ft * FT_M
+
+
+@kernel
+def _parameter_rows(altitude_m, w20_mps):
+    """(sigma (n, 3), L (n, 3)) of flat altitudes and W20s (n,)."""
+    n = altitude_m.size
+    sigma, length = np.empty((n, 3)), np.empty((n, 3))
+    for row in range(n):
+        sigma_uv, sigma_w, length_uv, length_w = _intensity_and_scale(altitude_m[row], w20_mps[row])
+        sigma[row, 0], sigma[row, 1], sigma[row, 2] = sigma_uv, sigma_uv, sigma_w
+        length[row, 0], length[row, 1], length[row, 2] = length_uv, length_uv, length_w
+    return sigma, length
+
+
 def dryden_parameters(altitude_m: np.ndarray | float, w20_mps: np.ndarray | float):
     """Intensities sigma (..., 3) m/s and length scales L (..., 3) m for axes (u, v, w).
 
     altitude_m is clipped to the low-altitude model's range 10..1000 ft.
     """
-    h_ft = np.clip(np.asarray(altitude_m, dtype=float) / FT_M, MIN_ALTITUDE_FT, MAX_ALTITUDE_FT)
-    w20 = np.asarray(w20_mps, dtype=float)
-    h_ft, w20 = np.broadcast_arrays(h_ft, w20)
-    base = 0.177 + 0.000823 * h_ft
-    length_uv = h_ft / base**1.2 * FT_M
-    sigma_w = 0.1 * w20
-    sigma_uv = sigma_w / base**0.4
-    sigma = np.stack([sigma_uv, sigma_uv, sigma_w], axis=-1)
-    length = np.stack([length_uv, length_uv, h_ft * FT_M], axis=-1)
-    return sigma, length
+    h, w20 = np.broadcast_arrays(np.asarray(altitude_m, dtype=float), np.asarray(w20_mps, dtype=float))
+    sigma, length = _parameter_rows(np.ascontiguousarray(h).reshape(-1), np.ascontiguousarray(w20).reshape(-1))
+    return sigma.reshape(h.shape + (3,)), length.reshape(h.shape + (3,))
+
+
+@kernel
+def _filters(altitude_m: float, w20_mps: float, airspeed_mps: float):
+    """(tau_u, tau_v, tau_w) s and (K_u, K_v, K_w) of the forming filters at one altitude, W20 and airspeed
+    (already floored): tau = L / V, K_u = sigma_u sqrt(2 L_u / (pi V)), K_v,w = sigma sqrt(L / (pi V))."""
+    sigma_uv, sigma_w, length_uv, length_w = _intensity_and_scale(altitude_m, w20_mps)
+    tau = (length_uv / airspeed_mps, length_uv / airspeed_mps, length_w / airspeed_mps)
+    gain = (sigma_uv * np.sqrt(2.0 * length_uv / (np.pi * airspeed_mps)),
+            sigma_uv * np.sqrt(1.0 * length_uv / (np.pi * airspeed_mps)),
+            sigma_w * np.sqrt(1.0 * length_w / (np.pi * airspeed_mps)))
+    return tau, gain
+
+
+@kernel
+def _filter_rows(altitude_m, w20_mps, airspeed_mps):
+    """(tau (n, 3), gain (n, 3)) for (n,) altitudes, W20s and floored airspeeds."""
+    n = altitude_m.size
+    tau, gain = np.empty((n, 3)), np.empty((n, 3))
+    for row in range(n):
+        t, g = _filters(altitude_m[row], w20_mps[row], airspeed_mps[row])
+        tau[row, 0], tau[row, 1], tau[row, 2] = t
+        gain[row, 0], gain[row, 1], gain[row, 2] = g
+    return tau, gain
 
 
 def dryden_psd(omega_rad_s: np.ndarray, sigma: Sequence[float], length: Sequence[float],
@@ -94,7 +133,8 @@ def continuous_filters(sigma: Sequence[float], length: Sequence[float], airspeed
     return out
 
 
-def _zoh(tau: np.ndarray, dt: float):
+@kernel
+def _zoh(tau, dt: float):
     """Closed-form ZOH coefficients (a, a r, 1 - a(1+r), 1 - a) for time constants tau (any shape)."""
     r = dt / tau
     a = np.exp(-r)
@@ -108,6 +148,50 @@ def _discrete_lyapunov_2x2(F: np.ndarray, Q: np.ndarray) -> np.ndarray:
     vec = np.linalg.solve(eye - kron, Q.reshape(Q.shape[:-2] + (4,))[..., None])[..., 0]
     P = vec.reshape(F.shape)
     return 0.5 * (P + np.swapaxes(P, -1, -2))
+
+
+@kernel
+def _second_order_output(x1: float, x2: float) -> float:
+    """The v/w filter's output per unit gain, (1 - sqrt3) x1 + sqrt3 x2 (module docstring)."""
+    return (1 - SQRT3) * x1 + SQRT3 * x2
+
+
+@kernel
+def _step_rows(altitude_m, airspeed_mps, w20_mps, dt, noise, state_u, state_vw):
+    """Advance each flight ``noise.shape[1]`` steps (unit normals (n, m, 3)) with the filters of its altitude
+    (n,) m and floored airspeed (n,) m/s, updating ``state_u`` (n,) and ``state_vw`` (n, 2, 2) in place;
+    returns the turbulence (n, 3) along/across/vertical after them."""
+    q_sqrt = np.sqrt(np.pi / dt)
+    n = noise.shape[0]
+    out = np.empty((n, 3))
+    for row in range(n):
+        tau, gain = _filters(altitude_m[row], w20_mps[row], airspeed_mps[row])
+        a, _, _, c2 = _zoh(tau[0], dt)
+        for k in range(noise.shape[1]):
+            state_u[row] = a * state_u[row] + c2 * (noise[row, k, 0] * q_sqrt)
+        out[row, 0] = gain[0] * state_u[row]
+        for axis in range(2):       # v, w: second order
+            a, ar, c1, c2 = _zoh(tau[1 + axis], dt)
+            for k in range(noise.shape[1]):
+                x1, x2 = state_vw[row, axis, 0], state_vw[row, axis, 1]
+                e = noise[row, k, 1 + axis] * q_sqrt
+                state_vw[row, axis, 0] = a * x1 + ar * x2 + c1 * e
+                state_vw[row, axis, 1] = a * x2 + c2 * e
+            out[row, 1 + axis] = gain[1 + axis] * _second_order_output(state_vw[row, axis, 0], state_vw[row, axis, 1])
+    return out
+
+
+@kernel
+def _rotate_rows(uvw, mean_wind, horizontal_speed):
+    """(n, 3) along/across/vertical -> world frame (:func:`rotate_to_world`)."""
+    out = np.empty_like(uvw)
+    for row in range(uvw.shape[0]):
+        h = horizontal_speed[row]
+        cx, cy = (1.0, 0.0) if h < 1e-9 else (mean_wind[row, 0] / h, mean_wind[row, 1] / h)
+        out[row, 0] = cx * uvw[row, 0] - cy * uvw[row, 1]
+        out[row, 1] = cy * uvw[row, 0] + cx * uvw[row, 1]
+        out[row, 2] = uvw[row, 2]
+    return out
 
 
 class DrydenTurbulence:
@@ -144,12 +228,10 @@ class DrydenTurbulence:
     # --- parameters -------------------------------------------------------------------------------
     def parameters(self, altitude_m, airspeed_mps):
         """(sigma (n,3), length (n,3), V (n,), tau (n,3), gain (n,3)) for the flights' current conditions."""
-        sigma, length = dryden_parameters(altitude_m, self.w20_mps)
-        sigma = np.broadcast_to(sigma, (self.n_flights, 3))
-        length = np.broadcast_to(length, (self.n_flights, 3))
+        altitude = np.broadcast_to(np.asarray(altitude_m, float), (self.n_flights,))
+        sigma, length = dryden_parameters(altitude, self.w20_mps)
         v = np.maximum(np.broadcast_to(np.asarray(airspeed_mps, float), (self.n_flights,)), self.airspeed_floor_mps)
-        tau = length / v[:, None]
-        gain = sigma * np.sqrt(np.array([2.0, 1.0, 1.0]) * length / (np.pi * v[:, None]))
+        tau, gain = _filter_rows(np.ascontiguousarray(altitude), self.w20_mps, v)
         return sigma, length, v, tau, gain
 
     # --- noise ---------------------------------------------------------------------------------------
@@ -178,38 +260,31 @@ class DrydenTurbulence:
     # --- stepping --------------------------------------------------------------------------------------
     def output(self, gain: np.ndarray) -> np.ndarray:
         """Current turbulence (n, 3) along/across/vertical for gains (n, 3)."""
-        vw = (1 - SQRT3) * self.state_vw[..., 0] + SQRT3 * self.state_vw[..., 1]
+        vw = _second_order_output(self.state_vw[..., 0], self.state_vw[..., 1])
         return gain * np.concatenate([self.state_u[:, None], vw], axis=1)
-
-    def advance(self, tau: np.ndarray, n_steps: int = 1) -> None:
-        """Advance every flight ``n_steps`` steps with time constants tau (n, 3) (one batched update each)."""
-        q_sqrt = np.sqrt(np.pi / self.dt_s)
-        a, ar, c1, c2 = _zoh(tau, self.dt_s)
-        e = self._draw(n_steps) * q_sqrt
-        for k in range(n_steps):  # n_steps is 0 or 1 in simulation use; series use generate()
-            self.state_u = a[:, 0] * self.state_u + c2[:, 0] * e[:, k, 0]
-            x1, x2 = self.state_vw[..., 0], self.state_vw[..., 1]
-            self.state_vw = np.stack([a[:, 1:] * x1 + ar[:, 1:] * x2 + c1[:, 1:] * e[:, k, 1:],
-                                      a[:, 1:] * x2 + c2[:, 1:] * e[:, k, 1:]], axis=-1)
 
     def local_turbulence(self, altitude_m, airspeed_mps, t_s: float) -> np.ndarray:
         """Turbulence (n, 3) along/across/vertical at time t_s (non-decreasing across calls).
 
         The first call sets the time origin and draws the stationary initial state; later calls advance
-        round((t - t_prev) / dt) steps with the current altitude and airspeed.
+        round((t - t_prev) / dt) steps with the current altitude and airspeed (one compiled loop over the
+        flights, :mod:`wrp_eval.compiled`).
         """
-        _, _, _, tau, gain = self.parameters(altitude_m, airspeed_mps)
         if self.t_s is None:
+            _, _, _, tau, _ = self.parameters(altitude_m, airspeed_mps)
             self._initialise(tau)
-            self.t_s = float(t_s)
+            self.t_s, n_steps = float(t_s), 0
         else:
             n_steps = int(round((t_s - self.t_s) / self.dt_s))
             if n_steps < 0:
                 raise ValueError(f"turbulence queried at t = {t_s} s after t = {self.t_s} s: time must not decrease")
-            if n_steps:
-                self.advance(tau, n_steps)
-                self.t_s += n_steps * self.dt_s
-        return self.output(gain)
+        altitude = np.broadcast_to(np.asarray(altitude_m, float), (self.n_flights,))
+        airspeed = np.maximum(np.broadcast_to(np.asarray(airspeed_mps, float), (self.n_flights,)),
+                              self.airspeed_floor_mps)
+        uvw = _step_rows(altitude, airspeed, self.w20_mps, self.dt_s, self._draw(n_steps), self.state_u,
+                         self.state_vw)
+        self.t_s += n_steps * self.dt_s
+        return uvw
 
     def velocity(self, points: np.ndarray, t: float, mean_wind: np.ndarray | None = None) -> np.ndarray:
         """Turbulence (n, 3) m/s in the world frame at flight positions ``points`` (n, 3).
@@ -257,7 +332,7 @@ class DrydenTurbulence:
             drive = ar[ax] * x2 + c1[ax] * e[:, :, ax]
             x1_next, _ = lfilter([1.0], [1.0, -a[ax]], drive, axis=1, zi=(a[ax] * x1_0)[:, None])
             x1 = np.concatenate([x1_0[:, None], x1_next[:, :-1]], axis=1)
-            out[..., ax] = gain[:, ax:ax + 1] * ((1 - SQRT3) * x1 + SQRT3 * x2)
+            out[..., ax] = gain[:, ax:ax + 1] * _second_order_output(x1, x2)
             new_vw[:, ax - 1] = np.stack([x1_next[:, -1], x2_next[:, -1]], axis=-1)
         self.state_vw = new_vw
         self.t_s += n_steps * self.dt_s
@@ -267,13 +342,10 @@ class DrydenTurbulence:
 def rotate_to_world(uvw: np.ndarray, mean_wind: np.ndarray, horizontal_speed: np.ndarray | None = None) -> np.ndarray:
     """(n, 3) along/across/vertical -> world frame: u along the mean horizontal wind (x where calm),
     v 90 deg to its left, w up."""
+    mean_wind = np.asarray(mean_wind, dtype=float)
     if horizontal_speed is None:
         horizontal_speed = np.hypot(mean_wind[:, 0], mean_wind[:, 1])
-    calm = horizontal_speed < 1e-9
-    safe = np.where(calm, 1.0, horizontal_speed)
-    cx = np.where(calm, 1.0, mean_wind[:, 0] / safe)
-    cy = np.where(calm, 0.0, mean_wind[:, 1] / safe)
-    return np.stack([cx * uvw[:, 0] - cy * uvw[:, 1], cy * uvw[:, 0] + cx * uvw[:, 1], uvw[:, 2]], axis=1)
+    return _rotate_rows(np.asarray(uvw, dtype=float), mean_wind, np.asarray(horizontal_speed, dtype=float))
 
 
 def turbulence_series(altitude_m: float, w20_mps: float, dt_s: float, duration_s: float, seed: int,

@@ -29,10 +29,10 @@ from __future__ import annotations
 
 from collections.abc import Sequence
 from dataclasses import dataclass
-from functools import cached_property
 
 import numpy as np
 
+from wrp_eval.compiled import kernel
 from wrp_eval.errors import InputError
 
 INTERPOLATION_METHODS = ("idw", "trilinear")
@@ -59,13 +59,6 @@ class WindGrid:
     velocity_mps: np.ndarray
     grid_yaw_rad: float = 0.0
     source: str = "wind grid"
-
-    @cached_property
-    def common_levels(self) -> np.ndarray | None:
-        """(nz,) the level heights when every column has the same ones (a flat sea: the synthetic field), else
-        None. Interpolation then finds a point's level once instead of once per column (same numbers)."""
-        first = self.heights_m[0, 0]
-        return first if np.all(self.heights_m == first) else None
 
     def __post_init__(self) -> None:
         x, y = np.asarray(self.x_m, float), np.asarray(self.y_m, float)
@@ -108,54 +101,123 @@ class WindGrid:
         return np.stack([np.repeat(xs[..., None], nz, 2), np.repeat(ys[..., None], nz, 2), self.heights_m], -1)
 
 
-def _cell(axis: np.ndarray, coord: np.ndarray, clamp: bool, name: str, source: str):
-    """Lower cell index (n,) and fraction in [0, 1] (n,) of ``coord`` along a rectilinear axis."""
-    lo, hi = axis[0], axis[-1]
-    outside = (coord < lo) | (coord > hi) | ~np.isfinite(coord)
-    if np.any(outside):
-        if not clamp:
-            bad = coord[outside][0]
-            raise OutsideWindGridError(source, f"query {name} = {bad:.3f} m is outside the wind grid "
-                                               f"[{lo:.3f}, {hi:.3f}] m (enlarge the grid or set wind.clamp)")
-        coord = np.clip(np.nan_to_num(coord, nan=lo), lo, hi)
-    idx = np.clip(np.searchsorted(axis, coord, side="right") - 1, 0, axis.size - 2)
-    frac = (coord - axis[idx]) / (axis[idx + 1] - axis[idx])
-    return idx, frac
+# what _interpolate_rows reports about the first query outside the grid (clamp off): which coordinate
+_INSIDE, _OUTSIDE_X, _OUTSIDE_Y, _OUTSIDE_Z = 0, 1, 2, 3
 
 
-def _outside_levels(z: np.ndarray, bottom: np.ndarray, top: np.ndarray, clamp: bool, source: str) -> None:
-    """Refuse (unless ``clamp``) heights z (n,) below ``bottom`` or above ``top`` (n,) of their cell."""
-    outside = (z < bottom) | (z > top) | ~np.isfinite(z)
-    if np.any(outside) and not clamp:
-        row = np.nonzero(outside)[0][0]
-        raise OutsideWindGridError(
-            source, f"query height z = {z[row]:.3f} m is outside the wind grid's levels "
-                    f"[{bottom[row]:.3f}, {top[row]:.3f}] m here (enlarge the grid or set wind.clamp)")
+@kernel
+def _lower_index(axis, coord):
+    """Index of the interval of the increasing ``axis`` (m,) holding ``coord`` (within its range): the last
+    node <= coord, at most m - 2 (a coordinate on the top node is in the last interval)."""
+    k = 0
+    while k < axis.size - 2 and axis[k + 1] <= coord:
+        k += 1
+    return k
 
 
-def _column_levels(heights: np.ndarray, z: np.ndarray, clamp: bool, source: str):
-    """(lower level k (n, 4) int, fraction fz (n, 4)) of heights z (n, 1) in the cell's 4 columns' levels
-    ``heights`` (n, 4, nz). Outside = below every column's lowest level or above every column's top; between,
-    a column a little shorter than its neighbours holds its end value (per-column clipping)."""
-    _outside_levels(z[:, 0], heights[..., 0].min(axis=1), heights[..., -1].max(axis=1), clamp, source)
-    zc = np.clip(np.nan_to_num(np.broadcast_to(z, heights.shape[:2]), nan=0.0),
-                 heights[..., 0], heights[..., -1])        # (n, 4), clipped per column
+@kernel
+def _clamped(coord, lo, hi, nan_value):
+    if coord != coord:                          # NaN
+        coord = nan_value
+    return min(max(coord, lo), hi)
+
+
+@kernel
+def _first_outside(coords, lo, hi):
+    """Row of the first coordinate outside [lo, hi] (n,) or not finite, -1 if none."""
+    for row in range(coords.size):
+        c = coords[row]
+        if not (c >= lo[row] and c <= hi[row]):     # also true for NaN
+            return row
+    return -1
+
+
+@kernel
+def _interpolate_rows(gx, gy, gz, x_axis, y_axis, heights, values, field, idw, idw_power, clamp):
+    """Mean wind (n, 3) at grid-frame points (gx, gy, gz) (n,) each, in ``values[field[i]]`` ((k, nx, ny, nz, 3),
+    ``field`` (n,) int); ``idw``: inverse-distance weights (else trilinear). Returns (wind, code, row): code
+    _INSIDE, or (clamp off) the first coordinate found outside (x over every row, then y, then z) and its row;
+    the wind is then not computed."""
+    n = gx.size
+    out = np.zeros((n, 3))
+    if not clamp:
+        row = _first_outside(gx, np.full(n, x_axis[0]), np.full(n, x_axis[-1]))
+        if row >= 0:
+            return out, _OUTSIDE_X, row
+        row = _first_outside(gy, np.full(n, y_axis[0]), np.full(n, y_axis[-1]))
+        if row >= 0:
+            return out, _OUTSIDE_Y, row
+    ci, cj = np.empty(4, np.int64), np.empty(4, np.int64)
+    fxc, fyc, kc, fzc = np.empty(4), np.empty(4), np.empty(4, np.int64), np.empty(4)
+    wxc, wyc = np.empty(4), np.empty(4)
     nz = heights.shape[2]
-    k = np.clip((heights <= zc[..., None]).sum(axis=2) - 1, 0, nz - 2)   # (n, 4) lower level per column
-    h_lo = np.take_along_axis(heights, k[..., None], 2)[..., 0]
-    h_hi = np.take_along_axis(heights, k[..., None] + 1, 2)[..., 0]
-    return k, (zc - h_lo) / (h_hi - h_lo)
-
-
-def _common_level(levels: np.ndarray, z: np.ndarray, clamp: bool, source: str):
-    """:func:`_column_levels` where every column has the levels ``levels`` (nz,): the same arithmetic, once per
-    point instead of once per column; k, fz broadcast to (n, 4)."""
-    n = z.shape[0]
-    _outside_levels(z, np.full(n, levels[0]), np.full(n, levels[-1]), clamp, source)
-    zc = np.clip(np.nan_to_num(z, nan=0.0), levels[0], levels[-1])
-    k = np.clip((levels <= zc[:, None]).sum(axis=1) - 1, 0, levels.size - 2)
-    fz = (zc - levels[k]) / (levels[k + 1] - levels[k])
-    return np.broadcast_to(k[:, None], (n, 4)), np.broadcast_to(fz[:, None], (n, 4))
+    bottom, top = np.empty(n), np.empty(n)
+    cells = np.empty((n, 4), np.int64)
+    fractions = np.empty((n, 2))
+    for row in range(n):
+        x = _clamped(gx[row], x_axis[0], x_axis[-1], x_axis[0])
+        y = _clamped(gy[row], y_axis[0], y_axis[-1], y_axis[0])
+        i, j = _lower_index(x_axis, x), _lower_index(y_axis, y)
+        cells[row, 0], cells[row, 1] = i, j
+        fractions[row, 0] = (x - x_axis[i]) / (x_axis[i + 1] - x_axis[i])
+        fractions[row, 1] = (y - y_axis[j]) / (y_axis[j + 1] - y_axis[j])
+        # outside in height = below every column's lowest level or above every column's top
+        bottom[row] = min(min(heights[i, j, 0], heights[i + 1, j, 0]), min(heights[i, j + 1, 0], heights[i + 1, j + 1, 0]))
+        top[row] = max(max(heights[i, j, nz - 1], heights[i + 1, j, nz - 1]),
+                       max(heights[i, j + 1, nz - 1], heights[i + 1, j + 1, nz - 1]))
+    if not clamp:
+        row = _first_outside(gz, bottom, top)
+        if row >= 0:
+            return out, _OUTSIDE_Z, row
+    for row in range(n):
+        i, j = cells[row, 0], cells[row, 1]
+        fx, fy = fractions[row, 0], fractions[row, 1]
+        # the 4 columns of the cell, order (i,j), (i+1,j), (i,j+1), (i+1,j+1); cell-unit distances to each
+        ci[0], ci[1], ci[2], ci[3] = i, i + 1, i, i + 1
+        cj[0], cj[1], cj[2], cj[3] = j, j, j + 1, j + 1
+        fxc[0], fxc[1], fxc[2], fxc[3] = fx, 1 - fx, fx, 1 - fx
+        fyc[0], fyc[1], fyc[2], fyc[3] = fy, fy, 1 - fy, 1 - fy
+        wxc[0], wxc[1], wxc[2], wxc[3] = 1 - fx, fx, 1 - fx, fx     # trilinear: the columns' bilinear weights
+        wyc[0], wyc[1], wyc[2], wyc[3] = 1 - fy, 1 - fy, fy, fy
+        z = gz[row]
+        if z != z:
+            z = 0.0
+        for c in range(4):
+            column = heights[ci[c], cj[c]]
+            zc = min(max(z, column[0]), column[nz - 1])    # a column a little shorter holds its end value
+            k = _lower_index(column, zc)
+            kc[c], fzc[c] = k, (zc - column[k]) / (column[k + 1] - column[k])
+        f = field[row]
+        if idw:
+            # Paper Sec. 4.1: inverse-distance weighting over the 8 surrounding grid points
+            weights = np.empty(8)
+            on_node = -1
+            for c in range(4):
+                d2_lo = fxc[c] ** 2 + fyc[c] ** 2 + fzc[c] ** 2
+                d2_hi = fxc[c] ** 2 + fyc[c] ** 2 + (1 - fzc[c]) ** 2
+                if d2_lo < 1e-24 and on_node < 0:
+                    on_node = c
+                if d2_hi < 1e-24 and on_node < 0:
+                    on_node = 4 + c
+                weights[c] = d2_lo ** (-0.5 * idw_power) if d2_lo >= 1e-24 else 0.0
+                weights[4 + c] = d2_hi ** (-0.5 * idw_power) if d2_hi >= 1e-24 else 0.0
+            if on_node >= 0:                     # a query on a node returns that node's value
+                weights[:] = 0.0
+                weights[on_node] = 1.0
+            total = weights.sum()
+            for c in range(8):
+                level = kc[c % 4] + (c // 4)
+                w = weights[c] / total
+                for d in range(3):
+                    out[row, d] += w * values[f, ci[c % 4], cj[c % 4], level, d]
+        else:
+            for c in range(4):
+                w = wxc[c] * wyc[c]
+                for d in range(3):
+                    lo = values[f, ci[c], cj[c], kc[c], d]
+                    hi = values[f, ci[c], cj[c], kc[c] + 1, d]
+                    out[row, d] += w * (lo + fzc[c] * (hi - lo))
+    return out, _INSIDE, -1
 
 
 def interpolate(grid: WindGrid, points: np.ndarray, method: str = "idw", idw_power: float = 2.0,
@@ -166,52 +228,36 @@ def interpolate(grid: WindGrid, points: np.ndarray, method: str = "idw", idw_pow
     values: optional node velocities of k fields (k, nx, ny, nz, 3) on ``grid``'s geometry, and value_index
     (n,) int: row i of ``points`` is interpolated in ``values[value_index[i]]`` (a batch of flights, each in
     its own mean field; the index lets flights share a field without copying it). Default: the grid's own
-    values. Every row is computed independently of the others, so a row's result does not depend on the
-    batch it is in."""
+    values. Every row is computed independently of the others (one compiled loop over the rows,
+    :mod:`wrp_eval.compiled`), so a row's result does not depend on the batch it is in."""
     if method not in INTERPOLATION_METHODS:
         raise InputError("wind.interpolation", f"unknown method {method!r}; choose from {INTERPOLATION_METHODS}")
     points = np.asarray(points, dtype=float)
     if points.ndim != 2 or points.shape[1] != 3:
         raise ValueError(f"points must have shape (n, 3), got {points.shape}")
     g = grid.to_grid_frame(points)
-    i, fx = _cell(grid.x_m, g[:, 0], clamp, "x (grid frame)", grid.source)
-    j, fy = _cell(grid.y_m, g[:, 1], clamp, "y (grid frame)", grid.source)
-
-    # the 4 columns of the cell, order (i,j), (i+1,j), (i,j+1), (i+1,j+1): shape (n, 4)
-    ci = np.stack([i, i + 1, i, i + 1], axis=1)
-    cj = np.stack([j, j, j + 1, j + 1], axis=1)
-    if grid.common_levels is not None:
-        k, fz = _common_level(grid.common_levels, g[:, 2], clamp, grid.source)
-    else:
-        k, fz = _column_levels(grid.heights_m[ci, cj], g[:, 2:3], clamp, grid.source)
     if values is None:
-        v_lo = grid.velocity_mps[ci, cj, k]                # (n, 4, 3)
-        v_hi = grid.velocity_mps[ci, cj, k + 1]
-    else:
-        field = np.asarray(value_index)[:, None]
-        v_lo = values[field, ci, cj, k]                    # (n, 4, 3): each row's own field's nodes
-        v_hi = values[field, ci, cj, k + 1]
+        values, value_index = grid.velocity_mps[None], np.zeros(len(points), dtype=np.int64)
+    wind, code, row = _interpolate_rows(g[:, 0], g[:, 1], g[:, 2], grid.x_m, grid.y_m, grid.heights_m, values,
+                                        np.asarray(value_index, dtype=np.int64), method == "idw", float(idw_power),
+                                        bool(clamp))
+    if code != _INSIDE:
+        _refuse_outside(grid, g[row], code)
+    return wind
 
-    fxc = np.stack([fx, 1 - fx, fx, 1 - fx], axis=1)       # cell-unit distance to each column along x
-    fyc = np.stack([fy, fy, 1 - fy, 1 - fy], axis=1)
-    if method == "trilinear":
-        column = v_lo + fz[..., None] * (v_hi - v_lo)      # (n, 4, 3)
-        wx = np.stack([1 - fx, fx, 1 - fx, fx], axis=1)
-        wy = np.stack([1 - fy, 1 - fy, fy, fy], axis=1)
-        return np.einsum("nc,ncd->nd", wx * wy, column)
 
-    # Paper Sec. 4.1: inverse-distance weighting over the 8 surrounding grid points.
-    d2_lo = fxc**2 + fyc**2 + fz**2                        # (n, 4) squared cell-unit distances
-    d2_hi = fxc**2 + fyc**2 + (1 - fz) ** 2
-    d2 = np.concatenate([d2_lo, d2_hi], axis=1)            # (n, 8)
-    values = np.concatenate([v_lo, v_hi], axis=1)          # (n, 8, 3)
-    on_node = d2 < 1e-24
-    with np.errstate(divide="ignore"):
-        w = np.where(on_node, 0.0, d2 ** (-0.5 * idw_power))
-    hit = on_node.any(axis=1)
-    w[hit] = on_node[hit].astype(float)                    # a query on a node returns that node's value
-    w /= w.sum(axis=1, keepdims=True)
-    return np.einsum("nc,ncd->nd", w, values)
+def _refuse_outside(grid: WindGrid, point: np.ndarray, code: int) -> None:
+    """Raise OutsideWindGridError for grid-frame ``point`` (3,) outside the grid along coordinate ``code``."""
+    if code == _OUTSIDE_Z:
+        i = min(int(np.searchsorted(grid.x_m, point[0], side="right")) - 1, grid.x_m.size - 2)
+        j = min(int(np.searchsorted(grid.y_m, point[1], side="right")) - 1, grid.y_m.size - 2)
+        columns = grid.heights_m[i:i + 2, j:j + 2]
+        raise OutsideWindGridError(grid.source, f"query height z = {point[2]:.3f} m is outside the wind grid's "
+                                                f"levels [{columns[..., 0].min():.3f}, {columns[..., -1].max():.3f}] m "
+                                                "here (enlarge the grid or set wind.clamp)")
+    axis, name, value = (grid.x_m, "x", point[0]) if code == _OUTSIDE_X else (grid.y_m, "y", point[1])
+    raise OutsideWindGridError(grid.source, f"query {name} (grid frame) = {value:.3f} m is outside the wind grid "
+                                            f"[{axis[0]:.3f}, {axis[-1]:.3f}] m (enlarge the grid or set wind.clamp)")
 
 
 def _same_geometry(a: WindGrid, b: WindGrid) -> bool:
