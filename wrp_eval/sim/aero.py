@@ -25,35 +25,58 @@ from __future__ import annotations
 
 import numpy as np
 
+from wrp_eval.compiled import kernel
 from wrp_eval.sim.vehicle import QuadrotorParams
+
+
+@kernel
+def _area_row(rx: float, ry: float, rz: float, yaw: float, length: float, width: float, height: float,
+              rotor_radius: float, rotor_height: float) -> float:
+    """Windward area m^2 of one vehicle: relative air (rx, ry, rz) m/s, body yaw rad, body box and rotor
+    cylinder sizes m (module docstring)."""
+    horizontal = np.hypot(rx, ry)
+    speed = np.sqrt(horizontal ** 2 + rz ** 2)
+    safe_h = horizontal if horizontal > 0.0 else 1.0
+    # horizontal unit normal of the wind direction (rotate the direction by +90 deg)
+    nx, ny = -ry / safe_h, rx / safe_h
+    cos_y, sin_y = np.cos(yaw), np.sin(yaw)
+    dot1 = length * (nx * cos_y + ny * sin_y)          # n . x_b * L
+    dot2 = width * (-nx * sin_y + ny * cos_y)          # n . y_b * W
+    side = (abs(dot1) + abs(dot2)) * height + 4.0 * np.pi * rotor_radius * rotor_height
+    if not speed > 0.0:
+        return side
+    cos_e, sin_e = horizontal / speed, abs(rz) / speed
+    return (side * cos_e if horizontal > 0.0 else 0.0) + length * width * sin_e
+
+
+@kernel
+def _drag_rows(rel_air, yaw, length, width, height, rotor_radius, rotor_height, drag_coefficient, air_density):
+    """(area (n,) m^2, drag (n, 3) N) for relative air (n, 3) m/s and yaw (n,) rad."""
+    n = rel_air.shape[0]
+    area, drag = np.empty(n), np.empty((n, 3))
+    for row in range(n):
+        rx, ry, rz = rel_air[row, 0], rel_air[row, 1], rel_air[row, 2]
+        area[row] = _area_row(rx, ry, rz, yaw[row], length, width, height, rotor_radius, rotor_height)
+        speed = np.sqrt(rx ** 2 + ry ** 2 + rz ** 2)
+        k = 0.5 * air_density * drag_coefficient * area[row] * speed
+        drag[row, 0], drag[row, 1], drag[row, 2] = k * rx, k * ry, k * rz
+    return area, drag
+
+
+def _drag(rel_air, yaw, params: QuadrotorParams, drag_coefficient: float, air_density_kg_m3: float):
+    rel_air = np.asarray(rel_air, dtype=float)
+    yaw = np.broadcast_to(np.asarray(yaw, dtype=float), rel_air.shape[:1])
+    return _drag_rows(rel_air, yaw, params.body_length_m, params.body_width_m, params.body_height_m,
+                      params.rotor_radius_m, params.rotor_height_m, float(drag_coefficient), float(air_density_kg_m3))
 
 
 def windward_area(rel_air: np.ndarray, yaw: np.ndarray, params: QuadrotorParams) -> np.ndarray:
     """Windward area (n,) in m^2 for relative air velocities ``rel_air`` (n, 3) m/s and body yaw (n,) rad."""
-    rel_air = np.asarray(rel_air, dtype=float)
-    yaw = np.asarray(yaw, dtype=float)
-    horizontal = np.hypot(rel_air[:, 0], rel_air[:, 1])
-    speed = np.sqrt(horizontal ** 2 + rel_air[:, 2] ** 2)
-    safe_h = np.where(horizontal > 0.0, horizontal, 1.0)
-    # horizontal unit normal of the wind direction (rotate the direction by +90 deg)
-    nx, ny = -rel_air[:, 1] / safe_h, rel_air[:, 0] / safe_h
-    cos_y, sin_y = np.cos(yaw), np.sin(yaw)
-    dot1 = params.body_length_m * (nx * cos_y + ny * sin_y)          # n . x_b * L
-    dot2 = params.body_width_m * (-nx * sin_y + ny * cos_y)          # n . y_b * W
-    body = (np.abs(dot1) + np.abs(dot2)) * params.body_height_m
-    rotors = 4.0 * np.pi * params.rotor_radius_m * params.rotor_height_m
-    side = body + rotors
-    top = params.body_length_m * params.body_width_m
-    safe_s = np.where(speed > 0.0, speed, 1.0)
-    cos_e, sin_e = horizontal / safe_s, np.abs(rel_air[:, 2]) / safe_s
-    area = np.where(horizontal > 0.0, side * cos_e, 0.0) + top * sin_e
-    return np.where(speed > 0.0, area, side)
+    return _drag(rel_air, yaw, params, 1.0, 1.0)[0]
 
 
 def drag_force(rel_air: np.ndarray, yaw: np.ndarray, params: QuadrotorParams,
                drag_coefficient: float, air_density_kg_m3: float) -> np.ndarray:
-    """Drag (n, 3) N along the relative air velocity: 0.5 rho C_d A |v_rel| v_rel."""
-    rel_air = np.asarray(rel_air, dtype=float)
-    area = windward_area(rel_air, yaw, params)
-    speed = np.sqrt((rel_air ** 2).sum(axis=1))
-    return (0.5 * air_density_kg_m3 * drag_coefficient * area * speed)[:, None] * rel_air
+    """Drag (n, 3) N along the relative air velocity: 0.5 rho C_d A |v_rel| v_rel (one compiled loop over the
+    vehicles, :mod:`wrp_eval.compiled`)."""
+    return _drag(rel_air, yaw, params, drag_coefficient, air_density_kg_m3)[1]

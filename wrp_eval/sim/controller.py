@@ -22,6 +22,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from wrp_eval.compiled import kernel
 from wrp_eval.sim.vehicle import GRAVITY_M_S2, QuadrotorParams
 
 
@@ -92,6 +93,30 @@ def wrap_angle(a: np.ndarray) -> np.ndarray:
     return (np.asarray(a) + np.pi) % (2.0 * np.pi) - np.pi
 
 
+@kernel
+def _attitude_row(b3x: float, b3y: float, b3z: float, yaw: float):
+    """(w, x, y, z) of R_d for one unit thrust axis b3 and heading ``yaw`` (:func:`attitude_quaternion`)."""
+    cy, sy = np.cos(yaw), np.sin(yaw)
+    bx = cy * b3x + sy * b3y
+    by = -sy * b3x + cy * b3y
+    phi = -np.arcsin(min(max(by, -1.0), 1.0))
+    theta = np.arctan2(bx, b3z)
+    cz, sz = np.cos(0.5 * yaw), np.sin(0.5 * yaw)
+    ct, st = np.cos(0.5 * theta), np.sin(0.5 * theta)
+    cp, sp = np.cos(0.5 * phi), np.sin(0.5 * phi)
+    return (cz * ct * cp + sz * st * sp, cz * ct * sp - sz * st * cp, cz * st * cp + sz * ct * sp,
+            sz * ct * cp - cz * st * sp)
+
+
+@kernel
+def _attitude_rows(b3, yaw):
+    quat = np.empty((b3.shape[0], 4))
+    for row in range(b3.shape[0]):
+        quat[row, 0], quat[row, 1], quat[row, 2], quat[row, 3] = _attitude_row(b3[row, 0], b3[row, 1], b3[row, 2],
+                                                                               yaw[row])
+    return quat
+
+
 def attitude_quaternion(b3: np.ndarray, yaw: np.ndarray) -> np.ndarray:
     """(n, 4) unit quaternions (w, x, y, z) of R_d = [b1 b2 b3] with b1 = y_c x b3 / |.|, y_c the horizontal
     normal of the heading ``yaw`` (n,) rad, b3 (n, 3) unit thrust axes (tilt < 90 deg).
@@ -100,18 +125,39 @@ def attitude_quaternion(b3: np.ndarray, yaw: np.ndarray) -> np.ndarray:
     cos phi cos theta), so q = q_z(yaw) q_y(theta) q_x(phi): a handful of trig functions per vehicle
     instead of a matrix-to-quaternion conversion.
     """
-    cy, sy = np.cos(yaw), np.sin(yaw)
-    bx = cy * b3[:, 0] + sy * b3[:, 1]
-    by = -sy * b3[:, 0] + cy * b3[:, 1]
-    phi = -np.arcsin(np.clip(by, -1.0, 1.0))
-    theta = np.arctan2(bx, b3[:, 2])
-    cz, sz = np.cos(0.5 * yaw), np.sin(0.5 * yaw)
-    ct, st = np.cos(0.5 * theta), np.sin(0.5 * theta)
-    cp, sp = np.cos(0.5 * phi), np.sin(0.5 * phi)
-    return np.stack([cz * ct * cp + sz * st * sp,
-                     cz * ct * sp - sz * st * cp,
-                     cz * st * cp + sz * ct * sp,
-                     sz * ct * cp - cz * st * sp], axis=1)
+    return _attitude_rows(np.asarray(b3, dtype=float), np.asarray(yaw, dtype=float))
+
+
+@kernel
+def _position_loop_rows(pos, vel, body_z, ref_pos, ref_vel, ref_acc, ref_yaw, integrate, integral, dt_s, kp, kv, ki,
+                        integral_limit, mass_kg, tan_max_tilt, max_total_thrust):
+    """(thrust (n,) N, R_d quaternions (n, 4)) of the position loop (:meth:`PositionController.__call__`), row by
+    row; ``integral`` (n, 3) is updated in place."""
+    n = pos.shape[0]
+    thrust, quat = np.empty(n), np.empty((n, 4))
+    e_p, acc = np.empty(3), np.empty(3)
+    for row in range(n):
+        for d in range(3):
+            e_p[d] = pos[row, d] - ref_pos[row, d]
+            if integrate[row]:
+                integral[row, d] += e_p[d] * dt_s
+        norm = np.sqrt(integral[row, 0] ** 2 + integral[row, 1] ** 2 + integral[row, 2] ** 2)
+        clamp = min(1.0, integral_limit / max(norm, 1e-12))
+        for d in range(3):
+            integral[row, d] *= clamp
+            acc[d] = -kp * e_p[d] - kv * (vel[row, d] - ref_vel[row, d]) - ki * integral[row, d] + ref_acc[row, d]
+        acc[2] = max(acc[2] + GRAVITY_M_S2, 0.2 * GRAVITY_M_S2)
+        # tilt limit: the horizontal demand may not exceed vertical * tan(max tilt)
+        scale = min(1.0, acc[2] * tan_max_tilt / max(np.hypot(acc[0], acc[1]), 1e-12))
+        acc[0] *= scale
+        acc[1] *= scale
+        norm_acc = np.sqrt(acc[0] ** 2 + acc[1] ** 2 + acc[2] ** 2)
+        # f = F_des . R e3 (Lee et al. 2010): less thrust while the attitude still lags the demand
+        f = mass_kg * (acc[0] * body_z[row, 0] + acc[1] * body_z[row, 1] + acc[2] * body_z[row, 2])
+        thrust[row] = min(max(f, 0.0), max_total_thrust)
+        quat[row, 0], quat[row, 1], quat[row, 2], quat[row, 3] = _attitude_row(
+            acc[0] / norm_acc, acc[1] / norm_acc, acc[2] / norm_acc, ref_yaw[row])
+    return thrust, quat
 
 
 class PositionController:
@@ -143,25 +189,9 @@ class PositionController:
         during accelerations would otherwise wind it up and leave a slow overshoot at the viewpoint.
         """
         g = self.gains
-        m = self.params.mass_kg
-        e_p = pos - ref_pos
-        e_v = vel - ref_vel
-        if integrate is None:
-            self.integral += e_p * dt_s
-        else:
-            self.integral += np.where(integrate[:, None], e_p * dt_s, 0.0)
-        lim = g.integral_limit_m_s2 / max(g.ki, 1e-9)
-        norm = np.sqrt((self.integral ** 2).sum(axis=1, keepdims=True))
-        self.integral *= np.minimum(1.0, lim / np.maximum(norm, 1e-12))
-        acc = -g.kp * e_p - g.kv * e_v - g.ki * self.integral + ref_acc
-        acc[:, 2] += GRAVITY_M_S2
-        acc[:, 2] = np.maximum(acc[:, 2], 0.2 * GRAVITY_M_S2)
-        # tilt limit: the horizontal demand may not exceed vertical * tan(max tilt)
-        horiz = np.hypot(acc[:, 0], acc[:, 1])
-        scale = np.minimum(1.0, acc[:, 2] * self.tan_max_tilt / np.maximum(horiz, 1e-12))
-        acc[:, :2] *= scale[:, None]
-        norm_acc = np.sqrt((acc ** 2).sum(axis=1))
-        b3 = acc / norm_acc[:, None]
-        # f = F_des . R e3 (Lee et al. 2010): less thrust while the attitude still lags the demand
-        thrust = m * (acc * body_z).sum(axis=1)
-        return np.clip(thrust, 0.0, self.max_total_thrust), attitude_quaternion(b3, ref_yaw)
+        n = len(pos)
+        integrate = np.ones(n, dtype=bool) if integrate is None else np.asarray(integrate, dtype=bool)
+        return _position_loop_rows(pos, vel, body_z, ref_pos, ref_vel, ref_acc, np.asarray(ref_yaw, dtype=float),
+                                   integrate, self.integral, float(dt_s), g.kp, g.kv, g.ki,
+                                   g.integral_limit_m_s2 / max(g.ki, 1e-9), self.params.mass_kg, self.tan_max_tilt,
+                                   self.max_total_thrust)
