@@ -7,7 +7,8 @@ the loop was bound by per-call overhead, not arithmetic. A kernel is one call wi
 rows inside: each row is computed on its own, so a row's result never depends on the batch it is in.
 
 Settings, in one place: ``cache=True`` (compiled once per machine into ``__pycache__``, later processes load
-it); ``nogil=True`` (a kernel may run beside the rollout threads); no ``fastmath``: IEEE arithmetic, so a
+it); ``nogil=True`` (a kernel may run beside the rollout threads); ``error_model="numpy"``: a division by zero
+gives inf / nan as in numpy instead of raising; no ``fastmath``: IEEE arithmetic, so a
 kernel's formulas give what the same formulas give in numpy up to the rounding of library functions (exp,
 pow, ...), a few ulps.
 """
@@ -19,4 +20,4 @@ import numba
 
 def kernel(function):
     """``function`` compiled by numba (nopython mode) with the project's settings (module docstring)."""
-    return numba.njit(cache=True, nogil=True)(function)
+    return numba.njit(cache=True, nogil=True, error_model="numpy")(function)

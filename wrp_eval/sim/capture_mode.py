@@ -28,6 +28,8 @@ from __future__ import annotations
 from typing import Literal
 
 import numpy as np
+
+from wrp_eval.compiled import kernel
 from pydantic import Field
 
 from wrp_eval.validation import StrictModel
@@ -95,30 +97,49 @@ def trigger_planes(body: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     return arriving, np.where(norm > 1e-6, mitre / np.maximum(norm, 1e-12), arriving)
 
 
-def through_profile(length, tau, v0, v1, v_max, accel):
-    """Trapezoid from speed v0 to v1 over ``length`` (each (n,)) with acceleration ``accel`` and cruise at most
-    ``v_max``: (distance s, speed v, acceleration a, duration) (n,) at time ``tau`` (n,) s. The end speeds
-    must be reachable (:func:`vertex_speeds` makes them so). After the duration: at the end, at speed v1."""
-    v_peak = np.minimum(v_max, np.sqrt(np.maximum(accel * length + 0.5 * (v0 ** 2 + v1 ** 2), 0.0)))
-    v_peak = np.maximum(v_peak, np.maximum(v0, v1))
+@kernel
+def through_row(length: float, tau: float, v0: float, v1: float, v_max: float, accel: float):
+    """(s, v, a, duration) of :func:`through_profile` for one segment at one time."""
+    v_peak = min(v_max, np.sqrt(max(accel * length + 0.5 * (v0 ** 2 + v1 ** 2), 0.0)))
+    v_peak = max(v_peak, max(v0, v1))
     t_acc = (v_peak - v0) / accel
     t_dec = (v_peak - v1) / accel
     s_acc = 0.5 * (v_peak + v0) * t_acc
     s_dec = 0.5 * (v_peak + v1) * t_dec
-    with np.errstate(divide="ignore", invalid="ignore"):
-        t_cruise = np.where(v_peak > 1e-9, np.maximum(length - s_acc - s_dec, 0.0) / v_peak, 0.0)
+    t_cruise = max(length - s_acc - s_dec, 0.0) / v_peak if v_peak > 1e-9 else 0.0
     duration = t_acc + t_cruise + t_dec
     moving = tau < duration
-    tau = np.clip(tau, 0.0, duration)
+    tau = min(max(tau, 0.0), duration)
     in_acc, in_cruise = tau < t_acc, tau < t_acc + t_cruise
     t_d = tau - t_acc - t_cruise
-    s = np.where(in_acc, v0 * tau + 0.5 * accel * tau ** 2,
-                 np.where(in_cruise, s_acc + v_peak * (tau - t_acc),
-                          s_acc + v_peak * t_cruise + v_peak * t_d - 0.5 * accel * t_d ** 2))
-    v = np.where(in_acc, v0 + accel * tau, np.where(in_cruise, v_peak, v_peak - accel * t_d))
-    a = np.where(moving, np.where(in_acc & (t_acc > 0), accel,
-                                  np.where(in_cruise, 0.0, np.where(t_dec > 0, -accel, 0.0))), 0.0)
-    return np.minimum(s, length), v, a, duration
+    if in_acc:
+        s, v = v0 * tau + 0.5 * accel * tau ** 2, v0 + accel * tau
+    elif in_cruise:
+        s, v = s_acc + v_peak * (tau - t_acc), v_peak
+    else:
+        s, v = s_acc + v_peak * t_cruise + v_peak * t_d - 0.5 * accel * t_d ** 2, v_peak - accel * t_d
+    a = 0.0
+    if moving:
+        a = accel if in_acc and t_acc > 0 else (0.0 if in_cruise else (-accel if t_dec > 0 else 0.0))
+    return min(s, length), v, a, duration
+
+
+@kernel
+def _through_rows(length, tau, v0, v1, v_max, accel):
+    out = np.empty((4, length.size))
+    for row in range(length.size):
+        out[0, row], out[1, row], out[2, row], out[3, row] = through_row(length[row], tau[row], v0[row], v1[row],
+                                                                         v_max[row], accel)
+    return out
+
+
+def through_profile(length, tau, v0, v1, v_max, accel):
+    """Trapezoid from speed v0 to v1 over ``length`` (each (n,)) with acceleration ``accel`` and cruise at most
+    ``v_max``: (distance s, speed v, acceleration a, duration) (n,) at time ``tau`` (n,) s. The end speeds
+    must be reachable (:func:`vertex_speeds` makes them so). After the duration: at the end, at speed v1."""
+    arrays = np.broadcast_arrays(*(np.asarray(x, dtype=float) for x in (length, tau, v0, v1, v_max)))
+    s, v, a, duration = _through_rows(*(np.ascontiguousarray(x).reshape(-1) for x in arrays), float(accel))
+    return tuple(x.reshape(arrays[0].shape) for x in (s, v, a, duration))
 
 
 def shutter_offset(past_m: np.ndarray, speed_along_m_s: np.ndarray, chunk_s: float, latency_s: float) -> np.ndarray:

@@ -16,7 +16,8 @@ from typing import NamedTuple
 
 import numpy as np
 
-from wrp_eval.sim.capture_mode import through_profile
+from wrp_eval.compiled import kernel
+from wrp_eval.sim.capture_mode import through_profile, through_row
 from wrp_eval.sim.config import SimSection
 from wrp_eval.sim.controller import PositionController, wrap_angle
 from wrp_eval.sim.flight_state import (
@@ -42,32 +43,50 @@ YAW_RATE_REF_RAD_S = np.radians(60.0)  # reference yaw rate when a segment is mo
 
 
 # -- reference speed profile -----------------------------------------------------------------------------
-def _trapezoid(length, tau, v_max, a_max):
+@kernel
+def _trapezoid(length: float, tau: float, v_max: float, a_max: float):
     """Rest-to-rest trapezoidal speed profile: distance s, speed v, acceleration a and the running integral
-    of s, S = int s dt (each (n,)) at time tau (n,) s, plus the duration (n,). Before 0: at rest at 0;
-    after: at rest at ``length``."""
+    of s, S = int s dt, at time tau s, plus the duration. Before 0: at rest at 0; after: at rest at ``length``."""
     tri = length < v_max ** 2 / a_max
-    v_peak = np.where(tri, np.sqrt(np.maximum(length, 0.0) * a_max), v_max)
+    v_peak = np.sqrt(max(length, 0.0) * a_max) if tri else v_max
     t_acc = v_peak / a_max
-    t_cruise = np.where(tri, 0.0, length / v_max - t_acc)
+    t_cruise = 0.0 if tri else length / v_max - t_acc
     duration = 2.0 * t_acc + t_cruise
     s_acc = 0.5 * a_max * t_acc ** 2
     big_s_acc = a_max * t_acc ** 3 / 6.0
     big_s_end = big_s_acc + s_acc * t_cruise + 0.5 * v_peak * t_cruise ** 2 + (length * t_acc - big_s_acc)
-    after = np.maximum(tau - duration, 0.0)
-    moving = (tau >= 0.0) & (tau < duration)
-    tau = np.clip(tau, 0.0, duration)
+    after = max(tau - duration, 0.0)
+    moving = tau >= 0.0 and tau < duration
+    tau = min(max(tau, 0.0), duration)
     t_c = tau - t_acc
     t_dec = duration - tau
-    in_acc, in_dec = tau < t_acc, t_dec < t_acc
-    s = np.where(in_acc, 0.5 * a_max * tau ** 2,
-                 np.where(in_dec, length - 0.5 * a_max * t_dec ** 2, s_acc + v_peak * t_c))
-    v = np.where(in_acc, a_max * tau, np.where(in_dec, a_max * t_dec, v_peak))
-    a = np.where(moving, np.where(in_acc, a_max, np.where(in_dec, -a_max, 0.0)), 0.0)
-    big_s = np.where(in_acc, a_max * tau ** 3 / 6.0,
-                     np.where(in_dec, big_s_end - (length * t_dec - a_max * t_dec ** 3 / 6.0),
-                              big_s_acc + s_acc * t_c + 0.5 * v_peak * t_c ** 2))
-    return s, v, a, big_s + length * after, duration
+    if tau < t_acc:
+        s, v, a, big_s = 0.5 * a_max * tau ** 2, a_max * tau, a_max, a_max * tau ** 3 / 6.0
+    elif t_dec < t_acc:
+        s, v, a = length - 0.5 * a_max * t_dec ** 2, a_max * t_dec, -a_max
+        big_s = big_s_end - (length * t_dec - a_max * t_dec ** 3 / 6.0)
+    else:
+        s, v, a = s_acc + v_peak * t_c, v_peak, 0.0
+        big_s = big_s_acc + s_acc * t_c + 0.5 * v_peak * t_c ** 2
+    return s, v, a if moving else 0.0, big_s + length * after, duration
+
+
+@kernel
+def profile_row(length: float, tau: float, v_max: float, a_max: float, t_jerk: float):
+    """(s, v, a, duration) of :func:`reference_profile` for one segment at one time."""
+    s1, v1, a1, big1, duration = _trapezoid(length, tau, v_max, a_max)
+    if t_jerk <= 0.0:
+        return s1, v1, a1, duration
+    s0, v0, _, big0, _ = _trapezoid(length, tau - t_jerk, v_max, a_max)
+    return (big1 - big0) / t_jerk, (s1 - s0) / t_jerk, (v1 - v0) / t_jerk, duration + t_jerk
+
+
+@kernel
+def _profile_rows(length, tau, v_max, a_max, t_jerk):
+    out = np.empty((4, length.size))
+    for row in range(length.size):
+        out[0, row], out[1, row], out[2, row], out[3, row] = profile_row(length[row], tau[row], v_max, a_max, t_jerk)
+    return out
 
 
 def reference_profile(length, tau, v_max, a_max, t_jerk):
@@ -82,11 +101,10 @@ def reference_profile(length, tau, v_max, a_max, t_jerk):
     vehicle overshot each viewpoint by ~10 cm (README.md). Exact box averages from the closed forms:
     s_j = (S(t) - S(t-T)) / T, v_j = (s(t) - s(t-T)) / T, a_j = (v(t) - v(t-T)) / T.
     """
-    s1, v1, a1, big1, duration = _trapezoid(length, tau, v_max, a_max)
-    if t_jerk <= 0.0:
-        return s1, v1, a1, duration
-    s0, v0, _, big0, _ = _trapezoid(length, tau - t_jerk, v_max, a_max)
-    return (big1 - big0) / t_jerk, (s1 - s0) / t_jerk, (v1 - v0) / t_jerk, duration + t_jerk
+    length, tau = np.broadcast_arrays(np.asarray(length, dtype=float), np.asarray(tau, dtype=float))
+    out = _profile_rows(np.ascontiguousarray(length).reshape(-1), np.ascontiguousarray(tau).reshape(-1),
+                        float(v_max), float(a_max), float(t_jerk))
+    return tuple(x.reshape(length.shape) for x in out)
 
 
 @dataclass(frozen=True)
@@ -149,23 +167,43 @@ class Reference(NamedTuple):
     held: np.ndarray
 
 
+@kernel
+def _reference_rows(transit, phase_time, start, end, yaw0, dyaw, length, direction, duration, v0, v1, v_max, position,
+                    through, cruise_m_s, a_max, t_jerk, leash_m):
+    """The arrays of :class:`Reference` (:func:`reference`), row by row."""
+    n = transit.size
+    ref_pos, ref_vel, ref_acc = np.empty((n, 3)), np.zeros((n, 3)), np.zeros((n, 3))
+    yaw, dist2, held = np.empty(n), np.empty(n), np.zeros(n, np.bool_)
+    for row in range(n):
+        if through:
+            s, v, a, _ = through_row(length[row], phase_time[row], v0[row], v1[row], v_max[row], a_max)
+        else:
+            s, v, a, _ = profile_row(length[row], phase_time[row], cruise_m_s, a_max, t_jerk)
+        d2 = 0.0
+        for d in range(3):
+            ref_pos[row, d] = start[row, d] + direction[row, d] * s if transit[row] else end[row, d]
+            d2 += (position[row, d] - ref_pos[row, d]) ** 2
+        dist2[row] = d2
+        # Leash: a vehicle held back by a head wind is not "lost"; its reference waits for it (what a waypoint
+        # autopilot does: it flies towards the next waypoint as fast as it can).
+        held[row] = transit[row] and d2 > leash_m ** 2
+        if transit[row] and not held[row]:
+            for d in range(3):
+                ref_vel[row, d] = direction[row, d] * v
+                ref_acc[row, d] = direction[row, d] * a
+        frac = min(max(phase_time[row] / max(duration[row], 1e-9), 0.0), 1.0) if transit[row] else 1.0
+        yaw[row] = yaw0[row] + dyaw[row] * frac
+    return ref_pos, ref_vel, ref_acc, yaw, dist2, held
+
+
 def reference(state: FlightState, position: np.ndarray, profile: Profile, leash_m: float) -> Reference:
     """Each flight's reference at its phase time: along the segment in TRANSIT, at the segment's end
     otherwise. ``position`` (batch, 3) m: the vehicles' centres of mass as the navigation estimates them."""
     seg = state.segment
-    s, v, a, _ = profile.along(seg, state.phase_time)
-    transit = state.phase == TRANSIT
-    ref_pos = np.where(transit[:, None], seg.start + seg.direction * s[:, None], seg.end)
-    # Leash: a vehicle held back by a head wind is not "lost"; its reference waits for it (what a waypoint
-    # autopilot does: it flies towards the next waypoint as fast as it can).
-    err = position - ref_pos
-    dist2 = np.einsum("ij,ij->i", err, err)
-    held = transit & (dist2 > leash_m ** 2)
-    moving = transit & ~held
-    ref_vel = np.where(moving[:, None], seg.direction * v[:, None], 0.0)
-    ref_acc = np.where(moving[:, None], seg.direction * a[:, None], 0.0)
-    frac = np.where(transit, np.clip(state.phase_time / np.maximum(seg.duration, 1e-9), 0.0, 1.0), 1.0)
-    return Reference(ref_pos, ref_vel, ref_acc, seg.yaw0 + seg.dyaw * frac, dist2, held)
+    return Reference(*_reference_rows(state.phase == TRANSIT, state.phase_time, seg.start, seg.end, seg.yaw0,
+                                      seg.dyaw, seg.length, seg.direction, seg.duration, seg.v0, seg.v1, seg.v_max,
+                                      position, profile.through, float(profile.cruise_m_s),
+                                      float(profile.acceleration_m_s2), float(profile.jerk_window_s), float(leash_m)))
 
 
 # -- how flights end ----------------------------------------------------------------------------------------
