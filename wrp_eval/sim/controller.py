@@ -54,21 +54,34 @@ GAIN_PRESETS: dict[str, ControllerGains] = {
 }
 
 
+@kernel
+def quat_row_to_matrix(quat, rot) -> None:
+    """Write the rotation matrix (world from body) of the unit quaternion ``quat`` (4,) (w, x, y, z) into
+    ``rot`` (3, 3)."""
+    w, x, y, z = quat[0], quat[1], quat[2], quat[3]
+    xx, yy, zz, xy, xz, yz, wx, wy, wz = x * x, y * y, z * z, x * y, x * z, y * z, w * x, w * y, w * z
+    rot[0, 0] = 1 - 2 * (yy + zz)
+    rot[0, 1] = 2 * (xy - wz)
+    rot[0, 2] = 2 * (xz + wy)
+    rot[1, 0] = 2 * (xy + wz)
+    rot[1, 1] = 1 - 2 * (xx + zz)
+    rot[1, 2] = 2 * (yz - wx)
+    rot[2, 0] = 2 * (xz - wy)
+    rot[2, 1] = 2 * (yz + wx)
+    rot[2, 2] = 1 - 2 * (xx + yy)
+
+
+@kernel
+def _quat_rows_to_matrix(quat):
+    rot = np.empty((quat.shape[0], 3, 3))
+    for row in range(quat.shape[0]):
+        quat_row_to_matrix(quat[row], rot[row])
+    return rot
+
+
 def quat_to_matrix(quat: np.ndarray) -> np.ndarray:
     """(n, 3, 3) rotation matrices (world from body) from (n, 4) unit quaternions (w, x, y, z)."""
-    w, x, y, z = quat[:, 0], quat[:, 1], quat[:, 2], quat[:, 3]
-    xx, yy, zz, xy, xz, yz, wx, wy, wz = x * x, y * y, z * z, x * y, x * z, y * z, w * x, w * y, w * z
-    rot = np.empty((quat.shape[0], 3, 3))
-    rot[:, 0, 0] = 1 - 2 * (yy + zz)
-    rot[:, 0, 1] = 2 * (xy - wz)
-    rot[:, 0, 2] = 2 * (xz + wy)
-    rot[:, 1, 0] = 2 * (xy + wz)
-    rot[:, 1, 1] = 1 - 2 * (xx + zz)
-    rot[:, 1, 2] = 2 * (yz - wx)
-    rot[:, 2, 0] = 2 * (xz - wy)
-    rot[:, 2, 1] = 2 * (yz + wx)
-    rot[:, 2, 2] = 1 - 2 * (xx + yy)
-    return rot
+    return _quat_rows_to_matrix(np.asarray(quat, dtype=float))
 
 
 def yaw_of(rot: np.ndarray) -> np.ndarray:

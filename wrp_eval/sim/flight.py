@@ -40,6 +40,7 @@ import numpy as np
 from mujoco import rollout as mj_rollout
 from scipy.spatial.transform import Rotation
 
+from wrp_eval.compiled import kernel
 from wrp_eval.planning.path import Path
 from wrp_eval.sim.aero import drag_force
 from wrp_eval.sim.capture_mode import shutter_offset, trigger_planes, vertex_speeds
@@ -47,9 +48,8 @@ from wrp_eval.sim.config import SimSection
 from wrp_eval.sim.controller import (
     GAIN_PRESETS,
     PositionController,
-    quat_to_matrix,
+    quat_row_to_matrix,
     tilt_of,
-    yaw_of,
 )
 from wrp_eval.sim.flight_state import (
     ENDED,
@@ -123,6 +123,24 @@ def _start_poses(targets: FlightTargets, padded: int, position: np.ndarray, yaw:
     return start
 
 
+@kernel
+def _body_rows(state, qpos_flat, qvel_flat):
+    """(position (n, 3), velocity (n, 3), rot (n, 3, 3), yaw (n,)) of the drones whose free joints sit at flat
+    indices ``qpos_flat`` (n, 7) and ``qvel_flat`` (n, 6) of the rollout ``state``."""
+    n = qpos_flat.shape[0]
+    position, velocity, rot, yaw = np.empty((n, 3)), np.empty((n, 3)), np.empty((n, 3, 3)), np.empty(n)
+    quat = np.empty(4)
+    for row in range(n):
+        for d in range(3):
+            position[row, d] = state[qpos_flat[row, d]]
+            velocity[row, d] = state[qvel_flat[row, d]]
+        for d in range(4):
+            quat[d] = state[qpos_flat[row, 3 + d]]
+        quat_row_to_matrix(quat, rot[row])
+        yaw[row] = np.arctan2(rot[row, 1, 0], rot[row, 0, 0])      # controller.yaw_of
+    return position, velocity, rot, yaw
+
+
 class Body(NamedTuple):
     """Vehicles of the padded batch at the start of a chunk: position, velocity (padded, 3) m, m/s world;
     rot (padded, 3, 3) world from body; yaw (padded,) rad (Z-Y-X heading)."""
@@ -159,10 +177,7 @@ class _Batch:
 
     def body(self) -> Body:
         """The drones' state as the last rollout left it."""
-        flat = self.state.reshape(-1)
-        qpos, qvel = flat[self.qpos_flat], flat[self.qvel_flat]
-        rot = quat_to_matrix(qpos[:, 3:])
-        return Body(qpos[:, :3], qvel[:, :3], rot, yaw_of(rot))
+        return Body(*_body_rows(self.state.reshape(-1), self.qpos_flat, self.qvel_flat))
 
     def hold(self, drones: np.ndarray, qpos: np.ndarray) -> None:
         """Put ``drones`` (padded,) bool at ``qpos`` (n, 7), at rest."""

@@ -31,6 +31,7 @@ from typing import NamedTuple
 import numpy as np
 from pydantic import Field, model_validator
 
+from wrp_eval.compiled import kernel
 from wrp_eval.validation import StrictModel
 
 
@@ -78,9 +79,52 @@ class CameraAttitude(NamedTuple):
     saturated: np.ndarray
 
 
+@kernel
+def _airframe_row(rot):
+    """(nose elevation, wing elevation) rad of one airframe ``rot`` (3, 3) world from body."""
+    return np.arcsin(min(max(rot[2, 0], -1.0), 1.0)), np.arcsin(min(max(rot[2, 1], -1.0), 1.0))
+
+
+@kernel
+def _airframe_rows(rot):
+    out = np.empty((2, rot.shape[0]))
+    for row in range(rot.shape[0]):
+        out[0, row], out[1, row] = _airframe_row(rot[row])
+    return out
+
+
 def airframe_angles(rot: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """(nose elevation, wing elevation) (n,) rad of airframes ``rot`` (n, 3, 3) world from body."""
-    return np.arcsin(np.clip(rot[:, 2, 0], -1.0, 1.0)), np.arcsin(np.clip(rot[:, 2, 1], -1.0, 1.0))
+    nose, wing = _airframe_rows(np.asarray(rot, dtype=float))
+    return nose, wing
+
+
+# what _gimbal_rows does to the joints: leave them, move them one chunk, or put them on their (limited) targets
+_HOLD, _ADVANCE, _SETTLE = 0, 1, 2
+
+
+@kernel
+def _gimbal_rows(rot, wanted_pitch, joint, mode, gain, max_step, pitch_range, roll_range):
+    """Cameras' (pitch, roll) (n,) rad and saturated (n,) bool for airframes ``rot`` (n, 3, 3) and wanted pitches
+    (n,); ``joint`` (n, 2) (pitch, roll) is updated in place as ``mode`` says. A joint's target compensates the
+    airframe's nose / wing elevation; a move is first order (``gain``) within the rate limit (``max_step``)."""
+    n = rot.shape[0]
+    pitch, roll, saturated = np.empty(n), np.empty(n), np.zeros(n, np.bool_)
+    lo = (pitch_range[0], roll_range[0])
+    hi = (pitch_range[1], roll_range[1])
+    for row in range(n):
+        nose, wing = _airframe_row(rot[row])
+        target = (wanted_pitch[row] - nose, -wing)
+        for k in range(2):
+            limited = min(max(target[k], lo[k]), hi[k])
+            if mode == _SETTLE:
+                joint[row, k] = limited
+            elif mode == _ADVANCE:
+                move = min(max(gain * (target[k] - joint[row, k]), -max_step), max_step)
+                joint[row, k] = min(max(joint[row, k] + move, lo[k]), hi[k])
+            saturated[row] |= abs(limited - target[k]) > 1e-12
+        pitch[row], roll[row] = nose + joint[row, 0], wing + joint[row, 1]
+    return pitch, roll, saturated
 
 
 class Gimbal:
@@ -91,25 +135,18 @@ class Gimbal:
         self.params = params
         self.gain = 1.0 - np.exp(-params.bandwidth * dt_s)
         self.max_step = params.rate_limit * dt_s
-        nose, wing = airframe_angles(rot)
-        self.joint = self._limits(self._targets(nose, wing, wanted_pitch))
+        self.joint = np.zeros((len(rot), 2))
+        self._move(rot, wanted_pitch, _SETTLE)
 
-    @staticmethod
-    def _targets(nose: np.ndarray, wing: np.ndarray, wanted_pitch: np.ndarray) -> np.ndarray:
-        return np.stack([wanted_pitch - nose, -wing], axis=1)
-
-    def _limits(self, joint: np.ndarray) -> np.ndarray:
+    def _move(self, rot: np.ndarray, wanted_pitch: np.ndarray, mode: int):
         p = self.params
-        return np.stack([np.clip(joint[:, 0], *p.pitch_range), np.clip(joint[:, 1], *p.roll_range)], axis=1)
+        return _gimbal_rows(np.asarray(rot, dtype=float), np.asarray(wanted_pitch, dtype=float), self.joint, mode,
+                            float(self.gain), float(self.max_step), np.asarray(p.pitch_range, dtype=float),
+                            np.asarray(p.roll_range, dtype=float))
 
     def step(self, rot: np.ndarray, yaw: np.ndarray, wanted_pitch: np.ndarray, advance: bool = True) -> CameraAttitude:
         """The cameras' world attitude for airframes ``rot`` (n, 3, 3) with headings ``yaw`` (n,) rad, after
         moving every joint one chunk towards its target (``advance``; False: as they are); saturated where a
         joint's target lies beyond its stop."""
-        nose, wing = airframe_angles(rot)
-        target = self._targets(nose, wing, wanted_pitch)
-        if advance:
-            move = np.clip(self.gain * (target - self.joint), -self.max_step, self.max_step)
-            self.joint = self._limits(self.joint + move)
-        saturated = np.any(np.abs(self._limits(target) - target) > 1e-12, axis=1)
-        return CameraAttitude(yaw, nose + self.joint[:, 0], wing + self.joint[:, 1], saturated)
+        pitch, roll, saturated = self._move(rot, wanted_pitch, _ADVANCE if advance else _HOLD)
+        return CameraAttitude(yaw, pitch, roll, saturated)
