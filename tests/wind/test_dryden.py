@@ -77,7 +77,9 @@ def test_generate_equals_stepping_and_is_deterministic():
     a = DrydenTurbulence(5, 0.02, 11, 8.0, block_steps=7)
     b = DrydenTurbulence(5, 0.02, 11, 8.0, block_steps=64)
     series = a.generate(300, 25.0, 8.0)
-    stepped = np.stack([b.local_turbulence(np.full(5, 25.0), np.full(5, 8.0), k * 0.02) for k in range(300)], 1)
+    # a mean wind of 8 m/s along +x: the world frame is the along/across/vertical one
+    points, mean = np.tile([0.0, 0.0, 25.0], (5, 1)), np.tile([8.0, 0.0, 0.0], (5, 1))
+    stepped = np.stack([b.velocity(points, k * 0.02, mean) for k in range(300)], 1)
     np.testing.assert_allclose(series, stepped, rtol=1e-10, atol=1e-12)
     c = DrydenTurbulence(5, 0.02, 11, 8.0)
     np.testing.assert_array_equal(c.generate(300, 25.0, 8.0), series)

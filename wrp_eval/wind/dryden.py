@@ -157,19 +157,21 @@ def _second_order_output(x1: float, x2: float) -> float:
 
 
 @kernel
-def _step_rows(altitude_m, airspeed_mps, w20_mps, dt, noise, state_u, state_vw):
+def _step_rows(points, mean_wind, w20_mps, airspeed_floor_mps, dt, noise, state_u, state_vw):
     """Advance each flight ``noise.shape[1]`` steps (unit normals (n, m, 3)) with the filters of its altitude
-    (n,) m and floored airspeed (n,) m/s, updating ``state_u`` (n,) and ``state_vw`` (n, 2, 2) in place;
-    returns the turbulence (n, 3) along/across/vertical after them."""
+    (``points`` (n, 3) m) and airspeed (the ``mean_wind`` (n, 3) m/s speed, floored), updating ``state_u`` (n,)
+    and ``state_vw`` (n, 2, 2) in place; returns the turbulence (n, 3) m/s after them, world frame."""
     q_sqrt = np.sqrt(np.pi / dt)
     n = noise.shape[0]
-    out = np.empty((n, 3))
+    out, uvw = np.empty((n, 3)), np.empty(3)
     for row in range(n):
-        tau, gain = _filters(altitude_m[row], w20_mps[row], airspeed_mps[row])
+        mx, my, mz = mean_wind[row, 0], mean_wind[row, 1], mean_wind[row, 2]
+        airspeed = max(np.sqrt(mx ** 2 + my ** 2 + mz ** 2), airspeed_floor_mps)
+        tau, gain = _filters(points[row, 2], w20_mps[row], airspeed)
         a, _, _, c2 = _zoh(tau[0], dt)
         for k in range(noise.shape[1]):
             state_u[row] = a * state_u[row] + c2 * (noise[row, k, 0] * q_sqrt)
-        out[row, 0] = gain[0] * state_u[row]
+        uvw[0] = gain[0] * state_u[row]
         for axis in range(2):       # v, w: second order
             a, ar, c1, c2 = _zoh(tau[1 + axis], dt)
             for k in range(noise.shape[1]):
@@ -177,20 +179,27 @@ def _step_rows(altitude_m, airspeed_mps, w20_mps, dt, noise, state_u, state_vw):
                 e = noise[row, k, 1 + axis] * q_sqrt
                 state_vw[row, axis, 0] = a * x1 + ar * x2 + c1 * e
                 state_vw[row, axis, 1] = a * x2 + c2 * e
-            out[row, 1 + axis] = gain[1 + axis] * _second_order_output(state_vw[row, axis, 0], state_vw[row, axis, 1])
+            uvw[1 + axis] = gain[1 + axis] * _second_order_output(state_vw[row, axis, 0], state_vw[row, axis, 1])
+        out[row, 0], out[row, 1], out[row, 2] = _to_world(uvw[0], uvw[1], uvw[2], mx, my)
     return out
 
 
 @kernel
-def _rotate_rows(uvw, mean_wind, horizontal_speed):
+def _to_world(u: float, v: float, w: float, mean_x: float, mean_y: float):
+    """(x, y, z) of along/across/vertical (u, v, w): u along the mean horizontal wind (x where calm), v 90 deg
+    to its left, w up."""
+    h = np.hypot(mean_x, mean_y)
+    cx, cy = (1.0, 0.0) if h < 1e-9 else (mean_x / h, mean_y / h)
+    return cx * u - cy * v, cy * u + cx * v, w
+
+
+@kernel
+def _rotate_rows(uvw, mean_wind):
     """(n, 3) along/across/vertical -> world frame (:func:`rotate_to_world`)."""
     out = np.empty_like(uvw)
     for row in range(uvw.shape[0]):
-        h = horizontal_speed[row]
-        cx, cy = (1.0, 0.0) if h < 1e-9 else (mean_wind[row, 0] / h, mean_wind[row, 1] / h)
-        out[row, 0] = cx * uvw[row, 0] - cy * uvw[row, 1]
-        out[row, 1] = cy * uvw[row, 0] + cx * uvw[row, 1]
-        out[row, 2] = uvw[row, 2]
+        out[row, 0], out[row, 1], out[row, 2] = _to_world(uvw[row, 0], uvw[row, 1], uvw[row, 2], mean_wind[row, 0],
+                                                          mean_wind[row, 1])
     return out
 
 
@@ -263,44 +272,31 @@ class DrydenTurbulence:
         vw = _second_order_output(self.state_vw[..., 0], self.state_vw[..., 1])
         return gain * np.concatenate([self.state_u[:, None], vw], axis=1)
 
-    def local_turbulence(self, altitude_m, airspeed_mps, t_s: float) -> np.ndarray:
-        """Turbulence (n, 3) along/across/vertical at time t_s (non-decreasing across calls).
-
-        The first call sets the time origin and draws the stationary initial state; later calls advance
-        round((t - t_prev) / dt) steps with the current altitude and airspeed (one compiled loop over the
-        flights, :mod:`wrp_eval.compiled`).
-        """
-        if self.t_s is None:
-            _, _, _, tau, _ = self.parameters(altitude_m, airspeed_mps)
-            self._initialise(tau)
-            self.t_s, n_steps = float(t_s), 0
-        else:
-            n_steps = int(round((t_s - self.t_s) / self.dt_s))
-            if n_steps < 0:
-                raise ValueError(f"turbulence queried at t = {t_s} s after t = {self.t_s} s: time must not decrease")
-        altitude = np.broadcast_to(np.asarray(altitude_m, float), (self.n_flights,))
-        airspeed = np.maximum(np.broadcast_to(np.asarray(airspeed_mps, float), (self.n_flights,)),
-                              self.airspeed_floor_mps)
-        uvw = _step_rows(altitude, airspeed, self.w20_mps, self.dt_s, self._draw(n_steps), self.state_u,
-                         self.state_vw)
-        self.t_s += n_steps * self.dt_s
-        return uvw
-
     def velocity(self, points: np.ndarray, t: float, mean_wind: np.ndarray | None = None) -> np.ndarray:
-        """Turbulence (n, 3) m/s in the world frame at flight positions ``points`` (n, 3).
+        """Turbulence (n, 3) m/s in the world frame at flight positions ``points`` (n, 3) at time ``t`` s
+        (non-decreasing across calls).
 
         mean_wind (n, 3): the mean wind at the points (sets the u axis and the airspeed V); None = calm
-        (u along +x, V = the floor).
+        (u along +x, V = the floor). The first call sets the time origin and draws the stationary initial
+        state; later calls advance round((t - t_prev) / dt) steps with the current altitude and airspeed (one
+        compiled loop over the flights, :mod:`wrp_eval.compiled`).
         """
         points = np.asarray(points, dtype=float)
         if points.shape != (self.n_flights, 3):
             raise ValueError(f"points must have shape ({self.n_flights}, 3), got {points.shape}")
-        if mean_wind is None:
-            mean_wind = np.zeros_like(points)
-        horizontal = np.hypot(mean_wind[:, 0], mean_wind[:, 1])
-        speed = np.linalg.norm(mean_wind, axis=1)
-        uvw = self.local_turbulence(points[:, 2], speed, t)
-        return rotate_to_world(uvw, mean_wind, horizontal)
+        mean_wind = np.zeros_like(points) if mean_wind is None else np.asarray(mean_wind, dtype=float)
+        if self.t_s is None:
+            _, _, _, tau, _ = self.parameters(points[:, 2], np.linalg.norm(mean_wind, axis=1))
+            self._initialise(tau)
+            self.t_s, n_steps = float(t), 0
+        else:
+            n_steps = int(round((t - self.t_s) / self.dt_s))
+            if n_steps < 0:
+                raise ValueError(f"turbulence queried at t = {t} s after t = {self.t_s} s: time must not decrease")
+        world = _step_rows(points, mean_wind, self.w20_mps, self.airspeed_floor_mps, self.dt_s, self._draw(n_steps),
+                           self.state_u, self.state_vw)
+        self.t_s += n_steps * self.dt_s
+        return world
 
     # --- whole series ----------------------------------------------------------------------------------
     def generate(self, n_steps: int, altitude_m: float, airspeed_mps: float) -> np.ndarray:
@@ -339,13 +335,10 @@ class DrydenTurbulence:
         return out
 
 
-def rotate_to_world(uvw: np.ndarray, mean_wind: np.ndarray, horizontal_speed: np.ndarray | None = None) -> np.ndarray:
+def rotate_to_world(uvw: np.ndarray, mean_wind: np.ndarray) -> np.ndarray:
     """(n, 3) along/across/vertical -> world frame: u along the mean horizontal wind (x where calm),
     v 90 deg to its left, w up."""
-    mean_wind = np.asarray(mean_wind, dtype=float)
-    if horizontal_speed is None:
-        horizontal_speed = np.hypot(mean_wind[:, 0], mean_wind[:, 1])
-    return _rotate_rows(np.asarray(uvw, dtype=float), mean_wind, np.asarray(horizontal_speed, dtype=float))
+    return _rotate_rows(np.asarray(uvw, dtype=float), np.asarray(mean_wind, dtype=float))
 
 
 def turbulence_series(altitude_m: float, w20_mps: float, dt_s: float, duration_s: float, seed: int,

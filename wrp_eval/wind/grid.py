@@ -133,12 +133,16 @@ def _first_outside(coords, lo, hi):
 
 
 @kernel
-def _interpolate_rows(gx, gy, gz, x_axis, y_axis, heights, values, field, idw, idw_power, clamp):
-    """Mean wind (n, 3) at grid-frame points (gx, gy, gz) (n,) each, in ``values[field[i]]`` ((k, nx, ny, nz, 3),
-    ``field`` (n,) int); ``idw``: inverse-distance weights (else trilinear). Returns (wind, code, row): code
-    _INSIDE, or (clamp off) the first coordinate found outside (x over every row, then y, then z) and its row;
-    the wind is then not computed."""
-    n = gx.size
+def _interpolate_rows(points, grid_yaw, x_axis, y_axis, heights, values, field, idw, idw_power, clamp):
+    """Mean wind (n, 3) at ship-frame ``points`` (n, 3) (the grid frame is turned by ``grid_yaw`` rad), in
+    ``values[field[i]]`` ((k, nx, ny, nz, 3), ``field`` (n,) int); ``idw``: inverse-distance weights (else
+    trilinear). Returns (wind, code, row): code _INSIDE, or (clamp off) the first coordinate found outside (x
+    over every row, then y, then z) and its row; the wind is then not computed."""
+    n = points.shape[0]
+    c, s = np.cos(grid_yaw), np.sin(grid_yaw)                  # WindGrid.to_grid_frame
+    gx = c * points[:, 0] + s * points[:, 1]
+    gy = -s * points[:, 0] + c * points[:, 1]
+    gz = points[:, 2]
     out = np.zeros((n, 3))
     if not clamp:
         row = _first_outside(gx, np.full(n, x_axis[0]), np.full(n, x_axis[-1]))
@@ -235,14 +239,13 @@ def interpolate(grid: WindGrid, points: np.ndarray, method: str = "idw", idw_pow
     points = np.asarray(points, dtype=float)
     if points.ndim != 2 or points.shape[1] != 3:
         raise ValueError(f"points must have shape (n, 3), got {points.shape}")
-    g = grid.to_grid_frame(points)
     if values is None:
         values, value_index = grid.velocity_mps[None], np.zeros(len(points), dtype=np.int64)
-    wind, code, row = _interpolate_rows(g[:, 0], g[:, 1], g[:, 2], grid.x_m, grid.y_m, grid.heights_m, values,
+    wind, code, row = _interpolate_rows(points, float(grid.grid_yaw_rad), grid.x_m, grid.y_m, grid.heights_m, values,
                                         np.asarray(value_index, dtype=np.int64), method == "idw", float(idw_power),
                                         bool(clamp))
     if code != _INSIDE:
-        _refuse_outside(grid, g[row], code)
+        _refuse_outside(grid, grid.to_grid_frame(points[row:row + 1])[0], code)
     return wind
 
 
