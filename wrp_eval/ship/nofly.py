@@ -26,6 +26,8 @@ from __future__ import annotations
 
 import numpy as np
 
+from wrp_eval.compiled import kernel
+
 EDGE_TOLERANCE_M = 1e-9   # m: closer to the box's boundary (or to the minimum altitude) than this counts as on it
 
 
@@ -91,12 +93,23 @@ def leg_flyable(starts: np.ndarray, ends: np.ndarray, box: np.ndarray | None, mi
     return ok
 
 
+@kernel
+def _box_distance_rows(points, box):
+    """(n,) m from points (n, 3) to the closed box (2, 3) (0 inside), one row at a time."""
+    out = np.empty(points.shape[0])
+    for row in range(points.shape[0]):
+        total = 0.0
+        for d in range(3):
+            outside = max(box[0, d] - points[row, d], 0.0) + max(points[row, d] - box[1, d], 0.0)
+            total += outside ** 2
+        out[row] = np.sqrt(total)
+    return out
+
+
 def distance_to_box(points: np.ndarray, box: np.ndarray) -> np.ndarray:
     """(...,) m: Euclidean distance from points (..., 3) to the closed box (2, 3) (0 inside)."""
     p = np.asarray(points, dtype=float)
-    box = np.asarray(box, dtype=float)
-    outside = np.maximum(box[0] - p, 0.0) + np.maximum(p - box[1], 0.0)
-    return np.sqrt((outside ** 2).sum(axis=-1))
+    return _box_distance_rows(np.ascontiguousarray(p.reshape(-1, 3)), np.asarray(box, dtype=float)).reshape(p.shape[:-1])
 
 
 def ray_box_distance(origins: np.ndarray, directions: np.ndarray, box: np.ndarray) -> np.ndarray:

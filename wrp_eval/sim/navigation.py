@@ -29,6 +29,7 @@ from typing import Literal, NamedTuple
 import numpy as np
 from pydantic import Field
 
+from wrp_eval.compiled import kernel
 from wrp_eval.streams import BlockNormals, flight_generators
 from wrp_eval.validation import StrictModel
 
@@ -250,15 +251,39 @@ def hover_p95_spec_m(params: NavigationParams) -> float:
     return K95_2D * math.hypot(params.horizontal_sigma_m, params.white_noise_m)
 
 
-def near_hull_taper(distance_m, reach_m: float) -> np.ndarray:
+@kernel
+def near_hull_taper(distance_m, reach_m: float):
     """Weight (n,) of the near-hull heading bias: 1 at the hull, 0 at and beyond ``reach_m``.
 
     Shape (1 - d/D)^3 for d < D: the cubic fall-off of a dipole-like anomaly (|dB| ~ 1/r^3; Michael 2011,
     arXiv:1105.3136) made compact, so that it reaches exactly 0 at the configured distance. Negative
-    distances (inside the hull's safety margin) count as 0.
+    distances (inside the hull's safety margin) count as 0. ``distance_m``: an array or a number.
     """
-    d = np.clip(np.asarray(distance_m, dtype=float) / reach_m, 0.0, 1.0)
+    d = np.minimum(np.maximum(distance_m / reach_m, 0.0), 1.0)
     return (1.0 - d) ** 3
+
+
+@kernel
+def _estimate_rows(position, velocity, yaw, held_pos, held_vel, held_yaw, compass_bias, hull_bias, hull_distance,
+                   reach_m, baro_rate, elapsed_s, latency_s):
+    """(position, velocity (n, 3), yaw (n,), position error (n, 3), yaw error (n,)) of the estimate: the held
+    fix errors, the latency lag -v * latency, the baro drift and the compass biases (the near-hull one tapered
+    by ``hull_distance`` (n,) m; empty: far from any hull)."""
+    n = position.shape[0]
+    est_pos, est_vel, pos_err = np.empty((n, 3)), np.empty((n, 3)), np.empty((n, 3))
+    est_yaw, yaw_err = np.empty(n), np.empty(n)
+    for row in range(n):
+        for d in range(3):
+            pos_err[row, d] = held_pos[row, d] - velocity[row, d] * latency_s
+        pos_err[row, 2] += baro_rate[row] * elapsed_s
+        for d in range(3):
+            est_pos[row, d] = position[row, d] + pos_err[row, d]
+            est_vel[row, d] = velocity[row, d] + held_vel[row, d]
+        yaw_err[row] = compass_bias[row] + held_yaw[row]
+        if hull_distance.size:
+            yaw_err[row] = yaw_err[row] + hull_bias[row] * near_hull_taper(hull_distance[row], reach_m)
+        est_yaw[row] = yaw[row] + yaw_err[row]
+    return est_pos, est_vel, est_yaw, pos_err, yaw_err
 
 
 class NavigationEstimate(NamedTuple):
@@ -359,9 +384,8 @@ class NavigationEstimator:
                                       np.zeros_like(yaw))
         self._advance(t_s)
         p = self.params
-        pos_err = self._held_pos - velocity * p.latency_s
-        pos_err[:, 2] += self._baro_rate * (t_s - self._t0)
-        yaw_err = self._compass_bias + self._held_yaw
-        if hull_distance_m is not None:
-            yaw_err = yaw_err + self._hull_bias * near_hull_taper(hull_distance_m, p.near_hull_distance_m)
-        return NavigationEstimate(position + pos_err, velocity + self._held_vel, yaw + yaw_err, pos_err, yaw_err)
+        hull = np.empty(0) if hull_distance_m is None else np.asarray(hull_distance_m, float)
+        return NavigationEstimate(*_estimate_rows(position, velocity, yaw, self._held_pos, self._held_vel,
+                                                  self._held_yaw, self._compass_bias, self._hull_bias, hull,
+                                                  float(p.near_hull_distance_m), self._baro_rate,
+                                                  float(t_s - self._t0), float(p.latency_s)))
