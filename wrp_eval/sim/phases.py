@@ -276,23 +276,59 @@ class Transitions(NamedTuple):
     overrun: np.ndarray
 
 
+@kernel
+def _transition_rows(phase, phase_time, index, duration, end, target_yaw, position, velocity, yaw, n_views, through,
+                     settle_position_m, settle_speed_m_s, settle_yaw_rad, settle_timeout_s, dwell_s):
+    """(to_settle, to_dwell, trigger, chain) (n,) bool of :func:`transitions`, row by row."""
+    n = phase.size
+    to_settle, to_dwell = np.zeros(n, np.bool_), np.zeros(n, np.bool_)
+    trigger, chain = np.zeros(n, np.bool_), np.zeros(n, np.bool_)
+    for row in range(n):
+        arrived = phase[row] == TRANSIT and phase_time[row] >= duration[row]
+        chain[row] = arrived and through and index[row] < n_views - 1
+        to_settle[row] = arrived and not chain[row]
+        if phase[row] == SETTLE:
+            yaw_err = (yaw[row] - target_yaw[row, index[row]] + np.pi) % (2.0 * np.pi) - np.pi   # wrap_angle
+            off = (position[row, 0] - end[row, 0]) ** 2 + (position[row, 1] - end[row, 1]) ** 2 \
+                + (position[row, 2] - end[row, 2]) ** 2
+            speed2 = velocity[row, 0] ** 2 + velocity[row, 1] ** 2 + velocity[row, 2] ** 2
+            settled = off < settle_position_m ** 2 and speed2 < settle_speed_m_s ** 2 and abs(yaw_err) < settle_yaw_rad
+            to_dwell[row] = settled or phase_time[row] >= settle_timeout_s
+        # 1e-9: the dwell is a whole number of chunks, summed in floating point
+        trigger[row] = phase[row] == DWELL and phase_time[row] >= dwell_s - 1e-9
+    return to_settle, to_dwell, trigger, chain
+
+
 def transitions(state: FlightState, position: np.ndarray, velocity: np.ndarray, yaw: np.ndarray,
                 targets: FlightTargets, sec: SimSection, dwell_s: float, through: bool) -> Transitions:
     """The vectorised state machine's moves this chunk, on the navigation's estimate: ``position``,
     ``velocity`` (batch, 3), ``yaw`` (batch,) rad. In fly-through (``through``) the reference stops only at
     the last viewpoint."""
-    phase, phase_time = state.phase, state.phase_time
-    arrived = (phase == TRANSIT) & (phase_time >= state.segment.duration)
-    chain = arrived & (state.index < targets.n_views - 1) if through else np.zeros_like(arrived)
-    to_settle = arrived & ~chain
-    yaw_err = wrap_angle(yaw - targets.yaw[np.arange(len(phase)), state.index])
-    settled = ((((position - state.segment.end) ** 2).sum(axis=1) < sec.settle_position_m ** 2)
-               & ((velocity ** 2).sum(axis=1) < sec.settle_speed_m_s ** 2)
-               & (np.abs(yaw_err) < np.radians(sec.settle_yaw_deg)))
-    to_dwell = (phase == SETTLE) & (settled | (phase_time >= sec.settle_timeout_s))
-    # 1e-9: the dwell is a whole number of chunks, summed in floating point
-    trigger = (phase == DWELL) & (phase_time >= dwell_s - 1e-9)
-    return Transitions(to_settle, to_dwell, trigger, chain, phase_time - state.segment.duration)
+    seg = state.segment
+    moves = _transition_rows(state.phase, state.phase_time, state.index, seg.duration, seg.end, targets.yaw,
+                             position, velocity, yaw, targets.n_views, bool(through), float(sec.settle_position_m),
+                             float(sec.settle_speed_m_s), float(np.radians(sec.settle_yaw_deg)),
+                             float(sec.settle_timeout_s), float(dwell_s))
+    return Transitions(*moves, state.phase_time - seg.duration)
+
+
+@kernel
+def _passing_rows(phase, photo, index, position, body, trigger_normal, arriving, reach_m):
+    """(hit, skipped (n,) bool, past (n,) m, the plane's normal (n, 3)) of :func:`passing_views`, row by row."""
+    n, n_views = phase.size, body.shape[1]
+    hit, skipped, past, normal = np.zeros(n, np.bool_), np.zeros(n, np.bool_), np.zeros(n), np.empty((n, 3))
+    for row in range(n):
+        view = min(photo[row], n_views - 1)
+        candidate = phase[row] < DONE and photo[row] >= 1 and photo[row] < n_views and photo[row] <= index[row]
+        along = 0.0
+        for d in range(3):
+            rel = position[row, d] - body[row, view, d]
+            normal[row, d] = trigger_normal[row, view, d]
+            past[row] += rel * normal[row, d]
+            along += rel * arriving[row, view, d]
+        hit[row] = candidate and past[row] >= 0.0 and along >= -reach_m
+        skipped[row] = candidate and not hit[row] and index[row] >= photo[row] + 2
+    return hit, skipped, past, normal
 
 
 def passing_views(state: FlightState, position: np.ndarray, targets: FlightTargets, reach_m: float
@@ -307,15 +343,8 @@ def passing_views(state: FlightState, position: np.ndarray, targets: FlightTarge
     (on a hairpin the mitre plane runs almost along the leg: without this a vehicle off the track would be
     "past" it long before the view). A view whose plane the vehicle has not crossed by the time the
     reference is two views further on is skipped: a missed trigger, the photo is not taken."""
-    n = targets.n_views
-    rows = np.arange(len(state.phase))
-    view = np.minimum(state.photo, n - 1)
-    candidate = state.flying & (state.photo >= 1) & (state.photo < n) & (state.photo <= state.index)
-    rel = position - targets.body[rows, view]
-    normal = targets.trigger_normal[rows, view]
-    past = (rel * normal).sum(axis=1)
-    hit = candidate & (past >= 0.0) & ((rel * targets.arriving[rows, view]).sum(axis=1) >= -reach_m)
-    skipped = candidate & ~hit & (state.index >= state.photo + 2)
+    hit, skipped, past, normal = _passing_rows(state.phase, state.photo, state.index, position, targets.body,
+                                               targets.trigger_normal, targets.arriving, float(reach_m))
     hits = np.flatnonzero(hit)
     return hits, past[hits], normal[hits], np.flatnonzero(skipped)
 
