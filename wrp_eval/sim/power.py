@@ -27,6 +27,7 @@ from typing import TYPE_CHECKING
 import numpy as np
 from pydantic import Field, ValidationInfo, field_validator
 
+from wrp_eval.compiled import kernel
 from wrp_eval.validation import StrictModel
 
 if TYPE_CHECKING:
@@ -91,6 +92,45 @@ def rotor_disk_area_m2(params: QuadrotorParams) -> float:
     return float(np.pi * params.rotor_radius_m ** 2)
 
 
+@kernel
+def _induced_row(thrust, rotor_area_m2: float, air_density: float) -> float:
+    """Induced power W of one vehicle's rotors ``thrust`` (n_rotors,) N (:func:`induced_power_w`)."""
+    total = 0.0
+    for k in range(thrust.size):
+        total += max(thrust[k], 0.0) ** 1.5
+    return total / np.sqrt(2.0 * air_density * rotor_area_m2)
+
+
+@kernel
+def _parasite_row(drag, rel_air) -> float:
+    """|F_drag . v_rel| W of one vehicle (:func:`parasite_power_w`)."""
+    return abs(drag[0] * rel_air[0] + drag[1] * rel_air[1] + drag[2] * rel_air[2])
+
+
+@kernel
+def _power_rows(thrust, drag, rel_air, rotor_area_m2, air_density, figure_of_merit, drive_efficiency, avionics_w):
+    """(induced (n,), parasite (n,), electrical (n,)) W of :func:`electrical_power_w`, row by row."""
+    n = thrust.shape[0]
+    induced, parasite, electrical = np.empty(n), np.empty(n), np.empty(n)
+    for row in range(n):
+        induced[row] = _induced_row(thrust[row], rotor_area_m2, air_density)
+        parasite[row] = _parasite_row(drag[row], rel_air[row])
+        electrical[row] = (induced[row] / figure_of_merit + parasite[row]) / drive_efficiency + avionics_w
+    return induced, parasite, electrical
+
+
+def _powers(thrust_per_motor_n, drag_force_n, rel_air_m_s, rotor_area_m2, air_density, section=None):
+    thrust = np.asarray(thrust_per_motor_n, dtype=float)
+    flat = thrust.reshape(-1, thrust.shape[-1])
+    n = len(flat)
+    drag = np.zeros((n, 3)) if drag_force_n is None else np.asarray(drag_force_n, float).reshape(n, 3)
+    rel = np.zeros((n, 3)) if rel_air_m_s is None else np.asarray(rel_air_m_s, float).reshape(n, 3)
+    fom, eta, avionics = (1.0, 1.0, 0.0) if section is None else (section.figure_of_merit, section.drive_efficiency,
+                                                                   section.avionics_w)
+    out = _power_rows(flat, drag, rel, float(rotor_area_m2), float(air_density), float(fom), float(eta), float(avionics))
+    return tuple(x.reshape(thrust.shape[:-1]) for x in out)
+
+
 def induced_power_w(thrust_per_motor_n: np.ndarray, rotor_area_m2: float, air_density: float) -> np.ndarray:
     """Ideal induced power (n,) W of the rotors: sum over rotors of T^(3/2) / sqrt(2 rho A).
 
@@ -100,8 +140,7 @@ def induced_power_w(thrust_per_motor_n: np.ndarray, rotor_area_m2: float, air_de
     induced power (Glauert's v_i = T / (2 rho A sqrt(V^2 + v_i^2)), Leishman Ch. 2 and 5); we neglect that,
     which over-estimates the power and is the conservative side for an energy reserve.
     """
-    thrust = np.clip(np.asarray(thrust_per_motor_n, dtype=float), 0.0, None)
-    return (thrust ** 1.5).sum(axis=-1) / np.sqrt(2.0 * air_density * rotor_area_m2)
+    return _powers(thrust_per_motor_n, None, None, rotor_area_m2, air_density)[0]
 
 
 def parasite_power_w(drag_force_n: np.ndarray, rel_air_m_s: np.ndarray) -> np.ndarray:
@@ -109,7 +148,8 @@ def parasite_power_w(drag_force_n: np.ndarray, rel_air_m_s: np.ndarray) -> np.nd
 
     For the drag of :func:`wrp_eval.sim.aero.drag_force` this is 0.5 rho C_d A |v_rel|^3 (Leishman Ch. 5).
     """
-    return np.abs(np.einsum("ij,ij->i", np.asarray(drag_force_n, float), np.asarray(rel_air_m_s, float)))
+    drag = np.asarray(drag_force_n, float)
+    return _powers(np.zeros((len(drag), 1)), drag, rel_air_m_s, 1.0, 1.0)[1]
 
 
 def electrical_power_w(thrust_per_motor_n: np.ndarray, drag_force_n: np.ndarray, rel_air_m_s: np.ndarray,
@@ -120,10 +160,9 @@ def electrical_power_w(thrust_per_motor_n: np.ndarray, drag_force_n: np.ndarray,
     balances the drag), ``drag_force_n`` (n, 3) N and ``rel_air_m_s`` (n, 3) m/s (wind - vehicle velocity),
     ``air_density`` kg/m^3. Decomposition: Leishman Ch. 5, Liu et al. (ICUAS 2017); see the module docstring.
     The parasite power is divided by the drive efficiency only (the figure of merit is a hover quantity).
+    One compiled loop over the vehicles (:mod:`wrp_eval.compiled`).
     """
-    rotors = induced_power_w(thrust_per_motor_n, rotor_disk_area_m2(params), air_density)
-    shaft = rotors / section.figure_of_merit + parasite_power_w(drag_force_n, rel_air_m_s)
-    return shaft / section.drive_efficiency + section.avionics_w
+    return _powers(thrust_per_motor_n, drag_force_n, rel_air_m_s, rotor_disk_area_m2(params), air_density, section)[2]
 
 
 def hover_power_w(params: QuadrotorParams, section: BatterySection, air_density: float) -> float:
