@@ -109,6 +109,14 @@ def _pad(rows: np.ndarray, padded: int) -> np.ndarray:
     return np.concatenate([rows, np.zeros((padded - len(rows),) + rows.shape[1:], dtype=rows.dtype)])
 
 
+def _pad_with(rows: np.ndarray, padded_rows: np.ndarray) -> np.ndarray:
+    """``rows`` (batch, ...) followed by the rows of ``padded_rows`` (padded, ...) beyond them (``rows`` itself
+    when the batch fills its models)."""
+    if len(rows) == len(padded_rows):
+        return rows
+    return np.concatenate([rows, padded_rows[len(rows):]])
+
+
 def _start_poses(targets: FlightTargets, padded: int, position: np.ndarray, yaw: np.ndarray) -> np.ndarray:
     """Free-joint poses (padded, 7): each flight hovering level at ``position`` (batch, 3) m with heading
     ``yaw`` (batch,) rad; the fillers of the last model 50 m above the first flight's target (out of
@@ -307,9 +315,8 @@ class FlightSimulator:
         drag = drag_force(_pad(wind_b, run.padded) - body.velocity, body.yaw, par, sec.drag_coefficient,
                           sec.air_density_kg_m3)
         position, velocity = body.position, body.velocity
-        if not nav_is_truth:
-            position = np.concatenate([nav.position, body.position[run.batch:]])
-            velocity = np.concatenate([nav.velocity, body.velocity[run.batch:]])
+        if not nav_is_truth:        # the fillers (if any) fly on their true state
+            position, velocity = _pad_with(nav.position, position), _pad_with(nav.velocity, velocity)
         motors, quat_d = control(controller, position, velocity, body.rot,
                                  setpoints(ref, state.phase, run.park[run.batch:, :3], nav.yaw_error, through), dt,
                                  par)
