@@ -16,6 +16,7 @@ import numpy as np
 from scipy.spatial.transform import Rotation
 
 from wrp_eval.camera import Camera, camera_angles, camera_rotations, optical_axes
+from wrp_eval.compiled import kernel
 from wrp_eval.ship.motion import ShipMotion, ShipMotionSection, ship_motion
 from wrp_eval.ship.nofly import distance_to_box, ray_box_distance
 from wrp_eval.sim.blur import angular_velocity, motion_blur_px
@@ -31,7 +32,7 @@ from wrp_eval.sim.power import (
     Battery,
     electrical_power_w,
     level_flight_power_w,
-    return_energy_j,
+    straight_home_energy_j,
 )
 from wrp_eval.sim.vehicle import QuadrotorParams
 from wrp_eval.streams import children, flight_generators
@@ -66,6 +67,29 @@ def view_depths(path, box: np.ndarray | None) -> np.ndarray:
     along = ray_box_distance(positions, optical_axes(path.yaw, path.pitch), box)
     nearest = distance_to_box(positions, box)
     return np.where(np.isfinite(along), along, np.where(nearest > 0.0, nearest, np.nan))
+
+
+@kernel
+def _return_rows(home, position, wind, wind_estimate, weight, judged, limit, cruise_m_s, cruise_power_w, energy_j,
+                 reserve_j, enabled):
+    """(battery due (n,) bool, wind over the limit (n,) bool) of :meth:`Onboard.must_return`, row by row; the
+    horizontal ``wind_estimate`` (n, 3) moves by ``weight`` towards ``wind`` (n, 3) in place (weight 1: it
+    starts there). Due: the energy home, flown straight at cruise airspeed plus the estimated tail wind (at
+    least 1 m/s), would leave no more than the reserve (:meth:`Battery.needs_return`)."""
+    n = position.shape[0]
+    due, over = np.zeros(n, np.bool_), np.zeros(n, np.bool_)
+    for row in range(n):
+        for d in range(2):
+            wind_estimate[row, d] = wind_estimate[row, d] + weight * (wind[row, d] - wind_estimate[row, d])
+        wind_estimate[row, 2] = 0.0
+        over[row] = judged and np.hypot(wind_estimate[row, 0], wind_estimate[row, 1]) > limit
+        hx, hy, hz = home[row, 0] - position[row, 0], home[row, 1] - position[row, 1], home[row, 2] - position[row, 2]
+        distance = np.sqrt(hx ** 2 + hy ** 2 + hz ** 2)
+        tailwind = (wind_estimate[row, 0] * hx + wind_estimate[row, 1] * hy + wind_estimate[row, 2] * hz) \
+            / max(distance, 1e-9)
+        ground = max(cruise_m_s + tailwind, 1.0)
+        due[row] = enabled and energy_j[row] - straight_home_energy_j(distance, ground, cruise_power_w) <= reserve_j
+    return due, over
 
 
 class Onboard:
@@ -119,27 +143,22 @@ class Onboard:
         """(battery due (batch,) bool, wind over the limit (batch,) bool) for vehicles at ``position`` (batch, 3)
         in ``wind`` (batch, 3) m/s. The way home is flown at cruise airspeed, its ground speed helped or
         hindered by the estimated (averaged) wind along it (at least 1 m/s)."""
-        horizontal = wind * np.array([1.0, 1.0, 0.0])
         if self.wind_estimate is None:
-            self.wind_estimate, self.wind_time, self.wind_samples = horizontal, 0.0, 1
+            self.wind_estimate, self.wind_time, self.wind_samples = np.zeros((len(wind), 3)), 0.0, 1
+            weight = 1.0
         else:
             # a first-order average, which starts as the running mean (the weight of a new sample is never below
             # 1/(samples so far), so the first gust after take-off does not dominate the first time constant)
             self.wind_samples += 1
             weight = max(1.0 - np.exp(-self.dt_s / self.sec.wind_average_s), 1.0 / self.wind_samples)
-            self.wind_estimate = self.wind_estimate + weight * (horizontal - self.wind_estimate)
             self.wind_time += self.dt_s
         limit = self.sec.wind_limit_m_s
         # judged once the average has had its time constant to form (not on the first gust after take-off)
-        wind_over = np.zeros(len(wind), dtype=bool)
-        if limit is not None and self.wind_time >= self.sec.wind_average_s:
-            wind_over = np.hypot(self.wind_estimate[:, 0], self.wind_estimate[:, 1]) > limit
-        home = self.home - position
-        distance = np.sqrt((home ** 2).sum(axis=1))
-        tailwind = (self.wind_estimate * home).sum(axis=1) / np.maximum(distance, 1e-9)
-        ground = np.maximum(self.cruise_m_s + tailwind, 1.0)
-        due = self.battery.needs_return(return_energy_j(distance, ground, self.cruise_power_w))
-        return due, wind_over
+        judged = limit is not None and self.wind_time >= self.sec.wind_average_s
+        bat = self.battery
+        return _return_rows(self.home, position, wind, self.wind_estimate, float(weight), judged,
+                            float(limit or 0.0), float(self.cruise_m_s), float(self.cruise_power_w), bat.energy_j,
+                            float(bat.reserve_j), bool(bat.section.enabled))
 
     def shoot(self, rows: np.ndarray, views: np.ndarray, delay_s: np.ndarray, t: float, position: np.ndarray,
               velocity: np.ndarray, rot: np.ndarray, nav: NavigationEstimate, attitude: CameraAttitude,

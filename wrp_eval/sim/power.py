@@ -183,7 +183,13 @@ def return_energy_j(distance_home_m: np.ndarray, speed_m_s, cruise_power_w) -> n
     speed = np.asarray(speed_m_s, dtype=float)
     if np.any(speed <= 0.0):
         raise ValueError("return speed must be positive")
-    return np.asarray(cruise_power_w, dtype=float) * np.asarray(distance_home_m, dtype=float) / speed
+    return straight_home_energy_j(np.asarray(distance_home_m, dtype=float), speed, np.asarray(cruise_power_w, float))
+
+
+@kernel
+def straight_home_energy_j(distance_home_m, speed_m_s, cruise_power_w):
+    """E = P d / V (:func:`return_energy_j` without its check), numbers or arrays."""
+    return cruise_power_w * distance_home_m / speed_m_s
 
 
 def level_flight_power_w(airspeed_m_s: np.ndarray, params: QuadrotorParams, section: BatterySection,
