@@ -23,6 +23,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from wrp_eval.compiled import kernel
+
 
 @dataclass(frozen=True)
 class Camera:
@@ -81,31 +83,69 @@ def yaw_pitch_towards(positions: np.ndarray, targets: np.ndarray) -> tuple[np.nd
     return yaw, pitch
 
 
+@kernel
+def _level_row(yaw: float, pitch: float, rot) -> None:
+    """Write the roll-free world-from-camera rotation of one view into ``rot`` (3, 3): columns x = (sin yaw,
+    -cos yaw, 0), z = the optical axis (:func:`optical_axes`), y = z x x."""
+    cp = np.cos(pitch)
+    z0, z1, z2 = cp * np.cos(yaw), cp * np.sin(yaw), np.sin(pitch)
+    x0, x1, x2 = np.sin(yaw), -np.cos(yaw), 0.0
+    rot[0, 0], rot[1, 0], rot[2, 0] = x0, x1, x2
+    rot[0, 1], rot[1, 1], rot[2, 1] = z1 * x2 - z2 * x1, z2 * x0 - z0 * x2, z0 * x1 - z1 * x0
+    rot[0, 2], rot[1, 2], rot[2, 2] = z0, z1, z2
+
+
+@kernel
+def _rotation_rows(yaw, pitch, roll):
+    n = yaw.size
+    rot = np.empty((n, 3, 3))
+    for row in range(n):
+        _level_row(yaw[row], pitch[row], rot[row])
+        if roll.size and roll[row] != 0:     # rows with zero roll stay bit-identical to the level camera
+            c, s = np.cos(roll[row]), np.sin(roll[row])
+            for d in range(3):
+                # R_level @ Rz(roll): the new right axis is c x + s y, the new down axis -s x + c y
+                x, y = rot[row, d, 0], rot[row, d, 1]
+                rot[row, d, 0], rot[row, d, 1] = c * x + s * y, -s * x + c * y
+    return rot
+
+
 def camera_rotations(yaw: np.ndarray, pitch: np.ndarray, roll: np.ndarray | None = None) -> np.ndarray:
     """World-from-camera rotations (n, 3, 3): columns are the camera x (right), y (down), z (optical axis).
 
     yaw, pitch (n,) rad; roll (n,) rad about the optical axis (module docstring: positive turns the camera
     clockwise as seen from behind, its x axis towards its y axis, right side down). Roll None or 0 is the
-    level gimbal: exactly the roll-free matrices (those rows are not touched).
+    level gimbal: exactly the roll-free matrices (those rows are not touched). One compiled loop over the
+    views (:mod:`wrp_eval.compiled`).
     """
     yaw = np.atleast_1d(np.asarray(yaw, dtype=float))
     pitch = np.atleast_1d(np.asarray(pitch, dtype=float))
-    z_axis = optical_axes(yaw, pitch)
-    x_axis = np.stack([np.sin(yaw), -np.cos(yaw), np.zeros_like(yaw)], axis=-1)
-    y_axis = np.cross(z_axis, x_axis)
-    rot = np.stack([x_axis, y_axis, z_axis], axis=-1)
-    if roll is None:
-        return rot
-    roll = np.broadcast_to(np.asarray(roll, dtype=float), yaw.shape)
-    rows = np.flatnonzero(roll != 0)  # rows with zero roll stay bit-identical to the level camera
-    if rows.size:
-        c, s = np.cos(roll[rows]), np.sin(roll[rows])
-        # R_level @ Rz(roll): the new right axis is c x + s y, the new down axis -s x + c y
-        x_new = c[:, None] * rot[rows, :, 0] + s[:, None] * rot[rows, :, 1]
-        y_new = -s[:, None] * rot[rows, :, 0] + c[:, None] * rot[rows, :, 1]
-        rot[rows, :, 0] = x_new
-        rot[rows, :, 1] = y_new
-    return rot
+    shape = np.broadcast_shapes(yaw.shape, pitch.shape)
+    yaw, pitch = (np.ascontiguousarray(np.broadcast_to(a, shape)).reshape(-1) for a in (yaw, pitch))
+    roll = np.empty(0) if roll is None else np.ascontiguousarray(
+        np.broadcast_to(np.asarray(roll, dtype=float), shape)).reshape(-1)
+    return _rotation_rows(yaw, pitch, roll).reshape(shape + (3, 3))
+
+
+@kernel
+def _angle_rows(rot):
+    n = rot.shape[0]
+    yaw, pitch, roll = np.empty(n), np.empty(n), np.zeros(n)
+    level = np.empty((3, 3))
+    for row in range(n):
+        horizontal = np.hypot(rot[row, 0, 2], rot[row, 1, 2])
+        pitch[row] = np.arctan2(rot[row, 2, 2], horizontal)     # atan2, not arcsin: exact near the vertical
+        if horizontal < 1e-12:
+            # level right axis (sin yaw, -cos yaw, 0) gives yaw where the optical axis does not (vertical views)
+            yaw[row] = np.arctan2(rot[row, 0, 0], -rot[row, 1, 0])
+            continue
+        yaw[row] = np.arctan2(rot[row, 1, 2], rot[row, 0, 2])
+        _level_row(yaw[row], pitch[row], level)
+        # Rz(roll) = R_level^T R: cos roll = x_level . x, sin roll = y_level . x
+        sin_roll = level[0, 1] * rot[row, 0, 0] + level[1, 1] * rot[row, 1, 0] + level[2, 1] * rot[row, 2, 0]
+        cos_roll = level[0, 0] * rot[row, 0, 0] + level[1, 0] * rot[row, 1, 0] + level[2, 0] * rot[row, 2, 0]
+        roll[row] = np.arctan2(sin_roll, cos_roll)
+    return yaw, pitch, roll
 
 
 def camera_angles(rotations: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
@@ -115,17 +155,7 @@ def camera_angles(rotations: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.nda
     yaw and roll turn about the same axis (gimbal lock); there the whole turn goes to yaw and roll is 0
     (the matrix is still reproduced).
     """
-    rot = np.asarray(rotations, dtype=float).reshape(-1, 3, 3)
-    x_axis, z_axis = rot[:, :, 0], rot[:, :, 2]
-    horizontal = np.hypot(z_axis[:, 0], z_axis[:, 1])
-    pitch = np.arctan2(z_axis[:, 2], horizontal)  # atan2, not arcsin: exact near the vertical
-    vertical = horizontal < 1e-12
-    # level right axis (sin yaw, -cos yaw, 0) gives yaw where the optical axis does not (vertical views)
-    yaw = np.where(vertical, np.arctan2(x_axis[:, 0], -x_axis[:, 1]), np.arctan2(z_axis[:, 1], z_axis[:, 0]))
-    level = camera_rotations(yaw, pitch)
-    # Rz(roll) = R_level^T R: cos roll = x_level . x, sin roll = y_level . x
-    roll = np.arctan2(np.einsum("ni,ni->n", level[:, :, 1], x_axis), np.einsum("ni,ni->n", level[:, :, 0], x_axis))
-    return yaw, pitch, np.where(vertical, 0.0, roll)
+    return _angle_rows(np.ascontiguousarray(np.asarray(rotations, dtype=float).reshape(-1, 3, 3)))
 
 
 def project(points: np.ndarray, positions: np.ndarray, rotations: np.ndarray,
