@@ -109,7 +109,8 @@ def _box_distance_rows(points, box):
 def distance_to_box(points: np.ndarray, box: np.ndarray) -> np.ndarray:
     """(...,) m: Euclidean distance from points (..., 3) to the closed box (2, 3) (0 inside)."""
     p = np.asarray(points, dtype=float)
-    return _box_distance_rows(np.ascontiguousarray(p.reshape(-1, 3)), np.asarray(box, dtype=float)).reshape(p.shape[:-1])
+    rows = _box_distance_rows(np.ascontiguousarray(p.reshape(-1, 3)), np.asarray(box, dtype=float))
+    return rows.reshape(p.shape[:-1])
 
 
 def ray_box_distance(origins: np.ndarray, directions: np.ndarray, box: np.ndarray) -> np.ndarray:

@@ -127,7 +127,8 @@ def _powers(thrust_per_motor_n, drag_force_n, rel_air_m_s, rotor_area_m2, air_de
     rel = np.zeros((n, 3)) if rel_air_m_s is None else np.asarray(rel_air_m_s, float).reshape(n, 3)
     fom, eta, avionics = (1.0, 1.0, 0.0) if section is None else (section.figure_of_merit, section.drive_efficiency,
                                                                    section.avionics_w)
-    out = _power_rows(flat, drag, rel, float(rotor_area_m2), float(air_density), float(fom), float(eta), float(avionics))
+    out = _power_rows(flat, drag, rel, float(rotor_area_m2), float(air_density), float(fom), float(eta),
+                      float(avionics))
     return tuple(x.reshape(thrust.shape[:-1]) for x in out)
 
 

@@ -166,7 +166,8 @@ def _interpolate_rows(points, grid_yaw, x_axis, y_axis, heights, values, field, 
         fractions[row, 0] = (x - x_axis[i]) / (x_axis[i + 1] - x_axis[i])
         fractions[row, 1] = (y - y_axis[j]) / (y_axis[j + 1] - y_axis[j])
         # outside in height = below every column's lowest level or above every column's top
-        bottom[row] = min(min(heights[i, j, 0], heights[i + 1, j, 0]), min(heights[i, j + 1, 0], heights[i + 1, j + 1, 0]))
+        bottom[row] = min(min(heights[i, j, 0], heights[i + 1, j, 0]),
+                          min(heights[i, j + 1, 0], heights[i + 1, j + 1, 0]))
         top[row] = max(max(heights[i, j, nz - 1], heights[i + 1, j, nz - 1]),
                        max(heights[i, j + 1, nz - 1], heights[i + 1, j + 1, nz - 1]))
     if not clamp:
