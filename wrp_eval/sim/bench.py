@@ -12,7 +12,8 @@ sim.ratio = closed / raw (target >= 0.7; issue 19: >= 0.5 at batch 64, the campa
 at 1,024); measured at batches 1,024 (no suffix), 64 and 32 (``_batch64``, ``_batch32``). For transparency
 the same drones without the attitude actuators (motors only) are measured too:
 sim.raw_rollout_motors_only_steps_per_s and sim.ratio_vs_motors_only = closed / that, i.e. the cost of the
-whole controller (inner loop in MuJoCo + outer loop in compiled kernels) against bare rigid-body physics. sim.timestep_s: the model's physics step.
+whole controller (inner loop in MuJoCo + outer loop in compiled kernels) against bare rigid-body physics.
+sim.timestep_s: the model's physics step.
 sim.path_flight_s: wall seconds per flight of a 50-view ~700 m path flown by a batch of 32.
 """
 
