@@ -5,7 +5,7 @@ import numpy as np
 import pytest
 
 from wrp_eval.camera import camera_angles, camera_rotations
-from wrp_eval.compiled import kernel
+from wrp_eval.compiled import kernel, kernel_sources_digest
 from wrp_eval.sim.aero import drag_force
 from wrp_eval.sim.controller import GAIN_PRESETS, PositionController, quat_to_matrix
 from wrp_eval.sim.vehicle import PHANTOM4
@@ -86,3 +86,23 @@ def test_camera_angles_invert_camera_rotations(pitch_deg):
     roll = np.linspace(-0.5, 0.5, 7)
     rot = camera_rotations(yaw, pitch, roll)
     np.testing.assert_allclose(camera_rotations(*camera_angles(rot)), rot, atol=1e-12)
+
+
+def test_the_kernel_cache_folder_follows_every_file_that_defines_kernels(tmp_path):
+    # numba invalidates a cached kernel only when its own file changes; a kernel calling another file's
+    # kernel would keep the old callee. The cache folder is named after all kernel files, so it moves.
+    package = tmp_path / "pkg"
+    (package / "sub").mkdir(parents=True)
+    (package / "compiled.py").write_text("settings = 1\n")
+    callee = package / "sub" / "callee.py"
+    callee.write_text("from wrp_eval.compiled import kernel\n\n@kernel\ndef f(x):\n    return x + 1\n")
+    plain = package / "plain.py"
+    plain.write_text("VALUE = 1\n")
+    before = kernel_sources_digest(package)
+    plain.write_text("VALUE = 2\n")                            # no kernel in it: the compiled code stays valid
+    assert kernel_sources_digest(package) == before
+    callee.write_text(callee.read_text().replace("x + 1", "x + 2"))
+    edited = kernel_sources_digest(package)
+    assert edited != before
+    (package / "compiled.py").write_text("settings = 2\n")      # the compile settings themselves
+    assert kernel_sources_digest(package) not in (before, edited)

@@ -6,16 +6,54 @@ batch of 64 each numpy call costs ~1 us whatever its size, and those functions a
 the loop was bound by per-call overhead, not arithmetic. A kernel is one call with a plain loop over the
 rows inside: each row is computed on its own, so a row's result never depends on the batch it is in.
 
-Settings, in one place: ``cache=True`` (compiled once per machine into ``__pycache__``, later processes load
-it); ``nogil=True`` (a kernel may run beside the rollout threads); ``error_model="numpy"``: a division by zero
-gives inf / nan as in numpy instead of raising; no ``fastmath``: IEEE arithmetic, so a
-kernel's formulas give what the same formulas give in numpy up to the rounding of library functions (exp,
-pow, ...), a few ulps.
+Settings, in one place: ``cache=True`` (compiled once, later processes load it); ``nogil=True`` (a kernel
+may run beside the rollout threads); ``error_model="numpy"``: a division by zero gives inf / nan as in numpy
+instead of raising; no ``fastmath``: IEEE arithmetic, so a kernel's formulas give what the same formulas
+give in numpy up to the rounding of library functions (exp, pow, ...), a few ulps.
+
+Where the compiled code is kept: :func:`kernel_cache_dir`, not numba's default ``__pycache__`` beside each
+file. numba invalidates a cached kernel only when the kernel's own file changes, so a kernel that calls a
+kernel of another file (``_body_rows`` -> ``controller.quat_row_to_matrix``, ...) would keep running the
+callee's old code after the callee was edited. The folder is named after the sources of every module that
+defines kernels: any edit to one of them starts a fresh folder (the kernels compile again, ~10 s, once).
+An explicit ``NUMBA_CACHE_DIR`` in the environment is left as it is.
 """
 
 from __future__ import annotations
 
+import hashlib
+import os
+from pathlib import Path
+
 import numba
+
+from wrp_eval.resources import cache_dir
+
+_PACKAGE = Path(__file__).resolve().parent
+_DEFINES_KERNELS = b"from wrp_eval.compiled import kernel"
+
+
+def kernel_sources_digest(package: Path = _PACKAGE) -> str:
+    """16 hex digits of SHA-256 over ``package``'s ``compiled.py`` and every module of it that imports
+    :func:`kernel` (relative path and content, in path order)."""
+    digest = hashlib.sha256()
+    for path in sorted(package.rglob("*.py")):
+        text = path.read_bytes()
+        if path == package / "compiled.py" or _DEFINES_KERNELS in text:
+            digest.update(path.relative_to(package).as_posix().encode() + b"\0" + text + b"\0")
+    return digest.hexdigest()[:16]
+
+
+def kernel_cache_dir() -> Path:
+    """numba's cache folder for these sources: ``cache_dir("numba", kernel_sources_digest())``."""
+    return cache_dir("numba", kernel_sources_digest())
+
+
+if not os.environ.get("NUMBA_CACHE_DIR"):
+    # the environment for processes started from this one (campaign workers compute the same folder), the
+    # config for the kernels decorated from now on (numba reads it when a kernel is decorated)
+    os.environ["NUMBA_CACHE_DIR"] = str(kernel_cache_dir())
+    numba.config.CACHE_DIR = os.environ["NUMBA_CACHE_DIR"]
 
 
 def kernel(function):
