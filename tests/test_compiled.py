@@ -88,21 +88,21 @@ def test_camera_angles_invert_camera_rotations(pitch_deg):
     np.testing.assert_allclose(camera_rotations(*camera_angles(rot)), rot, atol=1e-12)
 
 
-def test_the_kernel_cache_folder_follows_every_file_that_defines_kernels(tmp_path):
-    # numba invalidates a cached kernel only when its own file changes; a kernel calling another file's
-    # kernel would keep the old callee. The cache folder is named after all kernel files, so it moves.
+def test_the_kernel_cache_folder_follows_every_module_of_the_package(tmp_path):
+    # numba invalidates a cached kernel only when its own file changes, but a kernel also freezes another
+    # file's kernels and constants (vehicle.GRAVITY_M_S2, the phase codes): the cache folder must move with
+    # any of them
     package = tmp_path / "pkg"
     (package / "sub").mkdir(parents=True)
-    (package / "compiled.py").write_text("settings = 1\n")
-    callee = package / "sub" / "callee.py"
-    callee.write_text("from wrp_eval.compiled import kernel\n\n@kernel\ndef f(x):\n    return x + 1\n")
-    plain = package / "plain.py"
-    plain.write_text("VALUE = 1\n")
+    kernels = package / "sub" / "kernels.py"
+    kernels.write_text("from wrp_eval.compiled import kernel\nfrom pkg.constants import G\n\n@kernel\n"
+                       "def f(x):\n    return x * G\n")
+    constants = package / "constants.py"
+    constants.write_text("G = 9.81\n")
     before = kernel_sources_digest(package)
-    plain.write_text("VALUE = 2\n")                            # no kernel in it: the compiled code stays valid
     assert kernel_sources_digest(package) == before
-    callee.write_text(callee.read_text().replace("x + 1", "x + 2"))
+    constants.write_text("G = 1.0\n")                  # a constant the kernel froze when it was compiled
     edited = kernel_sources_digest(package)
     assert edited != before
-    (package / "compiled.py").write_text("settings = 2\n")      # the compile settings themselves
+    kernels.write_text(kernels.read_text().replace("x * G", "x * G + 1"))
     assert kernel_sources_digest(package) not in (before, edited)

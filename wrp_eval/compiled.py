@@ -12,11 +12,12 @@ instead of raising; no ``fastmath``: IEEE arithmetic, so a kernel's formulas giv
 give in numpy up to the rounding of library functions (exp, pow, ...), a few ulps.
 
 Where the compiled code is kept: :func:`kernel_cache_dir`, not numba's default ``__pycache__`` beside each
-file. numba invalidates a cached kernel only when the kernel's own file changes, so a kernel that calls a
-kernel of another file (``_body_rows`` -> ``controller.quat_row_to_matrix``, ...) would keep running the
-callee's old code after the callee was edited. The folder is named after the sources of every module that
-defines kernels: any edit to one of them starts a fresh folder (the kernels compile again, ~10 s, once).
-An explicit ``NUMBA_CACHE_DIR`` in the environment is left as it is.
+file. numba invalidates a cached kernel only when the kernel's own file changes, while a kernel also freezes
+what it takes from other files: another file's kernel (``_body_rows`` -> ``controller.quat_row_to_matrix``)
+and constants (``vehicle.GRAVITY_M_S2``, the phase codes of ``flight_state``), so an edit there would leave
+the cached kernel on the old code. The folder is named after the sources of the whole package: any edit
+starts a fresh folder (the kernels compile again, ~10 s, once). An explicit ``NUMBA_CACHE_DIR`` in the
+environment is left as it is.
 """
 
 from __future__ import annotations
@@ -26,26 +27,24 @@ import os
 from pathlib import Path
 
 import numba
+import numpy as np
 
 from wrp_eval.resources import cache_dir
 
 _PACKAGE = Path(__file__).resolve().parent
-_DEFINES_KERNELS = b"from wrp_eval.compiled import kernel"
 
 
 def kernel_sources_digest(package: Path = _PACKAGE) -> str:
-    """16 hex digits of SHA-256 over ``package``'s ``compiled.py`` and every module of it that imports
-    :func:`kernel` (relative path and content, in path order)."""
+    """16 hex digits of SHA-256 over every module of ``package`` (relative path and content, in path order)."""
     digest = hashlib.sha256()
     for path in sorted(package.rglob("*.py")):
-        text = path.read_bytes()
-        if path == package / "compiled.py" or _DEFINES_KERNELS in text:
-            digest.update(path.relative_to(package).as_posix().encode() + b"\0" + text + b"\0")
+        digest.update(path.relative_to(package).as_posix().encode() + b"\0" + path.read_bytes() + b"\0")
     return digest.hexdigest()[:16]
 
 
 def kernel_cache_dir() -> Path:
-    """numba's cache folder for these sources: ``cache_dir("numba", kernel_sources_digest())``."""
+    """numba's cache folder for these sources: ``cache_dir("numba", kernel_sources_digest())`` (folders of
+    older sources are left behind: a few MB each, in the cache folder the user may empty)."""
     return cache_dir("numba", kernel_sources_digest())
 
 
@@ -54,6 +53,20 @@ if not os.environ.get("NUMBA_CACHE_DIR"):
     # config for the kernels decorated from now on (numba reads it when a kernel is decorated)
     os.environ["NUMBA_CACHE_DIR"] = str(kernel_cache_dir())
     numba.config.CACHE_DIR = os.environ["NUMBA_CACHE_DIR"]
+
+
+def as_rows(name: str, array, shape: tuple[int, ...], dtype=float) -> np.ndarray:
+    """``array`` as ``dtype`` with ``shape`` (a number or another broadcastable shape is broadcast to it), or a
+    ValueError naming ``name``. A kernel does not check its indices (numba: no bounds checks), so every array
+    a kernel reads or writes row by row passes through here first: a wrong shape is an error, not a silent
+    read or write past the end."""
+    rows = np.asarray(array, dtype=dtype)
+    if rows.shape == shape:
+        return rows
+    try:
+        return np.broadcast_to(rows, shape)
+    except ValueError:
+        raise ValueError(f"{name} must have shape {shape}, got {rows.shape}") from None
 
 
 def kernel(function):

@@ -26,7 +26,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from wrp_eval.compiled import kernel
+from wrp_eval.compiled import as_rows, kernel
 
 EDGE_TOLERANCE_M = 1e-9   # m: closer to the box's boundary (or to the minimum altitude) than this counts as on it
 
@@ -100,7 +100,7 @@ def _box_distance_rows(points, box):
     for row in range(points.shape[0]):
         total = 0.0
         for d in range(3):
-            outside = max(box[0, d] - points[row, d], 0.0) + max(points[row, d] - box[1, d], 0.0)
+            outside = np.maximum(box[0, d] - points[row, d], 0.0) + np.maximum(points[row, d] - box[1, d], 0.0)
             total += outside ** 2
         out[row] = np.sqrt(total)
     return out
@@ -109,8 +109,10 @@ def _box_distance_rows(points, box):
 def distance_to_box(points: np.ndarray, box: np.ndarray) -> np.ndarray:
     """(...,) m: Euclidean distance from points (..., 3) to the closed box (2, 3) (0 inside)."""
     p = np.asarray(points, dtype=float)
-    rows = _box_distance_rows(np.ascontiguousarray(p.reshape(-1, 3)), np.asarray(box, dtype=float))
-    return rows.reshape(p.shape[:-1])
+    if p.shape[-1:] != (3,):
+        raise ValueError(f"points must have shape (..., 3), got {p.shape}")
+    rows = _box_distance_rows(np.ascontiguousarray(p.reshape(-1, 3)), as_rows("box", box, (2, 3)))
+    return rows.reshape(p.shape[:-1])[()]
 
 
 def ray_box_distance(origins: np.ndarray, directions: np.ndarray, box: np.ndarray) -> np.ndarray:

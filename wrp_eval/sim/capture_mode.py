@@ -100,16 +100,16 @@ def trigger_planes(body: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
 @kernel
 def through_row(length: float, tau: float, v0: float, v1: float, v_max: float, accel: float):
     """(s, v, a, duration) of :func:`through_profile` for one segment at one time."""
-    v_peak = min(v_max, np.sqrt(max(accel * length + 0.5 * (v0 ** 2 + v1 ** 2), 0.0)))
-    v_peak = max(v_peak, max(v0, v1))
+    v_peak = np.minimum(v_max, np.sqrt(np.maximum(accel * length + 0.5 * (v0 ** 2 + v1 ** 2), 0.0)))
+    v_peak = np.maximum(v_peak, np.maximum(v0, v1))
     t_acc = (v_peak - v0) / accel
     t_dec = (v_peak - v1) / accel
     s_acc = 0.5 * (v_peak + v0) * t_acc
     s_dec = 0.5 * (v_peak + v1) * t_dec
-    t_cruise = max(length - s_acc - s_dec, 0.0) / v_peak if v_peak > 1e-9 else 0.0
+    t_cruise = np.maximum(length - s_acc - s_dec, 0.0) / v_peak if v_peak > 1e-9 else 0.0
     duration = t_acc + t_cruise + t_dec
     moving = tau < duration
-    tau = min(max(tau, 0.0), duration)
+    tau = np.minimum(np.maximum(tau, 0.0), duration)
     in_acc, in_cruise = tau < t_acc, tau < t_acc + t_cruise
     t_d = tau - t_acc - t_cruise
     if in_acc:
@@ -121,7 +121,7 @@ def through_row(length: float, tau: float, v0: float, v1: float, v_max: float, a
     a = 0.0
     if moving:
         a = accel if in_acc and t_acc > 0 else (0.0 if in_cruise else (-accel if t_dec > 0 else 0.0))
-    return min(s, length), v, a, duration
+    return np.minimum(s, length), v, a, duration
 
 
 @kernel
@@ -139,7 +139,7 @@ def through_profile(length, tau, v0, v1, v_max, accel):
     must be reachable (:func:`vertex_speeds` makes them so). After the duration: at the end, at speed v1."""
     arrays = np.broadcast_arrays(*(np.asarray(x, dtype=float) for x in (length, tau, v0, v1, v_max)))
     s, v, a, duration = _through_rows(*(np.ascontiguousarray(x).reshape(-1) for x in arrays), float(accel))
-    return tuple(x.reshape(arrays[0].shape) for x in (s, v, a, duration))
+    return tuple(x.reshape(arrays[0].shape)[()] for x in (s, v, a, duration))     # [()]: a number for numbers
 
 
 def shutter_offset(past_m: np.ndarray, speed_along_m_s: np.ndarray, chunk_s: float, latency_s: float) -> np.ndarray:

@@ -22,7 +22,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from wrp_eval.compiled import kernel
+from wrp_eval.compiled import as_rows, kernel
 from wrp_eval.sim.vehicle import GRAVITY_M_S2, QuadrotorParams
 
 
@@ -112,7 +112,7 @@ def _attitude_row(b3x: float, b3y: float, b3z: float, yaw: float):
     cy, sy = np.cos(yaw), np.sin(yaw)
     bx = cy * b3x + sy * b3y
     by = -sy * b3x + cy * b3y
-    phi = -np.arcsin(min(max(by, -1.0), 1.0))
+    phi = -np.arcsin(np.minimum(np.maximum(by, -1.0), 1.0))
     theta = np.arctan2(bx, b3z)
     cz, sz = np.cos(0.5 * yaw), np.sin(0.5 * yaw)
     ct, st = np.cos(0.5 * theta), np.sin(0.5 * theta)
@@ -138,7 +138,8 @@ def attitude_quaternion(b3: np.ndarray, yaw: np.ndarray) -> np.ndarray:
     cos phi cos theta), so q = q_z(yaw) q_y(theta) q_x(phi): a handful of trig functions per vehicle
     instead of a matrix-to-quaternion conversion.
     """
-    return _attitude_rows(np.asarray(b3, dtype=float), np.asarray(yaw, dtype=float))
+    b3 = np.asarray(b3, dtype=float)
+    return _attitude_rows(as_rows("b3", b3, (len(b3), 3)), as_rows("yaw", yaw, (len(b3),)))
 
 
 @kernel
@@ -155,19 +156,19 @@ def _position_loop_rows(pos, vel, body_z, ref_pos, ref_vel, ref_acc, ref_yaw, in
             if integrate[row]:
                 integral[row, d] += e_p[d] * dt_s
         norm = np.sqrt(integral[row, 0] ** 2 + integral[row, 1] ** 2 + integral[row, 2] ** 2)
-        clamp = min(1.0, integral_limit / max(norm, 1e-12))
+        clamp = np.minimum(1.0, integral_limit / np.maximum(norm, 1e-12))
         for d in range(3):
             integral[row, d] *= clamp
             acc[d] = -kp * e_p[d] - kv * (vel[row, d] - ref_vel[row, d]) - ki * integral[row, d] + ref_acc[row, d]
-        acc[2] = max(acc[2] + GRAVITY_M_S2, 0.2 * GRAVITY_M_S2)
+        acc[2] = np.maximum(acc[2] + GRAVITY_M_S2, 0.2 * GRAVITY_M_S2)
         # tilt limit: the horizontal demand may not exceed vertical * tan(max tilt)
-        scale = min(1.0, acc[2] * tan_max_tilt / max(np.hypot(acc[0], acc[1]), 1e-12))
+        scale = np.minimum(1.0, acc[2] * tan_max_tilt / np.maximum(np.hypot(acc[0], acc[1]), 1e-12))
         acc[0] *= scale
         acc[1] *= scale
         norm_acc = np.sqrt(acc[0] ** 2 + acc[1] ** 2 + acc[2] ** 2)
         # f = F_des . R e3 (Lee et al. 2010): less thrust while the attitude still lags the demand
         f = mass_kg * (acc[0] * body_z[row, 0] + acc[1] * body_z[row, 1] + acc[2] * body_z[row, 2])
-        thrust[row] = min(max(f, 0.0), max_total_thrust)
+        thrust[row] = np.minimum(np.maximum(f, 0.0), max_total_thrust)
         quat[row, 0], quat[row, 1], quat[row, 2], quat[row, 3] = _attitude_row(
             acc[0] / norm_acc, acc[1] / norm_acc, acc[2] / norm_acc, ref_yaw[row])
     return thrust, quat
@@ -202,9 +203,12 @@ class PositionController:
         during accelerations would otherwise wind it up and leave a slow overshoot at the viewpoint.
         """
         g = self.gains
-        n = len(pos)
-        integrate = np.ones(n, dtype=bool) if integrate is None else np.asarray(integrate, dtype=bool)
-        return _position_loop_rows(pos, vel, body_z, ref_pos, ref_vel, ref_acc, np.asarray(ref_yaw, dtype=float),
-                                   integrate, self.integral, float(dt_s), g.kp, g.kv, g.ki,
+        n = len(self.integral)
+        vectors = (as_rows(name, value, (n, 3)) for name, value in (("pos", pos), ("vel", vel), ("body_z", body_z),
+                                                                    ("ref_pos", ref_pos), ("ref_vel", ref_vel),
+                                                                    ("ref_acc", ref_acc)))
+        integrate = as_rows("integrate", True if integrate is None else integrate, (n,), bool)
+        return _position_loop_rows(*vectors, as_rows("ref_yaw", ref_yaw, (n,)), integrate, self.integral,
+                                   float(dt_s), g.kp, g.kv, g.ki,
                                    g.integral_limit_m_s2 / max(g.ki, 1e-9), self.params.mass_kg, self.tan_max_tilt,
                                    self.max_total_thrust)

@@ -31,7 +31,7 @@ from typing import NamedTuple
 import numpy as np
 from pydantic import Field, model_validator
 
-from wrp_eval.compiled import kernel
+from wrp_eval.compiled import as_rows, kernel
 from wrp_eval.validation import StrictModel
 
 
@@ -82,7 +82,8 @@ class CameraAttitude(NamedTuple):
 @kernel
 def _airframe_row(rot):
     """(nose elevation, wing elevation) rad of one airframe ``rot`` (3, 3) world from body."""
-    return np.arcsin(min(max(rot[2, 0], -1.0), 1.0)), np.arcsin(min(max(rot[2, 1], -1.0), 1.0))
+    nose = np.arcsin(np.minimum(np.maximum(rot[2, 0], -1.0), 1.0))
+    return nose, np.arcsin(np.minimum(np.maximum(rot[2, 1], -1.0), 1.0))
 
 
 @kernel
@@ -116,12 +117,12 @@ def _gimbal_rows(rot, wanted_pitch, joint, mode, gain, max_step, pitch_range, ro
         nose, wing = _airframe_row(rot[row])
         target = (wanted_pitch[row] - nose, -wing)
         for k in range(2):
-            limited = min(max(target[k], lo[k]), hi[k])
+            limited = np.minimum(np.maximum(target[k], lo[k]), hi[k])
             if mode == _SETTLE:
                 joint[row, k] = limited
             elif mode == _ADVANCE:
-                move = min(max(gain * (target[k] - joint[row, k]), -max_step), max_step)
-                joint[row, k] = min(max(joint[row, k] + move, lo[k]), hi[k])
+                move = np.minimum(np.maximum(gain * (target[k] - joint[row, k]), -max_step), max_step)
+                joint[row, k] = np.minimum(np.maximum(joint[row, k] + move, lo[k]), hi[k])
             saturated[row] |= abs(limited - target[k]) > 1e-12
         pitch[row], roll[row] = nose + joint[row, 0], wing + joint[row, 1]
     return pitch, roll, saturated
@@ -140,8 +141,9 @@ class Gimbal:
 
     def _move(self, rot: np.ndarray, wanted_pitch: np.ndarray, mode: int):
         p = self.params
-        return _gimbal_rows(np.asarray(rot, dtype=float), np.asarray(wanted_pitch, dtype=float), self.joint, mode,
-                            float(self.gain), float(self.max_step), np.asarray(p.pitch_range, dtype=float),
+        n = len(self.joint)
+        return _gimbal_rows(as_rows("rot", rot, (n, 3, 3)), as_rows("wanted_pitch", wanted_pitch, (n,)), self.joint,
+                            mode, float(self.gain), float(self.max_step), np.asarray(p.pitch_range, dtype=float),
                             np.asarray(p.roll_range, dtype=float))
 
     def step(self, rot: np.ndarray, yaw: np.ndarray, wanted_pitch: np.ndarray, advance: bool = True) -> CameraAttitude:

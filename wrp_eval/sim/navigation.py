@@ -29,7 +29,7 @@ from typing import Literal, NamedTuple
 import numpy as np
 from pydantic import Field
 
-from wrp_eval.compiled import kernel
+from wrp_eval.compiled import as_rows, kernel
 from wrp_eval.streams import BlockNormals, flight_generators
 from wrp_eval.validation import StrictModel
 
@@ -251,14 +251,19 @@ def hover_p95_spec_m(params: NavigationParams) -> float:
     return K95_2D * math.hypot(params.horizontal_sigma_m, params.white_noise_m)
 
 
-@kernel
 def near_hull_taper(distance_m, reach_m: float):
     """Weight (n,) of the near-hull heading bias: 1 at the hull, 0 at and beyond ``reach_m``.
 
     Shape (1 - d/D)^3 for d < D: the cubic fall-off of a dipole-like anomaly (|dB| ~ 1/r^3; Michael 2011,
     arXiv:1105.3136) made compact, so that it reaches exactly 0 at the configured distance. Negative
-    distances (inside the hull's safety margin) count as 0. ``distance_m``: an array or a number.
+    distances (inside the hull's safety margin) count as 0. ``distance_m``: an array, a list or a number.
     """
+    return _taper(np.asarray(distance_m, dtype=float), float(reach_m))
+
+
+@kernel
+def _taper(distance_m, reach_m: float):
+    """:func:`near_hull_taper` of a number or an array."""
     d = np.minimum(np.maximum(distance_m / reach_m, 0.0), 1.0)
     return (1.0 - d) ** 3
 
@@ -281,7 +286,7 @@ def _estimate_rows(position, velocity, yaw, held_pos, held_vel, held_yaw, compas
             est_vel[row, d] = velocity[row, d] + held_vel[row, d]
         yaw_err[row] = compass_bias[row] + held_yaw[row]
         if hull_distance.size:
-            yaw_err[row] = yaw_err[row] + hull_bias[row] * near_hull_taper(hull_distance[row], reach_m)
+            yaw_err[row] = yaw_err[row] + hull_bias[row] * _taper(hull_distance[row], reach_m)
         est_yaw[row] = yaw[row] + yaw_err[row]
     return est_pos, est_vel, est_yaw, pos_err, yaw_err
 
@@ -382,9 +387,12 @@ class NavigationEstimator:
         if self.ideal:
             return NavigationEstimate(position.copy(), velocity.copy(), yaw.copy(), np.zeros_like(position),
                                       np.zeros_like(yaw))
+        n = self.n_flights
+        position, velocity = as_rows("position", position, (n, 3)), as_rows("velocity", velocity, (n, 3))
+        yaw = as_rows("yaw", yaw, (n,))
+        hull = np.empty(0) if hull_distance_m is None else as_rows("hull_distance_m", hull_distance_m, (n,))
         self._advance(t_s)
         p = self.params
-        hull = np.empty(0) if hull_distance_m is None else np.asarray(hull_distance_m, float)
         return NavigationEstimate(*_estimate_rows(position, velocity, yaw, self._held_pos, self._held_vel,
                                                   self._held_yaw, self._compass_bias, self._hull_bias, hull,
                                                   float(p.near_hull_distance_m), self._baro_rate,

@@ -16,7 +16,7 @@ import numpy as np
 from scipy.spatial.transform import Rotation
 
 from wrp_eval.camera import Camera, camera_angles, camera_rotations, optical_axes
-from wrp_eval.compiled import kernel
+from wrp_eval.compiled import as_rows, kernel
 from wrp_eval.ship.motion import ShipMotion, ShipMotionSection, ship_motion
 from wrp_eval.ship.nofly import distance_to_box, ray_box_distance
 from wrp_eval.sim.blur import angular_velocity, motion_blur_px
@@ -79,15 +79,15 @@ def _return_rows(home, position, wind, wind_estimate, weight, judged, limit, cru
     n = position.shape[0]
     due, over = np.zeros(n, np.bool_), np.zeros(n, np.bool_)
     for row in range(n):
-        for d in range(2):
-            wind_estimate[row, d] = wind_estimate[row, d] + weight * (wind[row, d] - wind_estimate[row, d])
-        wind_estimate[row, 2] = 0.0
+        for d in range(3):      # the horizontal wind: z times 0 (a non-finite z stays NaN, as wind * (1, 1, 0))
+            sample = wind[row, d] * (0.0 if d == 2 else 1.0)
+            wind_estimate[row, d] = wind_estimate[row, d] + weight * (sample - wind_estimate[row, d])
         over[row] = judged and np.hypot(wind_estimate[row, 0], wind_estimate[row, 1]) > limit
         hx, hy, hz = home[row, 0] - position[row, 0], home[row, 1] - position[row, 1], home[row, 2] - position[row, 2]
         distance = np.sqrt(hx ** 2 + hy ** 2 + hz ** 2)
         tailwind = (wind_estimate[row, 0] * hx + wind_estimate[row, 1] * hy + wind_estimate[row, 2] * hz) \
-            / max(distance, 1e-9)
-        ground = max(cruise_m_s + tailwind, 1.0)
+            / np.maximum(distance, 1e-9)
+        ground = np.maximum(cruise_m_s + tailwind, 1.0)
         due[row] = enabled and energy_j[row] - straight_home_energy_j(distance, ground, cruise_power_w) <= reserve_j
     return due, over
 
@@ -143,8 +143,10 @@ class Onboard:
         """(battery due (batch,) bool, wind over the limit (batch,) bool) for vehicles at ``position`` (batch, 3)
         in ``wind`` (batch, 3) m/s. The way home is flown at cruise airspeed, its ground speed helped or
         hindered by the estimated (averaged) wind along it (at least 1 m/s)."""
+        n = len(self.home)
+        position, wind = as_rows("position", position, (n, 3)), as_rows("wind", wind, (n, 3))
         if self.wind_estimate is None:
-            self.wind_estimate, self.wind_time, self.wind_samples = np.zeros((len(wind), 3)), 0.0, 1
+            self.wind_estimate, self.wind_time, self.wind_samples = np.zeros((n, 3)), 0.0, 1
             weight = 1.0
         else:
             # a first-order average, which starts as the running mean (the weight of a new sample is never below

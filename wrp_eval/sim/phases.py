@@ -48,16 +48,16 @@ def _trapezoid(length: float, tau: float, v_max: float, a_max: float):
     """Rest-to-rest trapezoidal speed profile: distance s, speed v, acceleration a and the running integral
     of s, S = int s dt, at time tau s, plus the duration. Before 0: at rest at 0; after: at rest at ``length``."""
     tri = length < v_max ** 2 / a_max
-    v_peak = np.sqrt(max(length, 0.0) * a_max) if tri else v_max
+    v_peak = np.sqrt(np.maximum(length, 0.0) * a_max) if tri else v_max
     t_acc = v_peak / a_max
     t_cruise = 0.0 if tri else length / v_max - t_acc
     duration = 2.0 * t_acc + t_cruise
     s_acc = 0.5 * a_max * t_acc ** 2
     big_s_acc = a_max * t_acc ** 3 / 6.0
     big_s_end = big_s_acc + s_acc * t_cruise + 0.5 * v_peak * t_cruise ** 2 + (length * t_acc - big_s_acc)
-    after = max(tau - duration, 0.0)
+    after = np.maximum(tau - duration, 0.0)
     moving = tau >= 0.0 and tau < duration
-    tau = min(max(tau, 0.0), duration)
+    tau = np.minimum(np.maximum(tau, 0.0), duration)
     t_c = tau - t_acc
     t_dec = duration - tau
     if tau < t_acc:
@@ -104,7 +104,7 @@ def reference_profile(length, tau, v_max, a_max, t_jerk):
     length, tau = np.broadcast_arrays(np.asarray(length, dtype=float), np.asarray(tau, dtype=float))
     out = _profile_rows(np.ascontiguousarray(length).reshape(-1), np.ascontiguousarray(tau).reshape(-1),
                         float(v_max), float(a_max), float(t_jerk))
-    return tuple(x.reshape(length.shape) for x in out)
+    return tuple(x.reshape(length.shape)[()] for x in out)     # [()]: a number for numbers
 
 
 @dataclass(frozen=True)
@@ -191,7 +191,9 @@ def _reference_rows(transit, phase_time, start, end, yaw0, dyaw, length, directi
             for d in range(3):
                 ref_vel[row, d] = direction[row, d] * v
                 ref_acc[row, d] = direction[row, d] * a
-        frac = min(max(phase_time[row] / max(duration[row], 1e-9), 0.0), 1.0) if transit[row] else 1.0
+        frac = 1.0
+        if transit[row]:
+            frac = np.minimum(np.maximum(phase_time[row] / np.maximum(duration[row], 1e-9), 0.0), 1.0)
         yaw[row] = yaw0[row] + dyaw[row] * frac
     return ref_pos, ref_vel, ref_acc, yaw, dist2, held
 

@@ -97,7 +97,7 @@ def _induced_row(thrust, rotor_area_m2: float, air_density: float) -> float:
     """Induced power W of one vehicle's rotors ``thrust`` (n_rotors,) N (:func:`induced_power_w`)."""
     total = 0.0
     for k in range(thrust.size):
-        total += max(thrust[k], 0.0) ** 1.5
+        total += np.maximum(thrust[k], 0.0) ** 1.5
     return total / np.sqrt(2.0 * air_density * rotor_area_m2)
 
 
@@ -129,7 +129,7 @@ def _powers(thrust_per_motor_n, drag_force_n, rel_air_m_s, rotor_area_m2, air_de
                                                                    section.avionics_w)
     out = _power_rows(flat, drag, rel, float(rotor_area_m2), float(air_density), float(fom), float(eta),
                       float(avionics))
-    return tuple(x.reshape(thrust.shape[:-1]) for x in out)
+    return tuple(x.reshape(thrust.shape[:-1])[()] for x in out)    # [()]: a number for one vehicle
 
 
 def induced_power_w(thrust_per_motor_n: np.ndarray, rotor_area_m2: float, air_density: float) -> np.ndarray:

@@ -68,7 +68,7 @@ CALM_MPS = 1e-9
 @kernel
 def smoothstep(u: float) -> float:
     """3u^2 - 2u^3 on [0, 1], 0 below, 1 above: a C1 ramp."""
-    u = min(max(u, 0.0), 1.0)
+    u = np.minimum(np.maximum(u, 0.0), 1.0)
     return u * u * (3.0 - 2.0 * u)
 
 
@@ -76,9 +76,9 @@ def smoothstep(u: float) -> float:
 def wilson_scale_length(height_m: float, width_m: float) -> float:
     """Wilson (1979) wake scale length R = min(H, W)^(2/3) max(H, W)^(1/3) (m), each side limited to 8 times
     the other (beyond that the block is already two-dimensional; PRIME ``wake_scales``)."""
-    h = min(height_m, 8.0 * width_m)
-    w = min(width_m, 8.0 * height_m)
-    return min(h, w) ** (2.0 / 3.0) * max(h, w) ** (1.0 / 3.0)
+    h = np.minimum(height_m, 8.0 * width_m)
+    w = np.minimum(width_m, 8.0 * height_m)
+    return np.minimum(h, w) ** (2.0 / 3.0) * np.maximum(h, w) ** (1.0 / 3.0)
 
 
 @kernel
@@ -87,8 +87,8 @@ def cavity_length(height_m: float, width_m: float, length_m: float) -> float:
     L_R = 1.8 W / ((L/H)^e (1 + 0.24 W/H)), L/H clipped to 0.3..3, e = 0.3 for W/H >= 1 and falling to 0 at
     W/H = 0.33 (Snyder: the cavity stops growing as W/H = L/H goes from 1 to 1/3)."""
     rw = width_m / height_m
-    rl = min(max(length_m / height_m, 0.3), 3.0)
-    exponent = max(0.0, FACKRELL_LENGTH_EXP * (rw - 0.33) / 0.67) if rw < 1.0 else FACKRELL_LENGTH_EXP
+    rl = np.minimum(np.maximum(length_m / height_m, 0.3), 3.0)
+    exponent = np.maximum(0.0, FACKRELL_LENGTH_EXP * (rw - 0.33) / 0.67) if rw < 1.0 else FACKRELL_LENGTH_EXP
     return FACKRELL_COEF * width_m / (rl**exponent * (1.0 + FACKRELL_WIDTH_COEF * rw))
 
 
@@ -96,7 +96,7 @@ def cavity_length(height_m: float, width_m: float, length_m: float) -> float:
 def wake_height(x_m: float, height_m: float, scale_m: float) -> float:
     """PRIME wake height (m) at x (m) downwind of the upwind face: 1.2 R (x/R + (H/(1.2 R))^3)^(1/3), = H at
     x = 0 (Wilson 1979 / Weil 1996 limits for a uniform approach wind)."""
-    x = max(x_m, 0.0)
+    x = np.maximum(x_m, 0.0)
     return WAKE_HEIGHT_COEF * scale_m * np.cbrt(x / scale_m + (height_m / (WAKE_HEIGHT_COEF * scale_m)) ** 3)
 
 
@@ -140,7 +140,7 @@ def footprint(c: float, dx: float, dy: float, half_length: float, half_breadth: 
     # wind along y: no limit in s from x (and vice versa)
     mid_x, half_x = (c * dy / dx, half_length / ax) if ax > 1e-12 else (0.0, np.inf)
     mid_y, half_y = (-c * dx / dy, half_breadth / ay) if ay > 1e-12 else (0.0, np.inf)
-    return min(mid_x + half_x, mid_y + half_y), max(mid_x - half_x, mid_y - half_y)
+    return np.minimum(mid_x + half_x, mid_y + half_y), np.maximum(mid_x - half_x, mid_y - half_y)
 
 
 @kernel
@@ -158,21 +158,22 @@ def _factor_rows(points, wind, centre_x, centre_y, half_length, half_breadth, he
         rel_x, rel_y = points[row, 0] - centre_x, points[row, 1] - centre_y
         s = rel_x * dx + rel_y * dy
         c = -rel_x * dy + rel_y * dx
-        lee, windward = footprint(min(max(c, -half_across), half_across), dx, dy, half_length, half_breadth)
-        fetch = max(lee - windward, MIN_RAMP_R * r)
+        across = np.minimum(np.maximum(c, -half_across), half_across)
+        lee, windward = footprint(across, dx, dy, half_length, half_breadth)
+        fetch = np.maximum(lee - windward, MIN_RAMP_R * r)
         x_lee, x_wind, x_up, lateral = s - lee, s - windward, s + half_along, abs(c) - half_across
         # streamwise: ramp over the roof, cavity plateau, PRIME's (x/R)^(-2/3) decay, taper over the last half
         # of the extent; the ramp ends at the lee boundary, or a little past it where the fetch is < 0.25 R
         roof = smoothstep(x_wind / fetch)
-        decay = (max(x_lee - cavity, 0.0) / r + 1.0) ** -DECAY_EXPONENT
+        decay = (np.maximum(x_lee - cavity, 0.0) / r + 1.0) ** -DECAY_EXPONENT
         start = cavity + 0.5 * extent_scale_lengths * r
         taper = 1.0 - smoothstep((x_lee - start) / (0.5 * extent_scale_lengths * r))
         stream = roof * decay * taper
         # lateral: PRIME's half-width growth (R/3)(x/R)^(1/3) beyond the shadow of the footprint
-        width = max(r / 3.0 * np.cbrt(max(x_up, 0.0) / r), MIN_LATERAL_TAPER_R * r)
+        width = np.maximum(r / 3.0 * np.cbrt(np.maximum(x_up, 0.0) / r), MIN_LATERAL_TAPER_R * r)
         shape = 0.0 if calm else stream * (1.0 - smoothstep(lateral / width))
         # vertical: deficit full to H, turbulence full to the cavity top, both gone at the wake height
-        top = max(wake_height(x_up, height, r), cavity_top + CAVITY_TOP_R * r)
+        top = np.maximum(wake_height(x_up, height, r), cavity_top + CAVITY_TOP_R * r)
         z = points[row, 2]
         mean_part = 1.0 - smoothstep((z - height) / (top - height))
         turb_part = 1.0 - smoothstep((z - cavity_top) / (top - cavity_top))

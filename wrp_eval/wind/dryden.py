@@ -32,7 +32,7 @@ from collections.abc import Sequence
 import numpy as np
 from scipy.signal import lfilter
 
-from wrp_eval.compiled import kernel
+from wrp_eval.compiled import as_rows, kernel
 from wrp_eval.streams import BlockNormals, flight_generators
 from wrp_eval.wind.boundary_layer import log_law_factor
 
@@ -55,7 +55,7 @@ def severity_w20_mps(severity: str) -> float:
 @kernel
 def _intensity_and_scale(altitude_m: float, w20_mps: float):
     """(sigma_uv, sigma_w, L_uv, L_w) in m/s and m at one altitude (clipped to 10..1000 ft) for W20 m/s."""
-    h_ft = min(max(altitude_m / FT_M, MIN_ALTITUDE_FT), MAX_ALTITUDE_FT)
+    h_ft = np.minimum(np.maximum(altitude_m / FT_M, MIN_ALTITUDE_FT), MAX_ALTITUDE_FT)
     base = 0.177 + 0.000823 * h_ft
     sigma_w = 0.1 * w20_mps
     return sigma_w / base**0.4, sigma_w, h_ft / base**1.2 * FT_M, h_ft * FT_M
@@ -166,7 +166,7 @@ def _step_rows(points, mean_wind, w20_mps, airspeed_floor_mps, dt, noise, state_
     out, uvw = np.empty((n, 3)), np.empty(3)
     for row in range(n):
         mx, my, mz = mean_wind[row, 0], mean_wind[row, 1], mean_wind[row, 2]
-        airspeed = max(np.sqrt(mx ** 2 + my ** 2 + mz ** 2), airspeed_floor_mps)
+        airspeed = np.maximum(np.sqrt(mx ** 2 + my ** 2 + mz ** 2), airspeed_floor_mps)
         tau, gain = _filters(points[row, 2], w20_mps[row], airspeed)
         a, _, _, c2 = _zoh(tau[0], dt)
         for k in range(noise.shape[1]):
@@ -284,7 +284,7 @@ class DrydenTurbulence:
         points = np.asarray(points, dtype=float)
         if points.shape != (self.n_flights, 3):
             raise ValueError(f"points must have shape ({self.n_flights}, 3), got {points.shape}")
-        mean_wind = np.zeros_like(points) if mean_wind is None else np.asarray(mean_wind, dtype=float)
+        mean_wind = np.zeros_like(points) if mean_wind is None else as_rows("mean_wind", mean_wind, points.shape)
         if self.t_s is None:
             _, _, _, tau, _ = self.parameters(points[:, 2], np.linalg.norm(mean_wind, axis=1))
             self._initialise(tau)

@@ -32,7 +32,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from wrp_eval.compiled import kernel
+from wrp_eval.compiled import as_rows, kernel
 from wrp_eval.errors import InputError
 
 INTERPOLATION_METHODS = ("idw", "trilinear")
@@ -119,7 +119,7 @@ def _lower_index(axis, coord):
 def _clamped(coord, lo, hi, nan_value):
     if coord != coord:                          # NaN
         coord = nan_value
-    return min(max(coord, lo), hi)
+    return np.minimum(np.maximum(coord, lo), hi)
 
 
 @kernel
@@ -166,10 +166,10 @@ def _interpolate_rows(points, grid_yaw, x_axis, y_axis, heights, values, field, 
         fractions[row, 0] = (x - x_axis[i]) / (x_axis[i + 1] - x_axis[i])
         fractions[row, 1] = (y - y_axis[j]) / (y_axis[j + 1] - y_axis[j])
         # outside in height = below every column's lowest level or above every column's top
-        bottom[row] = min(min(heights[i, j, 0], heights[i + 1, j, 0]),
-                          min(heights[i, j + 1, 0], heights[i + 1, j + 1, 0]))
-        top[row] = max(max(heights[i, j, nz - 1], heights[i + 1, j, nz - 1]),
-                       max(heights[i, j + 1, nz - 1], heights[i + 1, j + 1, nz - 1]))
+        bottom[row] = np.minimum(np.minimum(heights[i, j, 0], heights[i + 1, j, 0]),
+                          np.minimum(heights[i, j + 1, 0], heights[i + 1, j + 1, 0]))
+        top[row] = np.maximum(np.maximum(heights[i, j, nz - 1], heights[i + 1, j, nz - 1]),
+                       np.maximum(heights[i, j + 1, nz - 1], heights[i + 1, j + 1, nz - 1]))
     if not clamp:
         row = _first_outside(gz, bottom, top)
         if row >= 0:
@@ -189,7 +189,7 @@ def _interpolate_rows(points, grid_yaw, x_axis, y_axis, heights, values, field, 
             z = 0.0
         for c in range(4):
             column = heights[ci[c], cj[c]]
-            zc = min(max(z, column[0]), column[nz - 1])    # a column a little shorter holds its end value
+            zc = np.minimum(np.maximum(z, column[0]), column[nz - 1])    # a column a little shorter holds its end value
             k = _lower_index(column, zc)
             kc[c], fzc[c] = k, (zc - column[k]) / (column[k + 1] - column[k])
         f = field[row]
@@ -242,8 +242,15 @@ def interpolate(grid: WindGrid, points: np.ndarray, method: str = "idw", idw_pow
         raise ValueError(f"points must have shape (n, 3), got {points.shape}")
     if values is None:
         values, value_index = grid.velocity_mps[None], np.zeros(len(points), dtype=np.int64)
+    else:       # the kernel does not check its indices
+        values = np.asarray(values, dtype=float)
+        value_index = as_rows("value_index", value_index, (len(points),), np.int64)
+        if values.shape[1:] != grid.velocity_mps.shape:
+            raise ValueError(f"values must have shape (k,) + {grid.velocity_mps.shape}, got {values.shape}")
+        if value_index.size and not 0 <= value_index.min() <= value_index.max() < len(values):
+            raise ValueError(f"value_index must index the {len(values)} fields of values")
     wind, code, row = _interpolate_rows(points, float(grid.grid_yaw_rad), grid.x_m, grid.y_m, grid.heights_m, values,
-                                        np.asarray(value_index, dtype=np.int64), method == "idw", float(idw_power),
+                                        value_index, method == "idw", float(idw_power),
                                         bool(clamp))
     if code != _INSIDE:
         _refuse_outside(grid, grid.to_grid_frame(points[row:row + 1])[0], code)
