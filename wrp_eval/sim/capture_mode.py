@@ -136,7 +136,8 @@ def _through_rows(length, tau, v0, v1, v_max, accel):
 def through_profile(length, tau, v0, v1, v_max, accel):
     """Trapezoid from speed v0 to v1 over ``length`` (each (n,)) with acceleration ``accel`` and cruise at most
     ``v_max``: (distance s, speed v, acceleration a, duration) (n,) at time ``tau`` (n,) s. The end speeds
-    must be reachable (:func:`vertex_speeds` makes them so). After the duration: at the end, at speed v1."""
+    must be reachable (:func:`vertex_speeds` makes them so). After the duration: at the end, at speed v1.
+    ``accel``: a number (m/s^2); the others broadcast."""
     arrays = np.broadcast_arrays(*(np.asarray(x, dtype=float) for x in (length, tau, v0, v1, v_max)))
     s, v, a, duration = _through_rows(*(np.ascontiguousarray(x).reshape(-1) for x in arrays), float(accel))
     return tuple(x.reshape(arrays[0].shape)[()] for x in (s, v, a, duration))     # [()]: a number for numbers

@@ -91,7 +91,7 @@ def _profile_rows(length, tau, v_max, a_max, t_jerk):
 
 def reference_profile(length, tau, v_max, a_max, t_jerk):
     """Jerk-limited rest-to-rest profile: distance, speed, acceleration (each (n,)) at time tau, and the
-    duration (n,).
+    duration (n,); ``length`` and ``tau`` broadcast, ``v_max``, ``a_max`` and ``t_jerk`` are numbers.
 
     The trapezoidal speed profile averaged over a moving window of ``t_jerk`` s: the acceleration then
     ramps over t_jerk instead of jumping, i.e. the jerk is limited to a_max / t_jerk, at most twice that

@@ -67,7 +67,8 @@ CALM_MPS = 1e-9
 
 @kernel
 def smoothstep(u: float) -> float:
-    """3u^2 - 2u^3 on [0, 1], 0 below, 1 above: a C1 ramp."""
+    """3u^2 - 2u^3 on [0, 1], 0 below, 1 above: a C1 ramp. This and the three length functions below take
+    numbers (the wake's kernels call them row by row)."""
     u = np.minimum(np.maximum(u, 0.0), 1.0)
     return u * u * (3.0 - 2.0 * u)
 

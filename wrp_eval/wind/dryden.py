@@ -206,9 +206,9 @@ def _rotate_rows(uvw, mean_wind):
 class DrydenTurbulence:
     """Dryden turbulence for a batch of ``n_flights`` flights, each with its own random stream.
 
-    State per flight: x_u (1), and (x1, x2) for v and for w. ``advance`` moves all flights one step of
+    State per flight: x_u (1), and (x1, x2) for v and for w. ``velocity`` moves all flights the steps since its last call of
     ``dt_s`` (one batched elementwise update); ``generate`` produces a whole series at fixed altitude and
-    airspeed with scipy's C recursion (identical numbers to repeated ``advance``).
+    airspeed with scipy's C recursion (identical numbers to stepping with ``velocity``).
 
     rngs: one Generator per flight (e.g. ``np.random.default_rng(seed).spawn(n)``) or a single Generator /
     seed from which they are spawned. w20_mps: scalar or (n,). sigma_w_override_mps: if given, W20 is
@@ -303,7 +303,7 @@ class DrydenTurbulence:
         """Series (n_flights, n_steps, 3) along/across/vertical at fixed altitude and airspeed.
 
         Sample k is the turbulence at t0 + k dt (k = 0 is the current, or freshly drawn initial, state);
-        afterwards the state is at t0 + n_steps dt, exactly as after n_steps calls of ``advance``.
+        afterwards the state is at t0 + n_steps dt, exactly as after n_steps steps of ``velocity``.
         """
         _, _, _, tau, gain = self.parameters(altitude_m, airspeed_mps)
         if self.t_s is None:
