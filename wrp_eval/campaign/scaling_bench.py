@@ -9,7 +9,8 @@ is a record; ``scaling.*_exponent``):
 * oracle: the synthetic oracle's wall time on 25-400 views (a ring of views at three heights around the
   stylized ship, facing it; median of 3 after a warm-up call). Target: <= 1 s for 200 views.
 * flight: wall seconds per simulated drone-second of the closed loop (the sim bench's path and wind, every
-  ``sim:`` default on, 30 s simulated) against the batch size 1-1,024.
+  ``sim:`` default on, 30 s simulated) against the batch size 1-1,024, after an untimed warm-up flight (the
+  compiled kernels load or compile first).
 * campaign: wall time of a real campaign (the campaign bench's reference config) against its trial count,
   64 to ``WRP_EVAL_BENCH_SCALING_MAX_TRIALS`` (default 2,048; ~13 min in all on 2 cores), exponent fitted from
   128 trials up (the workers' start-up is a constant). Target: linear, exponent <= 1.1.
@@ -40,7 +41,7 @@ from wrp_eval.recon.bench import reference_ship
 from wrp_eval.recon.synthetic import SyntheticOracle
 from wrp_eval.ship.config import ShipSection
 from wrp_eval.ship.resolve import resolve_ship_full
-from wrp_eval.sim.bench import moderate_wind, ship_in_scene, bench_path
+from wrp_eval.sim.bench import bench_path, moderate_wind, ship_in_scene, warm_up_kernels
 from wrp_eval.sim.captures import CaptureSet
 from wrp_eval.sim.config import SimSection
 from wrp_eval.sim.flight import FlightSimulator
@@ -100,6 +101,7 @@ def oracle_curve() -> list[tuple[int, float]]:
 def flight_curve() -> list[tuple[int, float]]:
     """(batch, wall s per simulated drone-second) of the closed loop."""
     section = SimSection().model_copy(update={"max_flight_time_s": FLIGHT_SIM_S})
+    warm_up_kernels()
     out = []
     with FlightSimulator(section) as sim:
         for batch in BATCHES:

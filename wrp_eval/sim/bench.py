@@ -133,6 +133,16 @@ def ship_in_scene() -> ShipInScene:
     return ShipInScene(build_proxy(particulars).bounds, ShipMotionSection(sea_state=3), particulars)
 
 
+def warm_up_kernels() -> None:
+    """Fly the bench path (one flight, 1 s) and a 1 s hover once, untimed: the flight loop's compiled kernels
+    (wrp_eval/compiled.py) compile on a machine's first flight (~10 s, then cached) or load from the cache
+    (~0.3 s per process); a timing must not include either."""
+    section = SimSection().model_copy(update={"max_flight_time_s": 1.0})
+    with FlightSimulator(section) as sim:
+        sim.fly(bench_path(), moderate_wind(section, 1, 0), 1, ship=ship_in_scene(), flight_rngs=0)
+        sim.hover(moderate_wind(section, 1, 0), [0.0, -60.0, 30.0], 0.0, 1.0, 1, flight_rngs=0)
+
+
 def closed_loop_rate(section: SimSection, batch: int, sim_seconds: float) -> tuple[float, float]:
     """(drone-steps per wall second, per CPU second of all threads) of our flights: the bench path flown through
     (fly-through, the default) around the swinging ship in its air wake, moderate turbulence, every default
@@ -150,6 +160,7 @@ def closed_loop_rate(section: SimSection, batch: int, sim_seconds: float) -> tup
 
 def run_bench() -> list[BenchRecord]:
     section = SimSection()
+    warm_up_kernels()
     threads = section.threads or (os.cpu_count() or 1)
     rec = [BenchRecord("sim.timestep_s", section.timestep_s, "s",
                        note="MuJoCo physics step of the flight model (attitude loop at this rate)")]

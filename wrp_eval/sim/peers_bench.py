@@ -32,6 +32,7 @@ import numpy as np
 from wrp_eval.bench_record import BenchRecord
 from wrp_eval.ship.config import ShipSection
 from wrp_eval.ship.resolve import resolve_particulars
+from wrp_eval.sim.bench import warm_up_kernels
 from wrp_eval.sim.config import SimSection
 from wrp_eval.sim.flight import FlightSimulator
 from wrp_eval.sim.navigation import NavigationSection
@@ -137,6 +138,7 @@ def run_bench() -> list[BenchRecord]:
         print("peers: skipped (RotorPy is not installed: pip install '.[peers]')")
         return []
     section = SimSection()
+    warm_up_kernels()       # ours: compiled kernels loaded (or compiled) before any timing
     steps = int(round(SIM_S / ROTORPY_DT_S))
     records = []
     for batch in BATCHES:
