@@ -27,6 +27,7 @@ from pathlib import Path
 
 import numpy as np
 from matplotlib.figure import Figure
+from matplotlib.ticker import FixedFormatter, FixedLocator, NullFormatter
 
 from wrp_eval.atomic import atomic_path
 from wrp_eval.bench_record import BenchRecord
@@ -135,6 +136,11 @@ def scaling_figure(curves: dict, file: Path) -> None:
               "flight": ("batch (drones)", "wall s per drone-second"), "campaign": ("trials", "campaign wall (s)")}
     for ax, (name, (x, y, k)) in zip(axes, curves.items()):
         ax.loglog(x, y, "o-")
+        # the measured sizes as the x ticks, in plain numbers (log axes' minor labels overlapped)
+        ax.xaxis.set_major_locator(FixedLocator(x))
+        ax.xaxis.set_major_formatter(FixedFormatter([f"{v:g}" for v in x]))
+        ax.xaxis.set_minor_formatter(NullFormatter())
+        ax.tick_params(axis="x", labelsize=8, labelrotation=45)
         ax.set_xlabel(labels[name][0])
         ax.set_ylabel(labels[name][1])
         ax.set_title(f"{name}: exponent {k:.2f}", fontsize=9)
