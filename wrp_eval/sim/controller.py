@@ -1,7 +1,7 @@
 """Geometric SE(3) tracking controller with integral action, vectorised over a batch of vehicles.
 
 Split in two loops at two rates, as on a real autopilot (PX4: position loop ~50 Hz, attitude/rate loops
-250 Hz and faster): the position loop here (numpy, once per simulation chunk) and the attitude loop inside
+250 Hz and faster): the position loop here (a compiled kernel, once per simulation chunk) and the attitude loop inside
 MuJoCo (actuators of vehicle.build_scene, every physics step).
 
 Lee, Leok, McClamroch (2010), "Geometric tracking control of a quadrotor UAV on SE(3)", CDC:
@@ -84,7 +84,8 @@ def quat_to_matrix(quat: np.ndarray) -> np.ndarray:
     return _quat_rows_to_matrix(np.asarray(quat, dtype=float))
 
 
-def yaw_of(rot: np.ndarray) -> np.ndarray:
+@kernel
+def yaw_of(rot):
     """(n,) heading of the body x axis (rad, CCW from world +x) from (n, 3, 3) rotations."""
     return np.arctan2(rot[:, 1, 0], rot[:, 0, 0])
 
@@ -102,8 +103,14 @@ def cross(a: np.ndarray, b: np.ndarray) -> np.ndarray:
 
 
 def wrap_angle(a: np.ndarray) -> np.ndarray:
-    """Angles wrapped to [-pi, pi)."""
-    return (np.asarray(a) + np.pi) % (2.0 * np.pi) - np.pi
+    """Angles wrapped to [-pi, pi) (numbers, lists or arrays)."""
+    return wrapped(np.asarray(a, dtype=float))
+
+
+@kernel
+def wrapped(a):
+    """:func:`wrap_angle` of a number or an array, for kernels."""
+    return (a + np.pi) % (2.0 * np.pi) - np.pi
 
 
 @kernel

@@ -2,14 +2,14 @@
 
 Design (measured, see README.md and bench.py): the batch of flights is packed ``drones_per_model``
 quadrotors to a MuJoCo model (independent free bodies, no contacts), the models run in parallel in
-``mujoco.rollout`` threads for a chunk of ``chunk_steps`` physics steps, and between chunks numpy
-computes for the whole batch at once: the wind at every vehicle, the windward-area drag, the reference
+``mujoco.rollout`` threads for a chunk of ``chunk_steps`` physics steps, and between chunks the
+flight logic computes for the whole batch at once (compiled per-row kernels, wrp_eval/compiled.py): the wind at every vehicle, the windward-area drag, the reference
 (jerk-limited speed profile viewpoint to viewpoint), the position loop of the SE(3) controller, photo
 triggers and failures. Motor thrusts, drag forces (world-frame force actuators on the free joint) and
 the desired attitudes enter the rollout through ``control_spec = CTRL | MOCAP_QUAT`` and are held over
 the chunk (zero-order hold, 50 ms by default: the position loop runs at 20 Hz); the attitude loop runs
-inside MuJoCo at every physics step (200 Hz, vehicle.build_scene), so the numpy loop can run at the
-slower rate a position loop needs.
+inside MuJoCo at every physics step (200 Hz, vehicle.build_scene), so the loop between chunks can run at
+the slower rate a position loop needs.
 
 Flight logic (phases.py): in ``stop`` mode, per viewpoint TRANSIT along the straight segment at the cruise
 speed (accel-limited), then SETTLE until within the tolerances (or a timeout: a waypoint mission in gusts takes
@@ -50,6 +50,7 @@ from wrp_eval.sim.controller import (
     PositionController,
     quat_row_to_matrix,
     tilt_of,
+    yaw_of,
 )
 from wrp_eval.sim.flight_state import (
     ENDED,
@@ -136,7 +137,7 @@ def _body_rows(state, qpos_flat, qvel_flat):
     """(position (n, 3), velocity (n, 3), rot (n, 3, 3), yaw (n,)) of the drones whose free joints sit at flat
     indices ``qpos_flat`` (n, 7) and ``qvel_flat`` (n, 6) of the rollout ``state``."""
     n = qpos_flat.shape[0]
-    position, velocity, rot, yaw = np.empty((n, 3)), np.empty((n, 3)), np.empty((n, 3, 3)), np.empty(n)
+    position, velocity, rot = np.empty((n, 3)), np.empty((n, 3)), np.empty((n, 3, 3))
     quat = np.empty(4)
     for row in range(n):
         for d in range(3):
@@ -145,8 +146,7 @@ def _body_rows(state, qpos_flat, qvel_flat):
         for d in range(4):
             quat[d] = state[qpos_flat[row, 3 + d]]
         quat_row_to_matrix(quat, rot[row])
-        yaw[row] = np.arctan2(rot[row, 1, 0], rot[row, 0, 0])      # controller.yaw_of
-    return position, velocity, rot, yaw
+    return position, velocity, rot, yaw_of(rot)
 
 
 class Body(NamedTuple):

@@ -19,7 +19,7 @@ import numpy as np
 from wrp_eval.compiled import kernel
 from wrp_eval.sim.capture_mode import through_profile, through_row
 from wrp_eval.sim.config import SimSection
-from wrp_eval.sim.controller import PositionController, wrap_angle
+from wrp_eval.sim.controller import PositionController, wrap_angle, wrapped
 from wrp_eval.sim.flight_state import (
     COMPLETED,
     DITCHED,
@@ -290,7 +290,7 @@ def _transition_rows(phase, phase_time, index, duration, end, target_yaw, positi
         chain[row] = arrived and through and index[row] < n_views - 1
         to_settle[row] = arrived and not chain[row]
         if phase[row] == SETTLE:
-            yaw_err = (yaw[row] - target_yaw[row, index[row]] + np.pi) % (2.0 * np.pi) - np.pi   # wrap_angle
+            yaw_err = wrapped(yaw[row] - target_yaw[row, index[row]])
             off = (position[row, 0] - end[row, 0]) ** 2 + (position[row, 1] - end[row, 1]) ** 2 \
                 + (position[row, 2] - end[row, 2]) ** 2
             speed2 = velocity[row, 0] ** 2 + velocity[row, 1] ** 2 + velocity[row, 2] ** 2

@@ -9,12 +9,12 @@ controller can never disagree. :func:`build_scene` attaches N copies to a scene 
 or a root element the caller passes in, e.g. the ship stage's scene) each under a free joint.
 
 Inner attitude loop inside MuJoCo: each drone also gets a mocap body ``target{i}`` (its orientation is the
-desired attitude R_d set by the numpy position loop) and three ``general`` actuators with a site
+desired attitude R_d set by the position loop between chunks) and three ``general`` actuators with a site
 transmission from the drone's ``imu`` site to the target's site (``refsite``). MuJoCo then gives the
 actuator length = the rotation vector of R_d^T R (the attitude error, in the desired frame) and velocity =
 the body rate in that frame (checked in tests/sim/test_vehicle.py), so with ``biasprm = (0, -k_R, -k_W)``
 each physics step applies the PD attitude torque tau = -k_R e_R - k_W omega of Lee et al. (2010), at the
-physics rate (200 Hz at 5 ms), while the position loop runs in numpy at a lower rate (README.md).
+physics rate (200 Hz at 5 ms), while the position loop runs between chunks at a lower rate (README.md).
 """
 
 from __future__ import annotations

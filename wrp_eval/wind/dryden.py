@@ -206,8 +206,8 @@ def _rotate_rows(uvw, mean_wind):
 class DrydenTurbulence:
     """Dryden turbulence for a batch of ``n_flights`` flights, each with its own random stream.
 
-    State per flight: x_u (1), and (x1, x2) for v and for w. ``velocity`` moves all flights the steps since its last call of
-    ``dt_s`` (one batched elementwise update); ``generate`` produces a whole series at fixed altitude and
+    State per flight: x_u (1), and (x1, x2) for v and for w. ``velocity`` moves all flights the steps of
+    ``dt_s`` since its last call (one compiled loop); ``generate`` produces a whole series at fixed altitude and
     airspeed with scipy's C recursion (identical numbers to stepping with ``velocity``).
 
     rngs: one Generator per flight (e.g. ``np.random.default_rng(seed).spawn(n)``) or a single Generator /

@@ -165,11 +165,13 @@ def _interpolate_rows(points, grid_yaw, x_axis, y_axis, heights, values, field, 
         cells[row, 0], cells[row, 1] = i, j
         fractions[row, 0] = (x - x_axis[i]) / (x_axis[i + 1] - x_axis[i])
         fractions[row, 1] = (y - y_axis[j]) / (y_axis[j + 1] - y_axis[j])
+        if clamp:
+            continue
         # outside in height = below every column's lowest level or above every column's top
         bottom[row] = np.minimum(np.minimum(heights[i, j, 0], heights[i + 1, j, 0]),
-                          np.minimum(heights[i, j + 1, 0], heights[i + 1, j + 1, 0]))
+                                 np.minimum(heights[i, j + 1, 0], heights[i + 1, j + 1, 0]))
         top[row] = np.maximum(np.maximum(heights[i, j, nz - 1], heights[i + 1, j, nz - 1]),
-                       np.maximum(heights[i, j + 1, nz - 1], heights[i + 1, j + 1, nz - 1]))
+                              np.maximum(heights[i, j + 1, nz - 1], heights[i + 1, j + 1, nz - 1]))
     if not clamp:
         row = _first_outside(gz, bottom, top)
         if row >= 0:
