@@ -3,8 +3,9 @@
 Design (measured, see README.md and bench.py): the batch of flights is packed ``drones_per_model``
 quadrotors to a MuJoCo model (independent free bodies, no contacts), the models run in parallel in
 ``mujoco.rollout`` threads for a chunk of ``chunk_steps`` physics steps, and between chunks the
-flight logic computes for the whole batch at once (compiled per-row kernels, wrp_eval/compiled.py): the wind at every vehicle, the windward-area drag, the reference
-(jerk-limited speed profile viewpoint to viewpoint), the position loop of the SE(3) controller, photo
+flight logic computes for the whole batch at once (compiled per-row kernels, wrp_eval/compiled.py):
+the wind at every vehicle, the windward-area drag, the reference (jerk-limited speed profile viewpoint
+to viewpoint), the position loop of the SE(3) controller, photo
 triggers and failures. Motor thrusts, drag forces (world-frame force actuators on the free joint) and
 the desired attitudes enter the rollout through ``control_spec = CTRL | MOCAP_QUAT`` and are held over
 the chunk (zero-order hold, 50 ms by default: the position loop runs at 20 Hz); the attitude loop runs
