@@ -30,15 +30,11 @@ import time
 import numpy as np
 
 from wrp_eval.bench_record import BenchRecord
-from wrp_eval.ship.config import ShipSection
-from wrp_eval.ship.resolve import resolve_particulars
-from wrp_eval.sim.bench import warm_up_kernels
+from wrp_eval.sim.bench import moderate_wind, warm_up_kernels
 from wrp_eval.sim.config import SimSection
 from wrp_eval.sim.flight import FlightSimulator
 from wrp_eval.sim.navigation import NavigationSection
 from wrp_eval.sim.vehicle import GRAVITY_M_S2, PHANTOM4
-from wrp_eval.wind.config import TurbulenceSection, WindSection
-from wrp_eval.wind.field import build_wind_field
 
 BATCHES = (1, 64, 1024)
 SIM_S = 10.0
@@ -68,18 +64,10 @@ def rotorpy_params(section: SimSection) -> dict:
     }
 
 
-def wind_field(batch: int, dt_s: float):
-    """The batch's wind (synthetic marine field, 6 m/s at 10 m from the west, moderate Dryden), stepping by dt_s;
-    the default ship's particulars place the field (the hover point is upwind of its air wake)."""
-    wind = WindSection(speed_10m_mps=6.0, turbulence=TurbulenceSection(severity="moderate"))
-    particulars, _ = resolve_particulars(ShipSection(), ".")
-    return build_wind_field([wind] * batch, particulars, np.random.SeedSequence(0), dt_s)
-
-
 def wind_series(batch: int, dt_s: float, steps: int) -> np.ndarray:
     """(batch, steps, 3) m/s: the batch's wind at the hover point every dt_s (same seed and intensity as the field
     our flights get; the Dryden filter stepped at RotorPy's rate)."""
-    field = wind_field(batch, dt_s)
+    field = moderate_wind(SimSection(), batch, 0, dt_s)
     at = np.repeat(HOVER_POINT[None], batch, axis=0)
     return np.stack([field.velocity(at, k * dt_s) for k in range(steps)], axis=1)
 
@@ -143,14 +131,14 @@ def run_bench() -> list[BenchRecord]:
     records = []
     for batch in BATCHES:
         series = wind_series(batch, ROTORPY_DT_S, steps)
-        ours_wall, ours_err = ours_hover(batch, wind_field(batch, section.timestep_s * section.chunk_steps), section)
+        ours_wall, ours_err = ours_hover(batch, moderate_wind(section, batch, 0), section)
         peer_wall, peer_err = rotorpy_hover(batch, series, section)
         ours_rate, peer_rate = batch * SIM_S / ours_wall, batch * SIM_S / peer_wall
         note = (f"batch {batch}, {SIM_S:g} s hover in moderate Dryden turbulence (6 m/s mean), Phantom 4 mass and "
                 f"drag; ours MuJoCo {section.timestep_s * 1e3:g} ms with every sim default on, RotorPy 3.0.0 "
                 f"BatchedMultirotor rk4 {ROTORPY_DT_S * 1e3:g} ms + BatchedSE3Control, 1 torch thread")
         ideal = section.model_copy(update={"navigation": NavigationSection(preset="ideal")})
-        _, ideal_err = ours_hover(batch, wind_field(batch, section.timestep_s * section.chunk_steps), ideal)
+        _, ideal_err = ours_hover(batch, moderate_wind(section, batch, 0), ideal)
         target = ("issue 19 target", 10.0) if batch == 1024 else (None, None)
         records += [
             BenchRecord(f"peers.ours_drone_s_per_s.b{batch}", ours_rate, "drone-s/s", None, None, note),
