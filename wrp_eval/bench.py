@@ -24,6 +24,7 @@ BENCH_GROUPS: dict[str, str] = {
     "sim": "wrp_eval.sim.bench",
     "campaign": "wrp_eval.campaign.bench",
     "capture": "wrp_eval.campaign.capture_bench",
+    "mission": "wrp_eval.wrp.mission_bench",
     "wind": "wrp_eval.wind.bench",
     "ship": "wrp_eval.ship.bench",
     "plan": "wrp_eval.planning.bench",

@@ -18,6 +18,7 @@ from wrp_eval.campaign.rerun_log import campaign_recording_id
 from wrp_eval.errors import InputError
 from wrp_eval.experiment import ExperimentContext
 from wrp_eval.export.formats import FORMATS, export_path
+from wrp_eval.export.mission import FlightStyle
 from wrp_eval.planning.path import Path as FlightPath
 from wrp_eval.planning.rerun_log import save_plan_recording
 from wrp_eval.recording import merge_recordings
@@ -86,7 +87,7 @@ def run_pipeline(ctx: ExperimentContext, *, quiet: bool = True, smallest: bool =
                                    f"{config.campaign.oracle} oracle"):
         camp = campaign_job(ctx, out_dir=campaign_dir, progress=not quiet, path=path)
         summary["campaign"] = {"dir": str(campaign_dir), "trials": camp.done, "failed": camp.failed,
-                               "trials_per_min": camp.trials_per_min}
+                               "trials_per_min": camp.trials_per_min, "turbulence_stress": camp.stress_note}
 
     with Step(timings, "surrogate", "train the CNN surrogate on the campaign"):
         trained, trials, _ = train_from_campaign(ctx, campaign_dir, folders.surrogate, progress=not quiet)
@@ -97,6 +98,8 @@ def run_pipeline(ctx: ExperimentContext, *, quiet: bool = True, smallest: bool =
         summary["evaluate"] = evaluate_job(ctx, folders.evaluate, checkpoint=folders.surrogate / CHECKPOINT_NAME,
                                            campaign=campaign_dir, quiet=quiet, surrogate=trained.surrogate,
                                            trials=trials)
+        if camp.stress_note and summary["evaluate"].get("forecast"):
+            summary["evaluate"]["forecast"]["stress_notes"] = [f"**Stress test**: {camp.stress_note}.", ""]
 
     with Step(timings, "export", "missions of the three paths"):
         summary["missions"] = export_missions(ctx)
@@ -128,8 +131,9 @@ def export_missions(ctx: ExperimentContext) -> dict[str, list[str]]:
     missions: dict[str, list[str]] = {}
     for name, file in files.items():
         flight_path = FlightPath.load(file)
+        style = FlightStyle.of(flight_path, ctx.config.sim.capture, ctx.config.sim.dwell_s)   # as simulated
         for fmt, spec in FORMATS.items():
             written = export_path(flight_path, ship.particulars, ship.proxy, fmt,
-                                  folders.missions / f"{name}{spec.suffix}", ctx.config.export, str(file))
+                                  folders.missions / f"{name}{spec.suffix}", ctx.config.export, str(file), style)
             missions.setdefault(name, []).extend(str(f) for f, _ in written)
     return missions

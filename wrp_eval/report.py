@@ -113,7 +113,7 @@ def _design_text(design: str) -> str:
     """What a campaign's perturbation design means, for the report."""
     if design == "physical":
         return ("the path flown as planned (`physical` design: every capture error from the flight: navigation, "
-                "gimbal, fly-through capture, battery and wind limit, air wake, ship motion)")
+                "gimbal, capture mode, battery swaps and the autopilot's return rules, air wake, ship motion)")
     return f"commanded offsets from the campaign's `{design}` perturbation design"
 
 
@@ -131,11 +131,16 @@ def operator_section(ev: dict) -> list[str]:
         f"In the forecast wind ({fc['wind_speed_10m_mps']:g} m/s at 10 m from {fc['wind_direction_deg']:g} deg, "
         f"turbulence as the campaign draws it), {fc['trials']} simulated flights of the path to fly:",
         "",
-        "| P(meets spec) | CI | views not taken (mean) | expected sorties | CI |",
-        "|---|---|---|---|---|",
+        "| P(meets spec) | CI | views not taken (mean) | expected sorties | CI | P(one sortie) | mission time (s) |",
+        "|---|---|---|---|---|---|---|",
         f"| {fmt(fc.get('p_meets_spec'), 3)} | {_ci(ci)} | {fmt(fc.get('mean_views_not_taken'), 2)} | "
-        f"{fmt(fc.get('expected_sorties'), 3)} | {_ci(sorties_ci)} |",
+        f"{fmt(fc.get('expected_sorties'), 3)} | {_ci(sorties_ci)} | {fmt(fc.get('p_one_sortie'), 3)} | "
+        f"{fmt(fc.get('mean_mission_time_s'), 4)} |",
         "",
+        "Sorties: after a return home on energy the operator swaps the battery and resumes at the breakpoint "
+        "(`sim.mission`: up to max_sorties, swap_time_s on deck); the mission time counts the swaps.",
+        "",
+        *fc.get("stress_notes", []),
         f"Spec: error <= {fmt(fc.get('spec_error_m'), 4)} m and completeness >= {fmt(fc.get('spec_completeness'), 2)}. "
         f"GO needs the lower {ev['confidence']:.0%} bound of P(meets spec) >= {fc['go_probability']:g}. Where the "
         "error's spread comes from: the per-view risk map below (and `risk/viewpoints` in run.rrd).",
@@ -246,13 +251,14 @@ def write_report(ctx: ExperimentContext, path, summary: dict, trials: TrialData,
         lines.append(f"| {row['path']} | {row['mean_error_diff_m']:+.4f} | {_ci(row.get('mean_error_diff_ci'))} | "
                      f"{row['both_succeeded']} | {100 * row['failure_rate_diff']:+.1f} points |")
     if "robustness" in ev:
-        lines += ["", "| path | wind-free error (m) | P(meets spec) | CI | views not taken (mean) | expected sorties |",
-                  "|---|---|---|---|---|---|"]
+        lines += ["", "| path | wind-free error (m) | P(meets spec) | CI | views not taken (mean) | expected sorties | "
+                      "mission time (s) |",
+                  "|---|---|---|---|---|---|---|"]
         for row in ev["paths"]:
             lines.append(f"| {row['path']} | {fmt(ev['windfree_error_m'].get(row['path']), 4)} | "
                          f"{fmt(row.get('p_meets_spec'), 3)} | {_ci(row.get('p_meets_spec_ci'))} | "
                          f"{fmt(row.get('mean_views_not_taken'), 2)} | {fmt(row.get('expected_sorties'), 3)} "
-                         f"{_ci(row.get('expected_sorties_ci'))} |")
+                         f"{_ci(row.get('expected_sorties_ci'))} | {fmt(row.get('mean_mission_time_s'), 4)} |")
         spec = ev["paths"][0]
         lines += ["", f"Spec: error <= {fmt(spec.get('spec_error_m'), 4)} m and completeness >= "
                       f"{fmt(spec.get('spec_completeness'), 2)}.", "",

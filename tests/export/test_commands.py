@@ -84,3 +84,19 @@ def test_unsafe_path_refused_keeps_previous_output(path_file, config_file, tmp_p
     assert main(["export", str(path_file), "--format", "qgc-plan", "--out", str(out), "--config", str(strict)]) == 2
     assert "minimum altitude 30" in _one_error_line(capsys)
     assert not any(tmp_path.glob("m*.plan*"))
+
+
+def test_the_configs_capture_mode_is_exported(path_file, config_file, tmp_path, capsys):
+    from wrp_eval.export.litchi import read_litchi_csv
+
+    cfg = tmp_path / "through.yaml"
+    cfg.write_text(config_file.read_text() + "sim:\n  dwell_s: 3\n  capture: {mode: fly-through, corner_radius_m: 4}\n")
+    out = tmp_path / "m.csv"
+    assert main(["export", str(path_file), "--format", "litchi-csv", "--out", str(out), "--config", str(cfg)]) == 0
+    assert "capture mode fly-through" in capsys.readouterr().out
+    back = read_litchi_csv(tmp_path / "m_sortie0.csv")
+    assert back.turn_mode == "fly-through" and back.pass_radius_m == pytest.approx(4.0) and not back.hold_s.any()
+    assert main(["export", str(path_file), "--format", "litchi-csv", "--out", str(out),
+                 "--config", str(config_file)]) == 0           # no sim section: the default, stop
+    back = read_litchi_csv(tmp_path / "m_sortie0.csv")
+    assert back.turn_mode == "stop" and back.hold_s == pytest.approx(np.full(12, 2.0))   # the path's dwell

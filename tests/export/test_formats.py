@@ -14,7 +14,7 @@ from wrp_eval.errors import InputError
 from wrp_eval.export.config import ExportSection
 from wrp_eval.export.dji import KML_NS, WPML_NS
 from wrp_eval.export.formats import FORMATS, export_path, sortie_files, write_all_atomic
-from wrp_eval.export.mission import build_missions, home_point
+from wrp_eval.export.mission import FlightStyle, build_missions, home_point
 from wrp_eval.frames import compass_to_yaw_rad, geographic_to_ship, ship_pose, wrap_180
 from wrp_eval.export.qgc import qgc_plan_bytes
 from wrp_eval.ship.nofly import inside_no_fly_box
@@ -47,12 +47,13 @@ def test_qgc_wpl_loads_with_pymavlink(ship, path, section, tmp_path):
     loader = mavwp.MAVWPLoader()
     n = loader.load(str(file))
     k = len(mission)
-    assert n == 1 + 1 + 3 * k + 1          # home, takeoff, (waypoint, gimbal, photo) per view, RTL
+    assert n == 1 + 1 + 1 + 3 * k + 1      # home, takeoff, speed, (waypoint, gimbal, photo) per view, RTL
     wps = [loader.wp(i) for i in range(n)]
     mav = mavutil.mavlink
     assert wps[0].frame == mav.MAV_FRAME_GLOBAL and wps[0].z == pytest.approx(mission.home_alt_m)
     assert wps[1].command == mav.MAV_CMD_NAV_TAKEOFF
-    assert [w.command for w in wps[2:5]] == [mav.MAV_CMD_NAV_WAYPOINT, mav.MAV_CMD_DO_GIMBAL_MANAGER_PITCHYAW,
+    assert wps[2].command == mav.MAV_CMD_DO_CHANGE_SPEED and wps[2].param2 == pytest.approx(path.speed_m_s)
+    assert [w.command for w in wps[3:6]] == [mav.MAV_CMD_NAV_WAYPOINT, mav.MAV_CMD_DO_GIMBAL_MANAGER_PITCHYAW,
                                             mav.MAV_CMD_IMAGE_START_CAPTURE]
     assert wps[-1].command == mav.MAV_CMD_NAV_RETURN_TO_LAUNCH
     nav = [w for w in wps if w.command == mav.MAV_CMD_NAV_WAYPOINT and w.frame == mav.MAV_FRAME_GLOBAL_RELATIVE_ALT]
@@ -213,3 +214,53 @@ def test_a_failure_on_any_sortie_file_replaces_none(tmp_path):
     assert sorted(p.name for p in tmp_path.iterdir()) == ["m_sortie0.plan", "m_sortie1.plan", "not_a_folder"]
     write_all_atomic(outputs[:2])
     assert (first.read_bytes(), second.read_bytes()) == (b"new 0", b"new 1")
+
+
+# -- the simulated flight is the exported mission (issue 26) -------------------------------------------------
+@pytest.mark.parametrize("mode", ["stop", "fly-through"])
+@pytest.mark.parametrize("fmt", sorted(FORMATS))
+def test_every_file_is_flown_as_the_simulator_flies(fmt, mode, ship, path, section, tmp_path):
+    from wrp_eval.sim.config import SimSection
+
+    # a dwell of the simulator's own (1.5 s) that differs from the path's (2 s), and a corner radius of 3 m
+    sim = SimSection(dwell_s=1.5, capture={"mode": mode, "corner_radius_m": 3.0})
+    style = FlightStyle.of(path, sim.capture, sim.dwell_s)
+    particulars, proxy = ship
+    written = export_path(path, particulars, proxy, fmt, tmp_path / f"m{FORMATS[fmt].suffix}", section, style=style)
+    for file, mission in written:
+        back = FORMATS[fmt].read(file)
+        assert back.turn_mode == mode
+        hold = 1.5 if mode == "stop" else 0.0          # the simulator dwells sim.dwell_s only when it stops
+        np.testing.assert_allclose(back.hold_s, np.full(len(mission), hold))
+        assert back.speed_m_s == pytest.approx(path.speed_m_s)
+        assert back.photos == len(mission)
+        if fmt == "dji-wpml":                           # the one format that names its heading mode
+            assert back.heading_mode == sim.capture.heading_mode == "smoothTransition"
+        else:                                           # MAVLink and the Litchi CSV carry none (README)
+            assert back.heading_mode is None
+        if fmt != "dji-wpml":                           # DJI's pass-through turn has no radius to write
+            assert back.pass_radius_m == pytest.approx(3.0 if mode == "fly-through" else 0.0)
+
+
+def test_the_style_is_the_simulators(path):
+    from wrp_eval.sim.config import SimSection
+
+    default = FlightStyle.of(path, SimSection().capture, SimSection().dwell_s)
+    assert (default.mode, default.heading_mode, default.hold_s, default.speed_m_s) == (
+        "stop", "smoothTransition", path.dwell_s, path.speed_m_s)        # the path's dwell when sim.dwell_s is None
+    through = FlightStyle.of(path, SimSection(capture={"mode": "fly-through"}).capture, 4.0)
+    assert through.hold_s == 0.0 and through.pass_radius_m == SimSection().capture.corner_radius_m
+
+
+def test_dji_fly_through_passes_and_shoots_without_hovering(ship, path, section, tmp_path):
+    particulars, proxy = ship
+    style = FlightStyle("fly-through", "smoothTransition", 0.0, 5.0, 2.0)
+    (file, mission), _ = export_path(path, particulars, proxy, "dji-wpml", tmp_path / "m.kmz", section, style=style)
+    with zipfile.ZipFile(file) as kmz:
+        root = ET.fromstring(kmz.read("wpmz/waylines.wpml"))
+    funcs = [a.text for a in root.iter(f"{{{WPML_NS}}}actionActuatorFunc")]
+    assert funcs == ["gimbalRotate", "takePhoto"] * len(mission)
+    turns = {e.text for e in root.iter(f"{{{WPML_NS}}}waypointTurnMode")}
+    assert turns == {"toPointAndPassWithContinuityCurvature"}
+    triggers = {e.text for e in root.iter(f"{{{WPML_NS}}}actionTriggerType")}
+    assert triggers == {"reachPoint"}                   # the photo at the waypoint

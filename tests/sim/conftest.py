@@ -10,9 +10,10 @@ from wrp_eval.sim.config import SimSection
 from wrp_eval.sim.flight import FlightSimulator
 
 # the airframe, controller and flight logic alone: the truth as navigation, photos at rest with no trigger delay,
-# no battery or wind-limit return: the simulator before the capture realism of issue 16, bit for bit
+# no battery return (no wind-limit return either: off by default): the simulator before the capture realism of
+# issue 16, bit for bit
 CONTROLLER_ONLY = dict(navigation={"preset": "ideal"}, capture={"mode": "stop", "trigger_latency_s": 0.0},
-                       battery={"enabled": False}, wind_limit_m_s=None)
+                       battery={"enabled": False})
 
 
 @pytest.fixture(scope="session")

@@ -134,18 +134,29 @@ def test_same_seed_same_flight(controller_simulator, short_path):
     assert not np.allclose(a, c)
 
 
-def test_wind_beyond_capability_ends_the_sortie_without_a_failure(section, short_path):
-    # a real autopilot keeps trying against a 25 m/s wind (it cannot make headway) until its wind estimate has
-    # been over its limit for the averaging time: it turns home; the views not reached are not taken
+def test_wind_beyond_capability_loses_a_vehicle_that_can_neither_make_headway_nor_get_home(section, short_path):
+    # a real autopilot keeps trying against a 25 m/s wind (beyond the 35 deg tilt limit's ~18 m/s) until it has
+    # made no headway for the timeout; home lies upwind and 25 m/s beats its 13.9 m/s top airspeed: lost
     from wrp_eval.sim.flight import FlightSimulator
-    from wrp_eval.sim.flight_state import RETURNED_WIND
+    from wrp_eval.sim.flight_state import LOST_HEADWAY
     with FlightSimulator(section) as sim:
         res = sim.fly(short_path, ConstantWind([25.0, 0.0, 0.0]), batch=1)
-    assert not res.failed[0] and res.outcome[0] == RETURNED_WIND
-    assert "wind estimate over 10 m/s" in res.outcome_reason[0] and res.failure_reason[0] == ""
-    assert res.flight_time_s[0] == pytest.approx(section.wind_average_s, abs=0.06)
+    assert res.failed[0] and res.outcome[0] == LOST_HEADWAY
+    assert res.outcome_reason[0].startswith("lost: no headway") and res.failure_reason[0] != ""
+    timeout = section.mission.headway_timeout_s
+    assert timeout <= res.flight_time_s[0] <= timeout + 10.0
     assert len(res.captures[0]) < len(short_path)
     assert np.isnan(res.offsets[0, ~res.taken[0]]).all()
+
+
+def test_a_vehicle_without_headway_that_can_still_get_home_returns_home(section, short_path):
+    from wrp_eval.sim.flight import FlightSimulator
+    from wrp_eval.sim.flight_state import RETURNED_HEADWAY
+    with FlightSimulator(section.model_copy(update={"mission": section.mission.model_copy(
+            update={"return_airspeed_m_s": 30.0})})) as sim:
+        res = sim.fly(short_path, ConstantWind([25.0, 0.0, 0.0]), batch=1)
+    assert not res.failed[0] and res.outcome[0] == RETURNED_HEADWAY
+    assert "no headway" in res.outcome_reason[0]
 
 
 def test_gimbal_range_limits_the_pitch(controller_simulator):
@@ -252,3 +263,23 @@ def test_a_moving_ship_in_the_scene_follows_its_models_first_flight(controller_s
             assert abs(translation[0, 2]) > 1e-3            # it does move (sea state 5 heave)
         res = sim.fly(path, ConstantWind([3.0, 0.0, 0.0]), batch=2, ship=ship, flight_rngs=1)
     assert res.taken.all() and np.abs(res.ship_motion[:, :, 0]).max() > 1e-3
+
+
+def test_a_vehicle_blown_out_of_the_wind_field_is_lost_without_an_exception(section, short_path):
+    # a 25 m/s westerly on a grid 120 m wide: the vehicle drifts downwind out of the field; that flight ends
+    # "lost: left the wind field" while the other one, in a light wind on the same grid, completes
+    from wrp_eval.sim.flight import FlightSimulator
+    from wrp_eval.sim.flight_state import COMPLETED, LOST_OUTSIDE
+    from wrp_eval.wind.grid import GriddedMeanWind, WindGrid
+    x, y, z = np.linspace(-60.0, 60.0, 13), np.linspace(-60.0, 60.0, 13), np.array([0.0, 10.0, 40.0, 80.0])
+    heights = np.broadcast_to(z, (13, 13, 4)).copy()
+    strong, light = np.zeros((13, 13, 4, 3)), np.zeros((13, 13, 4, 3))
+    strong[..., 0], light[..., 0] = 25.0, 2.0
+    wind = GriddedMeanWind([WindGrid(x, y, heights, strong), WindGrid(x, y, heights, light)], "trilinear",
+                           flight_field=np.array([0, 1]))
+    with FlightSimulator(section.model_copy(update={"mission": section.mission.model_copy(
+            update={"headway_timeout_s": 600.0})})) as sim:
+        res = sim.fly(short_path, wind, batch=2)
+    assert res.outcome.tolist() == [LOST_OUTSIDE, COMPLETED] and res.failed.tolist() == [True, False]
+    assert res.outcome_reason[0].startswith("lost: left the wind field")
+    assert res.taken[1].all() and not res.taken[0].all()

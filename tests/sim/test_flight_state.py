@@ -11,9 +11,14 @@ from wrp_eval.sim.flight_state import (
     DONE,
     ENDED,
     FAILURES,
+    LOST_HEADWAY,
+    LOST_OUTSIDE,
     NON_FINITE,
+    OUTCOME_NAMES,
     RETURNED_BATTERY,
+    RETURNED_HEADWAY,
     RETURNED_WIND,
+    RETURNED_WIND_AVERAGE,
     SETTLE,
     TIMED_OUT,
     TRAJECTORY_FIELDS,
@@ -76,14 +81,17 @@ def test_segment_rows_are_replaced_in_place():
     assert seg.v_max.tolist() == [0.0, 4.0, 0.0]
 
 
-def test_only_crashes_and_the_time_limit_are_failures():
-    state = FlightState.start(_targets(6))
-    state.outcome[:] = [COMPLETED, NON_FINITE, DITCHED, TIMED_OUT, RETURNED_BATTERY, RETURNED_WIND]
-    state.phase[:] = [DONE] + [ENDED] * 5
-    assert set(FAILURES) == {NON_FINITE, DITCHED, TIMED_OUT}
-    # going home on the battery reserve or the wind limit is what a real autopilot does: not a failure
-    assert state.failed.tolist() == [False, True, True, True, False, False]
-    assert not state.flying.any()
+def test_only_crashes_lost_vehicles_and_the_time_limit_are_failures():
+    state = FlightState.start(_targets(10))
+    state.outcome[:] = [COMPLETED, NON_FINITE, DITCHED, TIMED_OUT, RETURNED_BATTERY, RETURNED_WIND,
+                        RETURNED_WIND_AVERAGE, RETURNED_HEADWAY, LOST_HEADWAY, LOST_OUTSIDE]
+    state.phase[:] = [DONE] + [ENDED] * 9
+    assert set(FAILURES) == {NON_FINITE, DITCHED, TIMED_OUT, LOST_HEADWAY, LOST_OUTSIDE}
+    # going home on the battery reserve, a wind limit or without headway is what a real autopilot does: not a
+    # failure; a vehicle that can neither make headway nor get home, or is blown out of the field, is lost
+    assert state.failed.tolist() == [False, True, True, True, False, False, False, False, True, True]
+    assert not state.flying.any() and not state.active.any()
+    assert len(OUTCOME_NAMES) == 10
 
 
 def test_capture_log_measures_true_and_recorded_offsets_against_the_plan():

@@ -1,5 +1,6 @@
-"""Navigation estimate: GM closed forms, hold at the fix rate, latency, ideal == truth, near-hull taper, batch
-independence, preset derivations (hover spec, PX4 plugin recursion) and config validation."""
+"""Navigation estimate: GM closed forms, hold at the fix rate (raw-fix), the fused GNSS + IMU filter (Riccati
+gains, matched covariance, smoothness, GM offset kept), latency, ideal == truth, near-hull taper, batch
+independence, seeds, preset derivations (hover spec, PX4 plugin recursion) and config validation."""
 
 from __future__ import annotations
 
@@ -12,12 +13,16 @@ from scipy.signal import lfilter
 
 from wrp_eval.errors import InputError
 from wrp_eval.sim.navigation import (
+    EKF2_GPS_DELAY_S,
+    FILTER_ACCEL_PSD,
     K95_1D,
     K95_2D,
     NavigationEstimator,
     NavigationSection,
     hover_p95_spec_m,
     navigation_params,
+    fusion_gain,
+    inertial_error_step,
     near_hull_taper,
     px4_plugin_gm,
 )
@@ -26,9 +31,10 @@ from wrp_eval.validation import parse_model
 DT = 0.05  # the simulator's control chunk (20 Hz)
 
 
-def make(n: int, seed: int = 0, **overrides) -> NavigationEstimator:
-    """An estimator whose error terms are only ``overrides`` (on top of the all-zero ideal preset)."""
-    params = navigation_params(NavigationSection(preset="ideal", **overrides))
+def make(n: int, seed: int = 0, estimator: str = "raw-fix", **overrides) -> NavigationEstimator:
+    """An estimator whose error terms are only ``overrides`` (on top of the all-zero ideal preset); raw fixes
+    unless ``estimator`` says "fused" (the fix error model itself is what most tests here check)."""
+    params = navigation_params(NavigationSection(preset="ideal", estimator=estimator, **overrides))
     return NavigationEstimator(params, seed, n, DT, block_steps=64)
 
 
@@ -87,6 +93,9 @@ def test_latency_makes_the_estimate_lag_by_velocity_times_delay():
     np.testing.assert_allclose(out.position, pos - vel * 0.12, rtol=0, atol=1e-12)
     np.testing.assert_array_equal(out.velocity, vel)
     np.testing.assert_array_equal(out.yaw_error, 0.0)
+    # the fused filter compensates EKF2_GPS_DELAY (0.11 s) of it: 10 ms are left
+    fused = make(4, seed=4, estimator="fused", latency_s=0.12).estimate(0.0, pos, vel, np.zeros(4))
+    np.testing.assert_allclose(fused.position_error, -vel * (0.12 - EKF2_GPS_DELAY_S), rtol=0, atol=1e-15)
 
 
 def test_ideal_is_the_truth_bit_for_bit_and_draws_nothing():
@@ -120,9 +129,11 @@ def test_near_hull_bias_applies_only_within_the_distance():
     assert taper[0] == 1.0 and taper[-1] == 0.0 and np.all(np.diff(taper) < 0)
 
 
-def test_row_of_a_batch_equals_the_flight_alone():
+@pytest.mark.parametrize("estimator", ["fused", "raw-fix"])
+def test_row_of_a_batch_equals_the_flight_alone(estimator):
     seeds = np.random.SeedSequence(11).spawn(3)
-    params = navigation_params(NavigationSection(preset="consumer", update_rate_hz=5.0, latency_s=0.1))
+    params = navigation_params(NavigationSection(preset="consumer", update_rate_hz=5.0, latency_s=0.1,
+                                                 estimator=estimator))
     batch = NavigationEstimator(params, [np.random.default_rng(s) for s in seeds], 3, DT, block_steps=16)
     alone = NavigationEstimator(params, [np.random.default_rng(seeds[1])], 1, DT, block_steps=7)
     rng = np.random.default_rng(12)
@@ -148,6 +159,70 @@ def test_white_noise_and_constant_heading_bias_statistics():
     assert np.std(yerr[0]) == pytest.approx(math.radians(math.hypot(2.0, 0.5)), rel=0.06)
     # the bias is constant per flight: it cancels in a difference of two fixes, the noise does not
     assert np.std(yerr[1] - yerr[0]) == pytest.approx(math.radians(0.5) * math.sqrt(2), rel=0.06)
+
+
+def test_fusion_gain_solves_its_riccati_equation():
+    # P = F (P - P (P + R)^-1 P) F^T + Q and K = P (P + R)^-1 (H = I), for the consumer's horizontal filter
+    interval, rp, rv = 0.1, 0.613, 0.3
+    k, p = fusion_gain(FILTER_ACCEL_PSD, interval, rp, rv)
+    f, q = inertial_error_step(FILTER_ACCEL_PSD, interval)
+    r = np.diag([rp**2, rv**2])
+    np.testing.assert_allclose(f @ (p - p @ np.linalg.solve(p + r, p)) @ f.T + q, p, rtol=1e-9)
+    np.testing.assert_allclose(k, p @ np.linalg.inv(p + r), rtol=1e-12)
+    assert np.all(np.abs(np.linalg.eigvals(f @ (np.eye(2) - k))) < 1)      # the error dynamics are stable
+    assert 0 < k[0, 0] < 0.2 and 0 < k[1, 1] < 0.2                        # a fix moves the estimate a little
+    # the estimator's gains are those of its preset's fix interval and EKF2's observation noise floors
+    params = navigation_params(NavigationSection(preset="consumer"))
+    est = NavigationEstimator(params, 0, 1, DT)
+    h, v, vh, vv, _ = params.filter_noise
+    assert (h, v, vh, vv) == pytest.approx((math.hypot(params.horizontal_sigma_m, params.white_noise_m), 0.75,
+                                            0.3, 0.45))
+    np.testing.assert_allclose(est.gains[0], fusion_gain(FILTER_ACCEL_PSD, 0.1, h, vh)[0], rtol=1e-12)
+    np.testing.assert_allclose(est.gains[1], fusion_gain(FILTER_ACCEL_PSD, 0.1, v, vv)[0], rtol=1e-12)
+
+
+def test_fused_error_covariance_is_the_filters_own_when_the_noises_match_its_model():
+    # White fix errors equal to the filter's observation noise (0.5 m, 0.3 m/s), no GM, an IMU error equal to
+    # its process noise: the simulated error after a fix has the Kalman posterior covariance (I - K) P.
+    # 3000 flights x 2 axes: rel. std of a variance sqrt(2/6000) = 1.8 %, tolerance 8 %.
+    n = 3000
+    est = make(n, seed=21, estimator="fused", white_noise_m=0.5, velocity_noise_m_s=0.3, update_rate_hz=10.0,
+               accel_noise_density=math.sqrt(FILTER_ACCEL_PSD))
+    k, p = fusion_gain(FILTER_ACCEL_PSD, 0.1, 0.5, 0.3)
+    post = (np.eye(2) - k) @ p
+    err, verr, _ = run(est, 401)                  # 20 s: the filter's slowest mode has decayed (e^-8)
+    pe, ve = err[400, :, :2].ravel(), verr[400, :, :2].ravel()     # step 400 brings a fix
+    assert np.var(pe) == pytest.approx(post[0, 0], rel=0.08)
+    assert np.var(ve) == pytest.approx(post[1, 1], rel=0.08)
+    assert np.mean(pe * ve) == pytest.approx(post[0, 1], abs=0.1 * math.sqrt(post[0, 0] * post[1, 1]))
+    assert math.sqrt(post[1, 1]) < 0.3 / 4                         # far below the 0.3 m/s per-fix noise
+
+
+def test_fused_estimate_is_smooth_where_raw_fixes_step_and_keeps_the_gm_offset():
+    # The consumer preset, 1000 flights, 40 s. Raw fixes: every fix steps the velocity error by ~sqrt(2) x
+    # 0.05 m/s; fused: the IMU carries it between fixes, the fixes nudge it: chunk-to-chunk changes < 1/4.
+    n, steps = 1000, 801
+    raw = run(NavigationEstimator(navigation_params(NavigationSection(preset="consumer", estimator="raw-fix")),
+                                  31, n, DT), steps)
+    fused = run(NavigationEstimator(navigation_params(NavigationSection(preset="consumer")), 31, n, DT), steps)
+    late = slice(steps // 2, None)
+    jump_raw = np.std(np.diff(raw[1][late, :, :2], axis=0))
+    jump_fused = np.std(np.diff(fused[1][late, :, :2], axis=0))
+    assert jump_fused < 0.25 * jump_raw
+    assert np.std(np.diff(fused[0][late, :, :2], axis=0)) < 0.25 * np.std(np.diff(raw[0][late, :, :2], axis=0))
+    # the slow GM offset passes the filter: the position error's 95 % radius is still the spec (1.5 m; 1000
+    # flights: the p95 of a Rayleigh radius has rel. std ~2.3 %, tolerance 10 %), and it is the raw one's
+    radius = np.hypot(fused[0][-1, :, 0], fused[0][-1, :, 1])
+    assert np.quantile(radius, 0.95) == pytest.approx(1.5, rel=0.10)
+    assert np.corrcoef(fused[0][-1, :, 0], raw[0][-1, :, 0])[0, 1] > 0.99
+
+
+def test_same_seed_same_numbers_other_seed_other_numbers():
+    params = navigation_params(NavigationSection(preset="consumer"))
+    a, b, c = (run(NavigationEstimator(params, s, 3, DT, block_steps=b), 30) for s, b in ((5, 8), (5, 64), (6, 8)))
+    for x, y in zip(a, b):
+        np.testing.assert_array_equal(x, y)
+    assert not np.array_equal(a[0], c[0])
 
 
 def test_baro_drift_alone_is_linear_in_time():

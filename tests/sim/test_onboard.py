@@ -14,7 +14,7 @@ from wrp_eval.sim.flight import FlightSimulator
 from wrp_eval.sim.flight_state import (
     COMPLETED,
     RETURNED_BATTERY,
-    RETURNED_WIND,
+    RETURNED_WIND_AVERAGE,
     FlightTargets,
 )
 from wrp_eval.sim.navigation import (
@@ -99,18 +99,21 @@ def _wind_average(speed: float, tau: float, dt: float, n: np.ndarray) -> np.ndar
     return np.where(n <= n_star, speed * (n - 1) / n, speed - speed / n_star * np.exp(-(n - n_star) * dt / tau))
 
 
-def test_the_wind_estimate_is_a_first_order_average_judged_after_its_time_constant():
+def test_the_operator_wind_average_is_a_first_order_average_judged_after_its_time_constant():
     tau, dt, limit = 1.0, 0.05, 9.8
-    sec = SimSection(navigation={"preset": "ideal"}, wind_average_s=tau, wind_limit_m_s=limit)
+    sec = SimSection(navigation={"preset": "ideal"},
+                     mission={"operator_wind_average_s": tau, "operator_wind_limit_m_s": limit})
     targets = FlightTargets.from_path(make_path(2), 3, None, PHANTOM4.camera_offset_m)
     onboard = Onboard(sec, PHANTOM4, targets, None, 0, dt, 5.0, Camera())
     home = targets.body[:, 0]
-    onboard.must_return(home, np.array([[0.0, 0.0, 0.0], [0.0, 0.0, 0.0], [0.0, 12.0, 0.0]]))   # at take-off
+    onboard.decide(home, np.array([[0.0, 0.0, 0.0], [0.0, 0.0, 0.0], [0.0, 12.0, 0.0]]))   # at take-off
     wind = np.array([[10.0, 0.0, 3.0], [0.0, 9.7, 0.0], [0.0, 12.0, 0.0]])     # the vertical part is not judged
-    estimate, over = [], []
+    estimate, over, px4 = [], [], []
     for _ in range(80):
-        over.append(onboard.must_return(home, wind)[1])
-        estimate.append(onboard.wind_estimate.copy())
+        decisions = onboard.decide(home, wind)
+        over.append(decisions.operator_wind)
+        px4.append(decisions.px4_wind)
+        estimate.append(onboard.wind_estimate.average.copy())
     estimate, over = np.array(estimate), np.array(over)
     n = np.arange(2, 82)                                             # samples so far, the calm one included
     assert estimate[:, 0, 0] == pytest.approx(_wind_average(10.0, tau, dt, n), rel=1e-9)
@@ -122,12 +125,25 @@ def test_the_wind_estimate_is_a_first_order_average_judged_after_its_time_consta
     assert over[:, 2].tolist() == judged.tolist() and not over[:, 1].any()
     assert over[:, 0].tolist() == (judged & (_wind_average(10.0, tau, dt, n) > limit)).tolist()
     assert over[:, 0].sum() > 0 and np.flatnonzero(over[:, 0])[0] > np.flatnonzero(judged)[0]
+    assert not np.any(px4)                                            # the PX4-style limit is off by default
+
+
+def test_the_px4_style_limit_judges_the_current_estimate_at_once():
+    tau, dt = 10.0, 0.05
+    sec = SimSection(navigation={"preset": "ideal"}, mission={"wind_estimate_tau_s": tau, "px4_wind_limit_m_s": 9.0})
+    targets = FlightTargets.from_path(make_path(2), 2, None, PHANTOM4.camera_offset_m)
+    onboard = Onboard(sec, PHANTOM4, targets, None, 0, dt, 5.0, Camera())
+    home = targets.body[:, 0]
+    wind = np.array([[10.0, 0.0, 0.0], [8.0, 0.0, 0.0]])
+    first = onboard.decide(home, wind)        # the estimate starts at the first sample: no averaging time
+    assert first.px4_wind.tolist() == [True, False] and not first.operator_wind.any()
+    assert onboard.wind_estimate.current[:, 0].tolist() == [10.0, 8.0]
 
 
 # -- flights --------------------------------------------------------------------------------------------------
 def test_calm_ideal_fly_through_takes_every_view_near_the_plan_with_finite_blur():
     path = make_path(4)
-    with _simulator(navigation={"preset": "ideal"}) as sim:
+    with _simulator(navigation={"preset": "ideal"}, capture={"mode": "fly-through"}) as sim:
         res = sim.fly(path, CALM, batch=2, ship=ShipInScene(BOX, wind_speed_10m_m_s=0.0))   # calm: a still sea
         open_sea = sim.fly(path, CALM, batch=1)
     assert res.outcome.tolist() == [COMPLETED, COMPLETED] and not res.failed.any() and res.taken.all()
@@ -193,7 +209,7 @@ def test_a_tiny_battery_sends_the_flight_home_with_its_reserve():
     capacity_wh = 0.3                          # about 6 s of flight above the 15 % reserve
     dt = 0.05
     with _simulator(navigation={"preset": "ideal"}, battery={"capacity_wh": capacity_wh},
-                    record_interval_s=dt) as sim:
+                    record_interval_s=dt, mission={"max_sorties": 1}) as sim:
         res = sim.fly(path, CALM, batch=1)
         sec = sim.section
     assert res.outcome.tolist() == [RETURNED_BATTERY] and not res.failed[0]
@@ -218,12 +234,40 @@ def test_a_tiny_battery_sends_the_flight_home_with_its_reserve():
     assert tr.charge[0, -1] == tr.charge[0, end - 1]         # an ended flight draws nothing
 
 
-def test_a_wind_over_the_limit_sends_the_flight_home_after_the_averaging_time():
+def test_a_battery_return_is_followed_by_a_swap_and_a_sortie_resumed_at_the_breakpoint():
+    path = make_path(6)
+    capacity_wh, swap_s = 0.9, 20.0            # about 16 s of flight above the 15 % reserve per battery
+    # capacity sized for fly-through (the mode it was written for; the default is stop since issue 26)
+    with _simulator(navigation={"preset": "ideal"}, battery={"capacity_wh": capacity_wh}, capture={"mode": "fly-through"},
+                    mission={"max_sorties": 10, "swap_time_s": swap_s}) as sim:
+        swapped = sim.fly(path, CALM, batch=1)
+    with _simulator(navigation={"preset": "ideal"}, battery={"capacity_wh": capacity_wh}, capture={"mode": "fly-through"},
+                    mission={"max_sorties": 1}) as sim:
+        single = sim.fly(path, CALM, batch=1)
+    assert single.outcome.tolist() == [RETURNED_BATTERY] and single.sorties.tolist() == [1]
+    # with sorties enough, every view is taken, each by exactly one sortie, in order
+    assert swapped.outcome.tolist() == [COMPLETED] and swapped.taken.all() and swapped.sorties[0] >= 2
+    assert np.all(np.diff(swapped.view_sortie[0]) >= 0) and swapped.view_sortie[0, 0] == 1
+    assert swapped.views_per_sortie.sum() == len(path) and swapped.views_per_sortie.shape == (1, swapped.sorties[0])
+    # the first sortie is the single-sortie flight until it turns home
+    first = swapped.view_sortie[0] == 1
+    assert np.array_equal(first, single.taken[0])
+    np.testing.assert_array_equal(swapped.offsets[0, first], single.offsets[0, first])
+    # each swap costs at least the time on deck: the mission takes longer than its flying
+    assert swapped.flight_time_s[0] > single.flight_time_s[0] + (swapped.sorties[0] - 1) * swap_s
+    # each resumed sortie starts with a fresh battery (less the way back to the breakpoint): the charge rises
+    # once per swap and never otherwise; it is not drawn while on deck
+    rises = np.diff(swapped.trajectory.charge[0]) > 0.0
+    assert rises.sum() == swapped.sorties[0] - 1
+
+
+def test_a_wind_over_the_operator_limit_sends_the_flight_home_after_the_averaging_time():
     tau = 1.0
-    with _simulator(navigation={"preset": "ideal"}, wind_limit_m_s=3.0, wind_average_s=tau) as sim:
+    with _simulator(navigation={"preset": "ideal"},
+                    mission={"operator_wind_limit_m_s": 3.0, "operator_wind_average_s": tau}) as sim:
         res = sim.fly(make_path(4), ConstantWind([4.0, -1.0, 0.0]), batch=2)
         dt = sim.section.timestep_s * sim.section.chunk_steps
-    assert res.outcome.tolist() == [RETURNED_WIND] * 2 and not res.failed.any()
+    assert res.outcome.tolist() == [RETURNED_WIND_AVERAGE] * 2 and not res.failed.any()
     # a constant wind is its own average: judged (and over the limit) as soon as the average has had tau
     assert tau <= res.flight_time_s[0] <= tau + dt + 1e-9
     assert "wind" in res.outcome_reason[0] and "3 m/s" in res.outcome_reason[0]
@@ -244,13 +288,16 @@ class _StepWind:
 
 def test_a_rising_wind_turns_the_flight_when_its_average_crosses_the_limit():
     tau, limit = 1.0, 9.8
+    # the old keys sim.wind_limit_m_s / wind_average_s (stored campaigns) are read as the operator policy
     with _simulator(navigation={"preset": "ideal"}, wind_limit_m_s=limit, wind_average_s=tau) as sim:
+        assert sim.section.mission.operator_wind_limit_m_s == limit
+        assert sim.section.mission.operator_wind_average_s == tau
         res = sim.fly(make_path(3), _StepWind([10.0, 6.0]), batch=2)
         dt = sim.section.timestep_s * sim.section.chunk_steps
     # calm at the first chunk, then 10 m/s: the chunk whose average first exceeds 9.8 m/s (after tau)
     n = np.arange(2, 200)
     first = n[_wind_average(10.0, tau, dt, n) > limit][0]
-    assert res.outcome.tolist() == [RETURNED_WIND, COMPLETED]
+    assert res.outcome.tolist() == [RETURNED_WIND_AVERAGE, COMPLETED]
     assert res.flight_time_s[0] == pytest.approx((first - 1) * dt) and (first - 1) * dt > tau
     assert res.taken[1].all()
 

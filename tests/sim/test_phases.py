@@ -7,14 +7,18 @@ from wrp_eval.sim.capture_mode import through_profile, trigger_planes
 from wrp_eval.sim.config import SimSection
 from wrp_eval.sim.controller import GAIN_PRESETS, PositionController
 from wrp_eval.sim.flight_state import (
+    AWAY,
     COMPLETED,
     DITCHED,
     DONE,
     DWELL,
     ENDED,
+    LOST_HEADWAY,
     NON_FINITE,
     RETURNED_BATTERY,
+    RETURNED_HEADWAY,
     RETURNED_WIND,
+    RETURNED_WIND_AVERAGE,
     SETTLE,
     TIMED_OUT,
     TRANSIT,
@@ -32,12 +36,15 @@ from wrp_eval.sim.phases import (
     check_failures,
     check_returns,
     control,
+    no_headway,
     outcome_reasons,
     parked_pose,
     passing_views,
     plan_segments,
     reference,
+    resume,
     setpoints,
+    swap_batteries,
     take_photos,
     tick,
     transitions,
@@ -147,7 +154,7 @@ def test_the_profile_follows_the_capture_mode():
     assert THROUGH.through and not PROFILE.through
     assert PROFILE.jerk_window_s == pytest.approx(SEC.acceleration_m_s2 / SEC.jerk_m_s3)     # T = a / j
     assert Profile.of(5.0, STOP_SEC.model_copy(update={"jerk_m_s3": None})).jerk_window_s == 0.0
-    assert SEC.capture.mode == "fly-through"                      # the default
+    assert SEC.capture.mode == "stop"                             # the default (issue 26: inspection missions stop)
 
 
 def test_fly_through_segments_run_from_v0_to_v1():
@@ -197,30 +204,76 @@ def test_flights_still_flying_at_the_time_limit_fail():
     cause = check_failures(state, pos, np.zeros((3, 3)), out_of_time=True)
     assert cause.tolist() == [TIMED_OUT, COMPLETED, DITCHED]
     apply_endings(state, cause, 12.0)
-    assert outcome_reasons(state, SEC) == (f"not finished within max_flight_time_s={SEC.max_flight_time_s:g}",
+    assert outcome_reasons(state, SEC) == (f"a sortie not finished within max_flight_time_s={SEC.max_flight_time_s:g}",
                                            "", "ditched (below sea level) at t=12.00s")
     assert state.flight_time.tolist() == [12.0, 0.0, 12.0]
 
 
-def test_the_autopilot_returns_home_on_its_battery_or_wind_limit_without_failing():
-    state = FlightState.start(_targets(5))
-    state.photo[:] = [1, 1, 2, 0, 0]
+def test_the_autopilot_returns_home_on_its_battery_wind_limit_or_headway_without_failing():
+    sec = SimSection(mission={"px4_wind_limit_m_s": 12.0, "operator_wind_limit_m_s": 10.0})
+    state = FlightState.start(_targets(7))
+    state.photo[:] = [1, 1, 2, 0, 0, 3, 3]
     state.phase[4] = ENDED                      # already ended: no new outcome
     state.outcome[4] = DITCHED
-    battery = np.array([True, False, True, False, True])
-    wind = np.array([False, True, True, False, True])
-    cause = check_returns(state, battery, wind)
-    assert cause.tolist() == [RETURNED_BATTERY, RETURNED_WIND, RETURNED_BATTERY, COMPLETED, COMPLETED]
+    battery = np.array([True, False, True, False, True, False, False])
+    px4 = np.array([False, True, True, False, True, False, False])
+    operator = np.array([False, True, False, False, False, False, False])
+    stuck = np.array([False, False, False, False, True, True, True])
+    reachable = np.array([True, True, True, True, True, True, False])
+    cause = check_returns(state, battery, px4, operator, stuck, reachable)
+    assert cause.tolist() == [RETURNED_BATTERY, RETURNED_WIND, RETURNED_BATTERY, COMPLETED, COMPLETED,
+                              RETURNED_HEADWAY, LOST_HEADWAY]
     apply_endings(state, cause, 4.5)
-    assert state.outcome.tolist() == [RETURNED_BATTERY, RETURNED_WIND, RETURNED_BATTERY, COMPLETED, DITCHED]
-    assert state.phase.tolist() == [ENDED, ENDED, ENDED, SETTLE, ENDED]
-    assert state.flight_time.tolist() == [4.5, 4.5, 4.5, 0.0, 0.0]
-    assert state.failed.tolist() == [False, False, False, False, True]
-    reasons = outcome_reasons(state, SEC)
-    assert "battery" in reasons[0] and f"({SEC.battery.reserve:g})" in reasons[0]
-    assert "t=4.50s" in reasons[0] and reasons[0].endswith("(before view 1)")
-    assert "wind" in reasons[1] and f"{SEC.wind_limit_m_s:g} m/s" in reasons[1] and "before view 1" in reasons[1]
-    assert reasons[2].endswith("(before view 2)") and reasons[3] == ""
+    assert state.outcome.tolist() == [RETURNED_BATTERY, RETURNED_WIND, RETURNED_BATTERY, COMPLETED, DITCHED,
+                                      RETURNED_HEADWAY, LOST_HEADWAY]
+    assert state.phase.tolist() == [ENDED, ENDED, ENDED, SETTLE, ENDED, ENDED, ENDED]
+    assert state.flight_time.tolist() == [4.5, 4.5, 4.5, 0.0, 0.0, 4.5, 4.5]
+    assert state.failed.tolist() == [False, False, False, False, True, False, True]     # lost = failed
+    reasons = outcome_reasons(state, sec)
+    assert "battery" in reasons[0] and f"({sec.battery.reserve:g})" in reasons[0]
+    assert "t=4.50s" in reasons[0] and "(before view 1;" in reasons[0]
+    assert "PX4-style limit 12 m/s" in reasons[1] and "before view 1" in reasons[1]
+    assert reasons[2].startswith("returned home: battery") and "(before view 2;" in reasons[2] and reasons[3] == ""
+    assert "no headway towards view 3" in reasons[5] and reasons[6].startswith("lost: no headway")
+    operator_only = check_returns(FlightState.start(_targets(1)), *(np.array([v]) for v in
+                                                                    (False, False, True, False, True)))
+    assert operator_only.tolist() == [RETURNED_WIND_AVERAGE]
+
+
+def test_no_headway_needs_the_timeout_without_progress_beyond_the_leash():
+    state = FlightState.start(_targets(3))
+    state.phase[:] = TRANSIT
+    state.segment.end[:] = [[100.0, 0.0, 20.0]] * 3
+    timeout, progress, leash = 30.0, 1.0, 2.0
+    # row 0 makes progress, row 1 is held 10 m short, row 2 hovers at its waypoint (within the leash)
+    for t in np.arange(0.0, 31.0, 1.0):
+        pos = np.array([[50.0 + t, 0.0, 20.0], [90.0, 0.0, 20.0], [99.0, 0.0, 20.0]])
+        stuck = no_headway(state, pos, float(t), timeout, progress, leash)
+        if t < timeout:
+            assert not stuck.any()
+    assert stuck.tolist() == [False, True, False]
+    state.index[1] = 1                   # a new waypoint starts a new record
+    assert not no_headway(state, pos, 31.0, timeout, progress, leash).any()
+
+
+def test_a_battery_return_with_sorties_left_is_a_swap_and_the_resume_flies_from_the_breakpoint():
+    targets = _targets(4)
+    state = FlightState.start(targets)
+    state.index[:] = 1
+    state.photo[:] = 1
+    state.sortie[:] = [1, 3, 2, 2]
+    state.view_sortie[:, 0] = [1, 3, 2, 1]          # flight 3's second sortie took no view
+    cause = np.array([RETURNED_BATTERY, RETURNED_BATTERY, COMPLETED, RETURNED_BATTERY])
+    away, left = swap_batteries(state, cause, max_sorties=3)
+    assert away.tolist() == [0] and left.tolist() == [COMPLETED, RETURNED_BATTERY, COMPLETED, RETURNED_BATTERY]
+    assert state.phase[0] == AWAY and not state.flying[0] and state.active[0]
+    breakpoint_ = np.array([[5.0, 1.0, 20.0]])
+    profile = Profile(5.0, 2.5, 0.0)
+    resume(state, targets, away, breakpoint_, np.array([0.3]), 400.0, profile)
+    assert state.phase[0] == TRANSIT and state.sortie[0] == 2 and state.sortie_start[0] == 400.0
+    np.testing.assert_array_equal(state.segment.start[0], breakpoint_[0])
+    np.testing.assert_array_equal(state.segment.end[0], targets.body[0, 1])
+    assert state.segment.yaw0[0] == 0.3 and state.phase_time[0] == 0.0
 
 
 def test_no_cause_changes_nothing():

@@ -86,3 +86,24 @@ def test_bad_grids_are_refused():
     with pytest.raises(InputError, match="unknown method"):
         GriddedMeanWind(WindGrid(x, x, np.broadcast_to([0.0, 1.0], (2, 2, 2)).copy(), np.zeros((2, 2, 2, 3))),
                         "cubic")
+
+
+def test_inside_tells_exactly_which_points_velocity_answers_for(random_grid):
+    # random points around the (rotated, terrain-following) grid: a point is inside iff interpolating it alone
+    # does not raise; NaN is outside; with clamp everything is inside
+    model = GriddedMeanWind(random_grid, "idw")
+    nodes = random_grid.node_positions().reshape(-1, 3)
+    lo, hi = nodes.min(axis=0), nodes.max(axis=0)
+    points = np.random.default_rng(4).uniform(lo - 0.3 * (hi - lo), hi + 0.3 * (hi - lo), (400, 3))
+    points = np.vstack([points, nodes[:50], [[np.nan, 0.0, 1.0]]])
+    inside = model.inside(points)
+    raises = []
+    for p in points:
+        try:
+            model.velocity(p[None, :], 0.0)
+            raises.append(False)
+        except OutsideWindGridError:
+            raises.append(True)
+    assert inside.tolist() == [not r for r in raises]
+    assert 50 < inside.sum() < len(points) - 50 and inside[400:450].all() and not inside[-1]
+    assert GriddedMeanWind(random_grid, "idw", clamp=True).inside(points).all()

@@ -91,7 +91,7 @@ class TurbulenceSpec(StrictModel):
     the trial's mean wind at 20 ft; light/moderate/severe: the presets; none), or an explicit intensity
     ``sigma_w_mps`` (then W20 = 10 sigma_w), which wins when given."""
 
-    severity: fixed_or_dist(Severity, Choice) = "moderate"
+    severity: fixed_or_dist(Severity, Choice) = "from_mean"
     sigma_w_mps: NumberOrDist | None = None
 
     @model_validator(mode="after")

@@ -25,7 +25,7 @@ from wrp_eval.errors import InputError
 from wrp_eval.recon.scene import scored_ship
 from wrp_eval.sim.captures import CaptureSet
 from wrp_eval.sim.flight import FlightSimulator
-from wrp_eval.sim.flight_state import COMPLETED
+from wrp_eval.sim.flight_state import COMPLETED, OUTCOME_NAMES
 from wrp_eval.sim.onboard import ShipInScene
 from wrp_eval.wind.field import build_wind_field
 
@@ -108,7 +108,9 @@ class FlightEvaluator:
                 capture_time_s=result.capture_time_s[i], camera_roll=result.camera_roll[i],
                 estimated_offsets=result.estimated_offsets[i],
                 blur_px=result.blur_px[i], battery_charge=result.battery_charge[i], ship_motion=result.ship_motion[i],
-                flight_outcome="completed" if result.outcome[i] == COMPLETED else result.outcome_reason[i]))
+                flight_outcome="completed" if result.outcome[i] == COMPLETED else result.outcome_reason[i],
+                sorties=int(result.sorties[i]), view_sortie=result.view_sortie[i],
+                mission_time_s=float(result.flight_time_s[i]), ending=OUTCOME_NAMES[int(result.outcome[i])]))
         return outcomes
 
     def close(self) -> None:

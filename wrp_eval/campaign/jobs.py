@@ -6,10 +6,12 @@ campaign section (``evaluate``, the studies) call :func:`wrp_eval.campaign.runne
 
 from __future__ import annotations
 
+from dataclasses import replace
 from pathlib import Path
 
 from wrp_eval.campaign.evaluators import DEFAULT_EVALUATOR
 from wrp_eval.campaign.runner import CampaignSummary, run_campaign, with_overrides
+from wrp_eval.campaign.turbulence import turbulence_ratios, turbulence_stress_note
 from wrp_eval.experiment import ExperimentContext
 from wrp_eval.planning.path import Path as FlightPath
 
@@ -21,10 +23,16 @@ def campaign_job(ctx: ExperimentContext, *, out_dir: str | Path | None = None, n
     """Run (or resume) the experiment's campaign: ``campaign.path`` or the plan, flown ``campaign.n_trials``
     times from root seed ``campaign.seed`` (else ``run.seed``) into ``out_dir`` (default the run's campaign
     folder); the keyword overrides are the command line's. ``path``: fly this path instead (``wrp-eval run``
-    flies the plan it has just written)."""
+    flies the plan it has just written). A turbulence preset stronger than the drawn winds imply is reported in
+    one line (printed, and in the summary's ``stress_note``)."""
     trial = with_overrides(ctx.trial_config, n_trials=n_trials, backend=backend, workers=workers, rerun=rerun)
     mesh = ctx.ship.mesh if trial.campaign.outputs.rerun else None
     out = Path(out_dir) if out_dir is not None else ctx.folders.campaign
-    return run_campaign(trial, path if path is not None else ctx.campaign_path, out, root_seed=ctx.campaign_seed,
-                        config_dir=ctx.config_dir, evaluator=evaluator, evaluator_options=evaluator_options,
-                        progress=progress, ship_mesh=mesh)
+    note = turbulence_stress_note(turbulence_ratios(trial.wind, trial.campaign, ctx.campaign_seed,
+                                                    trial.campaign.n_trials, ctx.ship.particulars, ctx.config_dir))
+    if note:
+        print(f"[wrp-eval campaign] {note}", flush=True)
+    summary = run_campaign(trial, path if path is not None else ctx.campaign_path, out, root_seed=ctx.campaign_seed,
+                           config_dir=ctx.config_dir, evaluator=evaluator, evaluator_options=evaluator_options,
+                           progress=progress, ship_mesh=mesh)
+    return replace(summary, stress_note=note)

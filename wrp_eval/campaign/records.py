@@ -32,8 +32,11 @@ class TrialOutcome:
     estimated_offsets (n_views, 4): the navigation's record of
     the capture pose minus the plan (the image's position prior); blur_px (n_views,); battery_charge
     (n_views,) fraction left at the shutter; ship_motion (n_views, 4): heave m, roll, pitch, yaw rad of the
-    ship at the shutter; flight_outcome: "completed" or why the sortie ended early (returned home: battery,
-    wind limit) or failed."""
+    ship at the shutter; flight_outcome: "completed" or why the mission ended early (returned home: battery
+    with no sortie left, wind limit, no headway; lost) or failed.
+    The mission (None when the evaluator has none): sorties flown; view_sortie (n_views,) int: the sortie that
+    took each view (0: none did); mission_time_s: the last photo or the end, battery swaps included; ending:
+    the outcome's name (:data:`wrp_eval.sim.flight_state.OUTCOME_NAMES`)."""
 
     flown_offsets: np.ndarray
     metrics: dict[str, float]
@@ -50,6 +53,10 @@ class TrialOutcome:
     battery_charge: np.ndarray | None = None
     ship_motion: np.ndarray | None = None
     flight_outcome: str | None = None
+    sorties: int | None = None
+    view_sortie: np.ndarray | None = None
+    mission_time_s: float | None = None
+    ending: str | None = None
 
 
 # per-view columns of the capture realism: name -> values per view (1: a list of floats, k: nested lists)
@@ -85,6 +92,11 @@ SCHEMA = pa.schema([
     # capture realism (null in campaigns stored before it, and for evaluators without it)
     *[pa.field(name, pa.list_(pa.float64()) if k == 1 else _nested(k)) for name, k in REALISM_COLUMNS.items()],
     pa.field("flight_outcome", pa.string()),
+    # the mission: sorties, the sortie of each view, its time, how it ended (null in campaigns stored before)
+    pa.field("sorties", pa.int32()),
+    pa.field("view_sortie", pa.list_(pa.int32())),
+    pa.field("mission_time_s", pa.float64()),
+    pa.field("ending", pa.string()),
     pa.field("trajectory", _nested(3)),
     # oracle
     *[pa.field(name, pa.float64()) for name in METRIC_NAMES],
@@ -129,7 +141,8 @@ def make_record(inputs, outcome: TrialOutcome | None, *, root_seed: int, path_di
     if outcome is None:
         nan = np.full((n_views, 4), np.nan)
         row.update({"flown_offsets": _rows(nan, 4), "camera_pitch": None, "wind_at_views": None, "trajectory": None,
-                    **{name: None for name in REALISM_COLUMNS}, "flight_outcome": None,
+                    **{name: None for name in REALISM_COLUMNS}, "flight_outcome": None, "sorties": None,
+                    "view_sortie": None, "mission_time_s": None, "ending": None,
                     **{m: float("nan") for m in METRIC_NAMES}, "failed": True,
                     "failure_reason": "error", "error": error, "flight_s": None, "oracle_s": None})
         return row
@@ -139,6 +152,10 @@ def make_record(inputs, outcome: TrialOutcome | None, *, root_seed: int, path_di
         "wind_at_views": _rows(outcome.wind_at_views, 3),
         **{name: _per_view(getattr(outcome, name), k) for name, k in REALISM_COLUMNS.items()},
         "flight_outcome": outcome.flight_outcome,
+        "sorties": outcome.sorties,
+        "view_sortie": None if outcome.view_sortie is None else np.asarray(outcome.view_sortie, int).tolist(),
+        "mission_time_s": outcome.mission_time_s,
+        "ending": outcome.ending,
         "trajectory": _rows(outcome.trajectory, 3),
         **{m: float(outcome.metrics.get(m, float("nan"))) for m in METRIC_NAMES},
         "failed": bool(outcome.failed), "failure_reason": outcome.reason, "error": None,

@@ -41,7 +41,8 @@ _TRIAL_SECTIONS = ("ship", "wind", "sim", "oracle", "campaign")
 @dataclass(frozen=True)
 class CampaignSummary:
     """out_dir; n_trials; done (stored now), failed, errors (trials that raised); ran: trials run this call;
-    wall_s of this call; trials_per_min of this call; rerun_s: time spent logging to rerun this call."""
+    wall_s of this call; trials_per_min of this call; rerun_s: time spent logging to rerun this call;
+    stress_note: the turbulence stress-test line (campaign/turbulence.py) or None."""
 
     out_dir: Path
     n_trials: int
@@ -52,6 +53,7 @@ class CampaignSummary:
     wall_s: float
     trials_per_min: float
     rerun_s: float
+    stress_note: str | None = None
 
 
 def with_overrides(trial: TrialConfig, *, n_trials: int | None = None, backend: str | None = None,

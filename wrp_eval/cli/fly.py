@@ -4,7 +4,11 @@ poses and offsets), or hold a hover in wind.
 Wind: a path flight flies through the config's ``wind:`` section (mean field + Dryden turbulence + gusts,
 built by :func:`wrp_eval.wind.field.build_wind_field`, one turbulence stream per trial from the seed);
 ``--wind-speed`` / ``--wind-dir`` override the synthetic field's 10 m speed and direction. A hover holds a
-constant wind of ``--wind-speed`` from ``--wind-dir``, so that the analytic balance can be checked exactly.
+constant wind of ``--wind-speed`` from ``--wind-dir`` (no ship air wake, no ship motion) with the config's
+``sim:`` settings, the navigation estimate included (the config's preset: GNSS + IMU fused errors, which the
+airframe answers with a few tenths of a degree of tilt noise), and prints its statistics beside the analytic
+weight/drag balance; ``--airframe-only`` flies it with ideal navigation (the controller sees the true state):
+the airframe alone, whose steady tilt is the analytic balance.
 ``--wind-dir`` is, for both, the project's one convention: the compass bearing the wind blows FROM, degrees
 clockwise from true north (the config's ``wind.direction_deg``); the hover turns it into the ship frame with
 the ship's heading from the config's ``ship:`` section (before, a hover's ``--wind-dir`` was counter-clockwise
@@ -24,7 +28,7 @@ from wrp_eval.errors import InputError
 from wrp_eval.experiment import ExperimentContext
 from wrp_eval.planning.path import Path
 from wrp_eval.sim.flight import FlightSimulator
-from wrp_eval.sim.hover import analytic_hover_balance, hover_statistics
+from wrp_eval.sim.hover import airframe_only, analytic_hover_balance, hover_statistics
 from wrp_eval.sim.outputs import write_flight_tables, write_rerun
 from wrp_eval.sim.simple_wind import ConstantWind
 from wrp_eval.wind.config import WindSection
@@ -55,7 +59,8 @@ def _fly(args: argparse.Namespace) -> int:
             raise InputError("--duration", "must be > 0")
         hover_wind = ConstantWind.blowing_from(args.wind_speed or 0.0, args.wind_dir or 0.0,
                                                ctx.particulars.heading_deg)
-        with FlightSimulator(config.sim) as sim:
+        section = airframe_only(config.sim) if args.airframe_only else config.sim
+        with FlightSimulator(section) as sim:
             result = sim.hover(hover_wind, [0.0, 0.0, args.altitude], 0.0, args.duration, batch=args.trials,
                                flight_rngs=np.random.SeedSequence(seed).spawn(2)[1])
         stats = hover_statistics(result)
@@ -66,6 +71,8 @@ def _fly(args: argparse.Namespace) -> int:
             for k, v in stats.items():
                 print(f"{k:18s} {v}")
         return 0
+    if args.airframe_only:
+        raise InputError("--airframe-only", "only applies to --hover")
     if args.path is None or args.out is None:
         raise InputError("fly", "--path and --out are required unless --hover is given")
     if args.trials < 1:
@@ -98,7 +105,13 @@ def register(sub: argparse._SubParsersAction) -> None:
                    help="seed of the turbulence, the navigation errors and the ship's motion (default: run.seed)")
     p.add_argument("--out", help="output folder for captures.parquet and trials.parquet")
     p.add_argument("--rerun", help="write a rerun .rrd recording here")
-    p.add_argument("--hover", action="store_true", help="hold a hover instead and print statistics")
+    p.add_argument("--hover", action="store_true",
+                   help="hold a hover in a constant wind instead and print statistics and the analytic balance "
+                        "(default: the config's sim settings, its navigation errors included; no air wake, no "
+                        "ship motion)")
+    p.add_argument("--airframe-only", action="store_true",
+                   help="with --hover: ideal navigation (no air wake, still sea as always for a hover): the "
+                        "airframe alone, whose tilt is the exact analytic balance")
     p.add_argument("--wind-speed", type=float, default=None,
                    help="mean wind m/s (path: overrides wind.speed_10m_mps; hover: the constant wind, default 0)")
     p.add_argument("--wind-dir", type=float, default=None,

@@ -4,10 +4,15 @@ executes), following DJI's Cloud API "DJI WPML" reference (template.kml, wayline
 Choices:
 - heights ``relativeToStartPoint`` (template ``heightMode``, waylines ``executeHeightMode``): metres above the
   take-off point on the ship, like every other format here;
-- the aircraft heading per waypoint is ``smoothTransition`` with ``waypointHeadingAngle`` in [-180, 180]
-  (DJI types it as an integer, so it is rounded), and the camera is pointed exactly by a ``gimbalRotate``
-  action in ``absoluteAngle`` mode (yaw relative to north, pitch), both floats; then ``hover`` for the
-  dwell time and ``takePhoto``. Readers take the heading from the gimbal yaw;
+- the aircraft heading per waypoint follows the mission's heading mode (``smoothTransition``: interpolated
+  over the leg, what the simulator flies) with ``waypointHeadingAngle`` in [-180, 180] (DJI types it as an
+  integer, so it is rounded), and the camera is pointed exactly by a ``gimbalRotate`` action in
+  ``absoluteAngle`` mode (yaw relative to north, pitch), both floats. Readers take the heading from the
+  gimbal yaw;
+- the turn mode follows the capture mode (:class:`~wrp_eval.export.mission.FlightStyle`): ``stop`` ->
+  ``toPointAndStopWithDiscontinuityCurvature`` (stop at the point) and the actions gimbalRotate, ``hover``
+  (the simulator's dwell), ``takePhoto``; ``fly-through`` -> ``toPointAndPassWithContinuityCurvature``
+  (pass through the point without stopping) and gimbalRotate, ``takePhoto`` on reaching it, no hover;
 - drone/payload enums: Mavic 3 Enterprise (droneEnumValue 77, sub 0; payload 66), the closest WPML-capable
   airframe to the paper's Phantom 4-class quadrotor - change them in DJI Pilot 2 for another aircraft.
 """
@@ -68,9 +73,13 @@ def _mission_config(doc: ET.Element, m: GeoMission) -> None:
     _sub(payload, _w("payloadPositionIndex"), 0)
 
 
-def _heading_param(parent: ET.Element, heading_deg: float) -> None:
+TURN_MODES = {"stop": "toPointAndStopWithDiscontinuityCurvature",
+              "fly-through": "toPointAndPassWithContinuityCurvature"}
+
+
+def _heading_param(parent: ET.Element, heading_deg: float, heading_mode: str) -> None:
     hp = _sub(parent, _w("waypointHeadingParam"))
-    _sub(hp, _w("waypointHeadingMode"), "smoothTransition")
+    _sub(hp, _w("waypointHeadingMode"), heading_mode)
     _sub(hp, _w("waypointHeadingAngle"), int(round(float(wrap_180(heading_deg)))))
     _sub(hp, _w("waypointHeadingPathMode"), "followBadArc")
 
@@ -89,7 +98,7 @@ def _action_group(parent: ET.Element, m: GeoMission, k: int) -> None:
                           ("gimbalYawRotateEnable", 1),
                           ("gimbalYawRotateAngle", _num(float(wrap_180(m.heading_deg[k])))),
                           ("gimbalRotateTimeEnable", 0), ("gimbalRotateTime", 0), ("payloadPositionIndex", 0)]),
-        ("hover", [("hoverTime", _num(m.hold_s, 2))]),
+        *([] if m.style.through else [("hover", [("hoverTime", _num(m.hold_s, 2))])]),
         ("takePhoto", [("payloadPositionIndex", 0), ("fileSuffix", f"s{m.sortie}_v{int(m.index[k])}"),
                        ("useGlobalPayloadLensIndex", 1)]),
     ]
@@ -109,16 +118,16 @@ def _placemark(folder: ET.Element, m: GeoMission, k: int, executable: bool) -> N
     if executable:
         _sub(pm, _w("executeHeight"), _num(m.alt_rel_m[k]))
         _sub(pm, _w("waypointSpeed"), _num(m.speed_m_s, 2))
-        _heading_param(pm, m.heading_deg[k])
+        _heading_param(pm, m.heading_deg[k], m.style.heading_mode)
         turn = _sub(pm, _w("waypointTurnParam"))
-        _sub(turn, _w("waypointTurnMode"), "toPointAndStopWithDiscontinuityCurvature")
+        _sub(turn, _w("waypointTurnMode"), TURN_MODES[m.style.mode])
         _sub(turn, _w("waypointTurnDampingDist"), 0)
     else:
         _sub(pm, _w("height"), _num(m.alt_rel_m[k]))
         _sub(pm, _w("useGlobalHeight"), 0)
         _sub(pm, _w("useGlobalSpeed"), 1)
         _sub(pm, _w("useGlobalHeadingParam"), 0)
-        _heading_param(pm, m.heading_deg[k])
+        _heading_param(pm, m.heading_deg[k], m.style.heading_mode)
         _sub(pm, _w("useGlobalTurnParam"), 1)
         _sub(pm, _w("gimbalPitchAngle"), _num(m.gimbal_pitch_deg[k]))
     _action_group(pm, m, k)
@@ -145,9 +154,9 @@ def _document(m: GeoMission, executable: bool) -> bytes:
         _sub(folder, _w("autoFlightSpeed"), _num(m.speed_m_s, 2))
         _sub(folder, _w("gimbalPitchMode"), "usePointSetting")
         glob = _sub(folder, _w("globalWaypointHeadingParam"))
-        _sub(glob, _w("waypointHeadingMode"), "smoothTransition")
+        _sub(glob, _w("waypointHeadingMode"), m.style.heading_mode)
         _sub(glob, _w("waypointHeadingPathMode"), "followBadArc")
-        _sub(folder, _w("globalWaypointTurnMode"), "toPointAndStopWithDiscontinuityCurvature")
+        _sub(folder, _w("globalWaypointTurnMode"), TURN_MODES[m.style.mode])
         _sub(folder, _w("globalUseStraightLine"), 1)
     for k in range(len(m)):
         _placemark(folder, m, k, executable)
@@ -174,21 +183,34 @@ def read_dji_kmz(file: str | FsPath) -> ReadMission:
             if TEMPLATE_PATH not in names:
                 raise ValueError(f"missing {TEMPLATE_PATH}")
             root = ET.fromstring(kmz.read(WAYLINES_PATH))
-        lat, lon, alt, heading, pitch = [], [], [], [], []
+        lat, lon, alt, heading, pitch, hold, turns, headings = [], [], [], [], [], [], set(), set()
         photos = 0
+        speed = float(root.find(f"{_k('Document')}/{_k('Folder')}/{_w('autoFlightSpeed')}").text)
+        modes = {v: k for k, v in TURN_MODES.items()}
         for pm in root.iter(_k("Placemark")):
             lon_s, lat_s = pm.find(f"{_k('Point')}/{_k('coordinates')}").text.strip().split(",")[:2]
             lat.append(float(lat_s)); lon.append(float(lon_s))
             alt.append(float(pm.find(_w("executeHeight")).text))
+            turn = pm.find(f"{_w('waypointTurnParam')}/{_w('waypointTurnMode')}").text
+            if turn not in modes:
+                raise ValueError(f"waypoint turn mode {turn!r} is neither of {sorted(modes)}")
+            turns.add(modes[turn])
+            headings.add(pm.find(f"{_w('waypointHeadingParam')}/{_w('waypointHeadingMode')}").text)
+            hold.append(0.0)
             for action in pm.iter(_w("action")):
                 func = action.find(_w("actionActuatorFunc")).text
                 params = action.find(_w("actionActuatorFuncParam"))
                 if func == "gimbalRotate":
                     pitch.append(float(params.find(_w("gimbalPitchRotateAngle")).text))
                     heading.append(float(params.find(_w("gimbalYawRotateAngle")).text) % 360.0)
+                elif func == "hover":
+                    hold[-1] += float(params.find(_w("hoverTime")).text)
                 elif func == "takePhoto":
                     photos += 1
+        if len(turns) > 1 or len(headings) > 1:
+            raise ValueError(f"mixed turn modes {sorted(turns)} or heading modes {sorted(headings)}")
     except (OSError, KeyError, ValueError, AttributeError, zipfile.BadZipFile, ET.ParseError) as err:
         raise InputError(file, f"not a readable DJI WPML KMZ: {err}") from None
     arr = lambda v: np.asarray(v, dtype=float)  # noqa: E731
-    return ReadMission(arr(lat), arr(lon), arr(alt), arr(heading), arr(pitch), photos)
+    return ReadMission(arr(lat), arr(lon), arr(alt), arr(heading), arr(pitch), photos, None,
+                       next(iter(turns), None), next(iter(headings), None), arr(hold), speed)

@@ -18,7 +18,7 @@ from wrp_eval.errors import InputError
 from wrp_eval.export.config import ExportSection
 from wrp_eval.export.dji import dji_kmz_bytes, read_dji_kmz
 from wrp_eval.export.litchi import litchi_csv_bytes, read_litchi_csv
-from wrp_eval.export.mission import GeoMission, ReadMission, build_missions
+from wrp_eval.export.mission import FlightStyle, GeoMission, ReadMission, build_missions
 from wrp_eval.export.qgc import (
     qgc_plan_bytes,
     qgc_wpl_bytes,
@@ -56,11 +56,14 @@ def sortie_files(out: FsPath, sorties: list[int]) -> list[FsPath]:
 
 
 def export_path(path: Path, particulars: ShipParticulars, proxy: Proxy, fmt: str, out: str | FsPath,
-                section: ExportSection = ExportSection(), source: str = "path") -> list[tuple[FsPath, GeoMission]]:
-    """Write ``path`` as ``fmt`` missions; returns (file, mission) per sortie. InputError for bad input."""
+                section: ExportSection = ExportSection(), source: str = "path",
+                style: FlightStyle | None = None) -> list[tuple[FsPath, GeoMission]]:
+    """Write ``path`` as ``fmt`` missions; returns (file, mission) per sortie. InputError for bad input.
+    ``style``: how the aircraft flies and shoots, the simulator's (``FlightStyle.of(path, sim.capture,
+    sim.dwell_s)``); None: the simulator's defaults."""
     if fmt not in FORMATS:
         raise InputError(fmt, f"unknown export format; choose one of {', '.join(FORMATS)}")
-    missions = build_missions(path, particulars, proxy, section, source)
+    missions = build_missions(path, particulars, proxy, section, source, style)
     files = sortie_files(FsPath(out), [m.sortie for m in missions])
     blobs = [FORMATS[fmt].render(m, section.firmware) for m in missions]
     write_all_atomic(list(zip(files, blobs)))

@@ -4,9 +4,13 @@ Columns: latitude, longitude, altitude(m), heading(deg), curvesize(m), rotationd
 gimbalpitchangle, 15 x (actiontype_i, actionparam_i), altitudemode, speed(m/s), poi_latitude, poi_longitude,
 poi_altitude(m), poi_altitudemode, photo_timeinterval, photo_distinterval.
 Values used: altitude above the take-off point (altitudemode 0), heading in [0, 360) (effective with the
-mission's Heading Mode "Custom", a global setting the CSV cannot carry), curvesize 0 (stop at each
-waypoint), rotationdir 0, gimbalmode 2 (interpolate, so the pitch column is used), actions
-0 = "stay for" (ms, the dwell) then 1 = "take photo"; unused actions are -1; no POI; no interval photos (-1).
+mission's Heading Mode "Custom", a global setting the CSV cannot carry: Litchi then interpolates the heading
+linearly from one waypoint to the next, litchiutilities.com/docs/why.php - the simulator's smoothTransition),
+rotationdir 0, gimbalmode 2 (interpolate, so the pitch column is used); the capture mode sets the rest:
+``stop``: curvesize 0 (stop at each waypoint), actions 0 = "stay for" (ms, the simulator's dwell) then 1 =
+"take photo"; ``fly-through``: curvesize = the simulator's corner_radius_m (the curve's size at the waypoint,
+litchiutilities.com/docs/litchiCsv.php) and the photo action alone. Unused actions are -1; no POI; no
+interval photos (-1). Litchi's Path Mode ("Curved Turns" for fly-through) is global too.
 """
 
 from __future__ import annotations
@@ -36,18 +40,21 @@ def litchi_csv_bytes(m: GeoMission, firmware: str = "px4") -> bytes:
     out = io.StringIO()
     writer = csv.writer(out, lineterminator="\n")
     writer.writerow(HEADER)
+    through = m.style.through
+    curve = f"{m.style.pass_radius_m:.2f}" if through else 0
     for k in range(len(m)):
-        actions = [ACTION_STAY_MS, int(round(m.hold_s * 1000)), ACTION_PHOTO, 0]
-        actions += [ACTION_NONE, 0] * (N_ACTIONS - 2)
+        actions = [] if through else [ACTION_STAY_MS, int(round(m.hold_s * 1000))]
+        actions += [ACTION_PHOTO, 0]
+        actions += [ACTION_NONE, 0] * (N_ACTIONS - len(actions) // 2)
         writer.writerow([f"{m.lat_deg[k]:.10f}", f"{m.lon_deg[k]:.10f}", f"{m.alt_rel_m[k]:.4f}",
-                         f"{m.heading_deg[k]:.4f}", 0, 0, GIMBAL_INTERPOLATE, f"{m.gimbal_pitch_deg[k]:.4f}"]
+                         f"{m.heading_deg[k]:.4f}", curve, 0, GIMBAL_INTERPOLATE, f"{m.gimbal_pitch_deg[k]:.4f}"]
                         + actions + [0, f"{m.speed_m_s:.2f}", 0, 0, 0, 0, -1, -1])
     return out.getvalue().encode("ascii")
 
 
 def read_litchi_csv(file: str | FsPath) -> ReadMission:
     """Parse a Litchi CSV (``csv.DictReader``)."""
-    lat, lon, alt, heading, pitch = [], [], [], [], []
+    lat, lon, alt, heading, pitch, hold, curve, speed = [], [], [], [], [], [], [], []
     photos = 0
     try:
         with open(file, newline="", encoding="ascii") as fh:
@@ -60,9 +67,16 @@ def read_litchi_csv(file: str | FsPath) -> ReadMission:
                 lat.append(float(row["latitude"])); lon.append(float(row["longitude"]))
                 alt.append(float(row["altitude(m)"])); heading.append(float(row["heading(deg)"]))
                 pitch.append(float(row["gimbalpitchangle"]))
-                photos += sum(int(row.get(f"actiontype{i}", ACTION_NONE)) == ACTION_PHOTO
-                              for i in range(1, N_ACTIONS + 1))
+                kinds = [(int(row.get(f"actiontype{i}", ACTION_NONE)), float(row.get(f"actionparam{i}", 0)))
+                         for i in range(1, N_ACTIONS + 1)]
+                photos += sum(kind == ACTION_PHOTO for kind, _ in kinds)
+                hold.append(sum(ms for kind, ms in kinds if kind == ACTION_STAY_MS) / 1000.0)
+                curve.append(float(row.get("curvesize(m)", 0.0)))
+                speed.append(float(row.get("speed(m/s)", "nan")))
     except (OSError, ValueError, UnicodeDecodeError) as err:
         raise InputError(file, f"not a readable Litchi CSV: {err}") from None
     arr = lambda v: np.asarray(v, dtype=float)  # noqa: E731
-    return ReadMission(arr(lat), arr(lon), arr(alt), arr(heading), arr(pitch), photos)
+    through = bool(curve) and bool(np.all(arr(curve) > 0.0)) and not np.any(arr(hold))
+    return ReadMission(arr(lat), arr(lon), arr(alt), arr(heading), arr(pitch), photos, None,
+                       "fly-through" if through else "stop", None, arr(hold),
+                       float(speed[0]) if speed else None, float(np.max(curve)) if through else 0.0)

@@ -19,6 +19,37 @@ from wrp_eval.planning.path import Path
 from wrp_eval.ship.nofly import above_min_altitude, inside_no_fly_box, leg_flyable
 from wrp_eval.ship.particulars import ShipParticulars
 from wrp_eval.ship.proxy import Proxy
+from wrp_eval.sim.capture_mode import FLY_THROUGH, STOP, CaptureSection
+
+
+@dataclass(frozen=True)
+class FlightStyle:
+    """How the aircraft flies the waypoints and shoots: what the simulator flies, written into every format.
+
+    mode: ``stop`` (fly to the waypoint, hover ``hold_s``, shoot) or ``fly-through`` (shoot passing the
+    waypoint, no hold; the turn starts ``pass_radius_m`` before it, the simulator's ``corner_radius_m``);
+    heading_mode: ``smoothTransition`` (the heading interpolated over each leg); hold_s: hover per photo
+    (0 in fly-through); speed_m_s: cruise speed.
+    """
+
+    mode: str = STOP
+    heading_mode: str = "smoothTransition"
+    hold_s: float = 0.0
+    speed_m_s: float = 5.0
+    pass_radius_m: float = 0.0
+
+    @classmethod
+    def of(cls, path: Path, capture: CaptureSection = CaptureSection(), dwell_s: float | None = None) -> FlightStyle:
+        """The style the simulator flies ``path`` with under ``sim.capture`` and ``sim.dwell_s`` (None: the
+        path's dwell), at the path's cruise speed (wrp_eval/sim/flight.py: the same choices)."""
+        through = capture.mode == FLY_THROUGH
+        hold = 0.0 if through else float(path.dwell_s if dwell_s is None else dwell_s)
+        return cls(capture.mode, capture.heading_mode, hold, float(path.speed_m_s),
+                   float(capture.corner_radius_m) if through else 0.0)
+
+    @property
+    def through(self) -> bool:
+        return self.mode == FLY_THROUGH
 
 
 @dataclass(frozen=True)
@@ -27,9 +58,10 @@ class GeoMission:
 
     index (k,) viewpoint indices in the path; lat_deg, lon_deg (k,) WGS84; alt_rel_m (k,) above home;
     heading_deg (k,) compass heading of the aircraft/camera, [0, 360); gimbal_pitch_deg (k,) (negative
-    looks down); hold_s: hover time per photo; speed_m_s: cruise speed; home_*: take-off point (deg, m above
-    the sea); takeoff_alt_rel_m: climb height before the first waypoint (clears the no-fly box);
-    fence_lat_lon (4, 2): corners of the no-fly box outline (lat, lon), counter-clockwise seen from above.
+    looks down); style: how it is flown and shot (:class:`FlightStyle`: mode, heading mode, hold, speed);
+    home_*: take-off point (deg, m above the sea); takeoff_alt_rel_m: climb height before the first waypoint
+    (clears the no-fly box); fence_lat_lon (4, 2): corners of the no-fly box outline (lat, lon),
+    counter-clockwise seen from above.
     """
 
     sortie: int
@@ -39,8 +71,7 @@ class GeoMission:
     alt_rel_m: np.ndarray
     heading_deg: np.ndarray
     gimbal_pitch_deg: np.ndarray
-    hold_s: float
-    speed_m_s: float
+    style: FlightStyle
     home_lat_deg: float
     home_lon_deg: float
     home_alt_m: float
@@ -50,10 +81,22 @@ class GeoMission:
     def __len__(self) -> int:
         return int(self.index.shape[0])
 
+    @property
+    def hold_s(self) -> float:
+        return self.style.hold_s
+
+    @property
+    def speed_m_s(self) -> float:
+        return self.style.speed_m_s
+
 
 @dataclass(frozen=True)
 class ReadMission:
-    """What a reader recovers from an exported file (k waypoints, as in :class:`GeoMission`)."""
+    """What a reader recovers from an exported file (k waypoints, as in :class:`GeoMission`).
+
+    turn_mode: ``stop`` | ``fly-through`` as the file commands it; heading_mode: the heading mode the file
+    names (None where the format cannot carry one); hold_s (k,) hover per waypoint; speed_m_s: cruise speed;
+    pass_radius_m: where the turn starts before a waypoint (0 for stop)."""
 
     lat_deg: np.ndarray
     lon_deg: np.ndarray
@@ -62,6 +105,11 @@ class ReadMission:
     gimbal_pitch_deg: np.ndarray
     photos: int
     home_lat_lon: tuple[float, float] | None = None
+    turn_mode: str | None = None
+    heading_mode: str | None = None
+    hold_s: np.ndarray | None = None
+    speed_m_s: float | None = None
+    pass_radius_m: float | None = None
 
 
 def home_point(particulars: ShipParticulars, section: ExportSection) -> np.ndarray:
@@ -108,9 +156,11 @@ def check_exportable(path: Path, proxy: Proxy, section: ExportSection, source: s
 
 
 def build_missions(path: Path, particulars: ShipParticulars, proxy: Proxy, section: ExportSection,
-                   source: str = "path") -> list[GeoMission]:
-    """One :class:`GeoMission` per sortie, in sortie order (raises InputError for an unsafe path)."""
+                   source: str = "path", style: FlightStyle | None = None) -> list[GeoMission]:
+    """One :class:`GeoMission` per sortie, in sortie order (raises InputError for an unsafe path). ``style``:
+    how it is flown (None: the simulator's defaults, :meth:`FlightStyle.of`)."""
     check_exportable(path, proxy, section, source)
+    style = FlightStyle.of(path) if style is None else style
     pose = ship_pose(particulars)
     home = home_point(particulars, section)
     lat, lon = ship_to_geographic(path.positions, pose)
@@ -127,6 +177,6 @@ def build_missions(path: Path, particulars: ShipParticulars, proxy: Proxy, secti
         idx = np.flatnonzero(path.sortie == sortie)
         missions.append(GeoMission(
             int(sortie), idx, lat[idx], lon[idx], alt_rel[idx], heading[idx], pitch[idx],
-            float(path.dwell_s), float(path.speed_m_s), float(home_lat), float(home_lon), float(home[2]),
+            style, float(home_lat), float(home_lon), float(home[2]),
             takeoff, np.stack([fence_lat, fence_lon], axis=1)))
     return missions

@@ -2,8 +2,15 @@
 
 Items per sortie (MAVLink common.xml command ids; the .plan layout follows QGC's "Plan File Format" page,
 file version 1, mission version 2, geoFence version 2, polygon version 1):
-  MAV_CMD_NAV_TAKEOFF (22) above home to clear the no-fly box, then per viewpoint
-  MAV_CMD_NAV_WAYPOINT (16): hold time, acceptance 0, pass radius 0, yaw = compass heading, lat, lon, alt;
+  MAV_CMD_NAV_TAKEOFF (22) above home to clear the no-fly box, MAV_CMD_DO_CHANGE_SPEED (178: ground speed,
+  the cruise speed, throttle -1 = unchanged), then per viewpoint
+  MAV_CMD_NAV_WAYPOINT (16): param1 hold, param2 acceptance radius, param3 pass radius 0 (through the point),
+  param4 yaw = compass heading, lat, lon, alt. The capture mode (:class:`~wrp_eval.export.mission.FlightStyle`)
+  sets param1/param2: ``stop`` holds the simulator's dwell with the autopilot's default acceptance (0 =
+  NAV_ACC_RAD); ``fly-through`` holds 0 s and accepts the waypoint ``pass_radius_m`` before it (the
+  simulator's corner_radius_m, the distance at which PX4 turns to the next leg), so the photo item that
+  follows fires on reaching the waypoint. MAVLink carries no interpolated heading: param4 is the heading
+  to reach at the waypoint (PX4/ArduPilot turn towards it at their own yaw rate, not over the leg);
   MAV_CMD_DO_GIMBAL_MANAGER_PITCHYAW (1000): pitch (deg, + up), yaw 0 (relative to the vehicle, flags 0),
   rates NaN (ignored);  MAV_CMD_IMAGE_START_CAPTURE (2000): all cameras, interval 0, 1 image, sequence k;
   and MAV_CMD_NAV_RETURN_TO_LAUNCH (20) at the end.
@@ -29,6 +36,8 @@ from wrp_eval.export.mission import GeoMission, ReadMission
 MAV_CMD_NAV_WAYPOINT = 16
 MAV_CMD_NAV_RETURN_TO_LAUNCH = 20
 MAV_CMD_NAV_TAKEOFF = 22
+MAV_CMD_DO_CHANGE_SPEED = 178
+SPEED_TYPE_GROUND = 1
 MAV_CMD_DO_GIMBAL_MANAGER_PITCHYAW = 1000
 MAV_CMD_IMAGE_START_CAPTURE = 2000
 MAV_FRAME_GLOBAL = 0
@@ -43,10 +52,13 @@ NAN = float("nan")
 def mission_items(m: GeoMission) -> list[tuple[int, int, list[float]]]:
     """(command, frame, params[7]) of every item of the sortie, in order."""
     items = [(MAV_CMD_NAV_TAKEOFF, MAV_FRAME_GLOBAL_RELATIVE_ALT,
-              [0.0, 0.0, 0.0, float(m.heading_deg[0]), m.home_lat_deg, m.home_lon_deg, m.takeoff_alt_rel_m])]
+              [0.0, 0.0, 0.0, float(m.heading_deg[0]), m.home_lat_deg, m.home_lon_deg, m.takeoff_alt_rel_m]),
+             (MAV_CMD_DO_CHANGE_SPEED, MAV_FRAME_MISSION, [float(SPEED_TYPE_GROUND), m.speed_m_s, -1.0, 0.0, 0.0, 0.0,
+                                                           0.0])]
+    accept = m.style.pass_radius_m if m.style.through else 0.0
     for k in range(len(m)):
         items.append((MAV_CMD_NAV_WAYPOINT, MAV_FRAME_GLOBAL_RELATIVE_ALT,
-                      [m.hold_s, 0.0, 0.0, float(m.heading_deg[k]), float(m.lat_deg[k]), float(m.lon_deg[k]),
+                      [m.hold_s, accept, 0.0, float(m.heading_deg[k]), float(m.lat_deg[k]), float(m.lon_deg[k]),
                        float(m.alt_rel_m[k])]))
         items.append((MAV_CMD_DO_GIMBAL_MANAGER_PITCHYAW, MAV_FRAME_MISSION,
                       [float(m.gimbal_pitch_deg[k]), 0.0, NAN, NAN, 0.0, 0.0, 0.0]))
@@ -110,18 +122,26 @@ def _fmt(v: float, decimals: int) -> str:
 
 
 def _read_items(items: list[tuple[int, int, list[float]]], home: tuple[float, float] | None) -> ReadMission:
-    """Waypoints (16 in the relative frame), the gimbal pitch set after each, and the photo count."""
-    lat, lon, alt, heading, pitch = [], [], [], [], []
-    photos = 0
+    """Waypoints (16 in the relative frame), the gimbal pitch set after each, the photo count, the speed set
+    and the turn mode: ``fly-through`` where every waypoint holds 0 s and has an acceptance radius, else
+    ``stop``. MAVLink names no heading mode (None)."""
+    lat, lon, alt, heading, pitch, hold, accept = [], [], [], [], [], [], []
+    photos, speed = 0, None
     for command, frame, p in items:
+        if command == MAV_CMD_DO_CHANGE_SPEED and int(p[0]) == SPEED_TYPE_GROUND:
+            speed = p[1]
         if command == MAV_CMD_NAV_WAYPOINT and frame == MAV_FRAME_GLOBAL_RELATIVE_ALT:
             lat.append(p[4]); lon.append(p[5]); alt.append(p[6]); heading.append(p[3]); pitch.append(NAN)
+            hold.append(p[0]); accept.append(p[1])
         elif command == MAV_CMD_DO_GIMBAL_MANAGER_PITCHYAW and pitch:
             pitch[-1] = p[0]
         elif command == MAV_CMD_IMAGE_START_CAPTURE:
             photos += int(p[2])
     arr = lambda v: np.asarray(v, dtype=float)  # noqa: E731
-    return ReadMission(arr(lat), arr(lon), arr(alt), arr(heading), arr(pitch), photos, home)
+    through = bool(hold) and not np.any(arr(hold)) and bool(np.all(arr(accept) > 0.0))
+    return ReadMission(arr(lat), arr(lon), arr(alt), arr(heading), arr(pitch), photos, home,
+                       "fly-through" if through else "stop", None, arr(hold), speed,
+                       float(np.max(accept)) if through else 0.0)
 
 
 def read_qgc_plan(file: str | FsPath) -> ReadMission:

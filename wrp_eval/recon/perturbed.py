@@ -19,8 +19,9 @@ each kind known by construction (all deterministic from ``seed``, one numpy stre
 * ``blur`` (3): motion blur of 8 px on every view, 25 px on every view, 40 px on every other view (pixels of
   the capture camera, ``CaptureSet.blur_px``);
 * ``flight`` (``FLIGHTS_PER_SPEED`` per speed): the path flown by the simulator with the config's ``sim:``
-  section (navigation errors, gimbal, fly-through capture, ship motion, air wake; the wind return rule
-  off, ``wind_limit_m_s`` None, so the flights complete: the question is the capture errors) through the
+  section (navigation errors, gimbal, capture mode, ship motion, air wake; the wind-limit return rules
+  off, ``sim.mission`` ``px4_wind_limit_m_s`` / ``operator_wind_limit_m_s`` None, so the flights complete: the
+  question is the capture errors) through the
   config's synthetic wind at U10 = 0, 4, 8, 12 m/s, each flight's wind direction drawn uniformly (as
   ``wrp-eval bench --only capture`` does); :func:`flight_capture_sets`. A flight that still misses views
   keeps the views it took, and its name ends in ``_partial<taken>of<n>``.
@@ -165,7 +166,8 @@ def flight_capture_sets(ctx, path: Path, seed: int, speeds=FLIGHT_SPEEDS_M_S,
     directions = rng.uniform(0.0, 360.0, len(speed_of))
     sections = [config.wind.model_copy(update={"speed_10m_mps": float(u), "direction_deg": float(d)})
                 for u, d in zip(speed_of, directions)]
-    sim = config.sim.model_copy(update={"wind_limit_m_s": None})
+    no_wind_limit = config.sim.mission.model_copy(update={"px4_wind_limit_m_s": None, "operator_wind_limit_m_s": None})
+    sim = config.sim.model_copy(update={"mission": no_wind_limit})
     wind_seed, flight_seed = np.random.SeedSequence(int(rng.integers(2 ** 63 - 1))).spawn(2)
     dt = sim.timestep_s * sim.chunk_steps  # the wind is stepped at the controller rate (wrp-eval fly)
     wind = build_wind_field(sections, ctx.particulars, wind_seed, dt, ctx.config_dir)

@@ -13,7 +13,8 @@ speed is a trapezoid from v0 to v1 (:func:`through_profile`); the first viewpoin
 its photo, taken hovering); the reference stops at the last, whose photo is taken when the vehicle crosses its
 plane (often still slowing down) or, failing that, once it has settled there. The reference's velocity turns
 at each viewpoint without a jerk limit (a corner is a step in the velocity direction; the controller rounds
-it): photos at corners carry the airframe's tilt transient (residual roll, blur).
+it), so the corner speed is also kept to a velocity step of :data:`CORNER_STEP_M_S`: a larger step tilts the
+airframe hard just as the shutter opens (blur, and a heading swing no mission commands).
 
 Trigger (:func:`wrp_eval.sim.phases.passing_views`): a view is shot when the estimated position crosses the
 plane through the view's target normal to the bisector of the arriving and leaving legs (a vehicle rounding
@@ -35,22 +36,37 @@ from pydantic import Field
 from wrp_eval.validation import StrictModel
 
 STOP, FLY_THROUGH = "stop", "fly-through"
+SMOOTH_TRANSITION = "smoothTransition"
+# Largest step of the reference velocity at a fly-through corner (m/s): the position loop turns a velocity step
+# dv into an acceleration demand kv dv (kv = 6 /s, the default gains, controller.py); 0.4 m/s keeps it near
+# the reference's own acceleration limit (2.5 m/s^2 / 6 /s = 0.42 m/s). Without it the corners were taken at
+# the arc speed sqrt(a R / tan(theta/2)) (2.2 m/s at 90 deg: a 3.2 m/s step, 35 deg of tilt at the shutter):
+# calm-air fly-through photos of a 30 m standoff path had blur p95 27 px and heading rates at the shutter up to
+# 43 deg/s on legs that command none (README.md, "Capture mode").
+CORNER_STEP_M_S = 0.4
 
 
 class CaptureSection(StrictModel):
     """The ``sim.capture`` section.
 
-    mode: ``fly-through`` by default: the paper flies its tours at 5 m/s and reports 170.8 s of flight for 51
-    views on its reference ship (Table 1) - about the length over the speed, no stop at each view; survey
-    apps (DJI GS Pro, Pix4Dcapture) shoot on the move by default too. ``stop`` hovers at each view
-    (``sim.settle_*``, the path's dwell) before the photo.
+    mode: ``stop`` by default: fly to the view, settle, hover ``sim.dwell_s`` (or the path's dwell), shoot -
+    what a waypoint inspection mission does: DJI executes waypoint actions once the aircraft "has reached a
+    waypoint, has rotated to the new heading" (DJI Mobile SDK, DJIWaypointMissionExecuteState BeginAction),
+    and DJI-based ground stations warn that in curved (pass-through) mode most waypoint actions are not
+    executed (GoodStation manual, "Patrol (Custom Waypoint)", Turn Mode); close-range industrial inspection
+    flies waypoint-by-waypoint (Gyrichidi et al. 2024, Drones 8(10) 549). ``fly-through`` shoots on the
+    move, as survey apps do: the paper's tours (5 m/s, 170.8 s for 51 views, Table 1) are flown that way
+    (experiments/paper/*.yaml set it). Every exported mission follows this mode (wrp_eval/export).
+    heading_mode: how the heading goes from one view's to the next: ``smoothTransition`` (DJI WPML's name),
+    interpolated linearly over the leg - the one the simulator flies (phases._reference_rows).
     trigger_latency_s: from the trigger decision to the shutter (assumed 50 ms: consumer camera trigger
     latencies are tens of milliseconds; no DJI figure is published).
     exposure_s: shutter time (1/500 s by default; the Phantom 4 Pro's mechanical shutter reaches 1/2000 s).
     corner_radius_m: where the fly-through reference starts turning before a corner (see the module).
     """
 
-    mode: Literal["stop", "fly-through"] = FLY_THROUGH
+    mode: Literal["stop", "fly-through"] = STOP
+    heading_mode: Literal["smoothTransition"] = SMOOTH_TRANSITION
     trigger_latency_s: float = Field(0.05, ge=0.0, le=2.0, description="trigger to shutter delay, s")
     exposure_s: float = Field(1.0 / 500.0, gt=0.0, le=1.0, description="shutter time, s")
     corner_radius_m: float = Field(2.0, gt=0.0, le=50.0, description="fly-through: corner turn starts this far "
@@ -58,10 +74,13 @@ class CaptureSection(StrictModel):
 
 
 def vertex_speeds(body: np.ndarray, yaw: np.ndarray, cruise_m_s: float, accel_m_s2: float,
-                  yaw_rate_rad_s: float, corner_radius_m: float) -> tuple[np.ndarray, np.ndarray]:
+                  yaw_rate_rad_s: float, corner_radius_m: float,
+                  corner_step_m_s: float = CORNER_STEP_M_S) -> tuple[np.ndarray, np.ndarray]:
     """(speed at each viewpoint (batch, n_views), cruise limit of each leg (batch, n_views - 1)) m/s for the
     fly-through reference through the body targets ``body`` (batch, n_views, 3) m with headings ``yaw``
-    (batch, n_views) rad. The first and last viewpoints are at rest."""
+    (batch, n_views) rad. The first and last viewpoints are at rest. At a corner of turn angle theta the
+    reference's velocity turns in one step of 2 v sin(theta/2), at the viewpoint, where the photo is taken:
+    v is kept to ``corner_step_m_s`` / (2 sin(theta/2)) (:data:`CORNER_STEP_M_S`)."""
     delta = np.diff(body, axis=1)
     length = np.linalg.norm(delta, axis=2)
     dyaw = np.abs((np.diff(yaw, axis=1) + np.pi) % (2.0 * np.pi) - np.pi)
@@ -73,8 +92,10 @@ def vertex_speeds(body: np.ndarray, yaw: np.ndarray, cruise_m_s: float, accel_m_
     half_turn = 0.5 * np.arccos(cos_turn)
     with np.errstate(divide="ignore"):
         corner = np.sqrt(accel_m_s2 * corner_radius_m / np.tan(half_turn))
+    with np.errstate(divide="ignore"):
+        step = corner_step_m_s / (2.0 * np.sin(half_turn))
     speed = np.zeros(body.shape[:2])
-    speed[:, 1:-1] = np.minimum(np.nan_to_num(corner, nan=0.0, posinf=np.inf),
+    speed[:, 1:-1] = np.minimum(np.minimum(np.nan_to_num(corner, nan=0.0, posinf=np.inf), step),
                                 np.minimum(leg_cap[:, :-1], leg_cap[:, 1:]))
     for k in range(1, speed.shape[1]):             # over viewpoints (tens), every flight at once
         speed[:, k] = np.minimum(speed[:, k], np.sqrt(speed[:, k - 1] ** 2 + 2.0 * accel_m_s2 * length[:, k - 1]))

@@ -4,10 +4,11 @@ from __future__ import annotations
 
 from typing import Literal
 
-from pydantic import Field
+from pydantic import Field, model_validator
 
 from wrp_eval.sim.capture_mode import CaptureSection
 from wrp_eval.sim.gimbal import GimbalSection
+from wrp_eval.sim.mission import MissionSection
 from wrp_eval.sim.navigation import NavigationSection
 from wrp_eval.sim.power import BatterySection
 from wrp_eval.validation import StrictModel
@@ -45,16 +46,27 @@ class SimSection(StrictModel):
     dwell_s: float | None = Field(None, ge=0.0, description="hover before each photo; None: the path's dwell")
     leash_m: float = Field(2.0, gt=0.0, description="in transit the reference waits while the vehicle is "
                                                     "farther than this behind it (head wind)")
-    wind_limit_m_s: float | None = Field(10.0, gt=0.0, description="the autopilot turns home when its wind "
-                                         "estimate exceeds this (Phantom 4: max wind speed resistance 10 m/s; "
-                                         "PX4 COM_WIND_MAX); None: never")
-    wind_average_s: float = Field(30.0, gt=0.0, description="time constant of the autopilot's wind estimate (a "
-                                  "first-order average of the wind vector at the vehicle; PX4's EKF2 estimates the "
-                                  "wind as a slowly varying state, no time constant is published: assumed)")
     record_interval_s: float = Field(0.2, gt=0.0, description="trajectory down-sampling interval")
-    max_flight_time_s: float = Field(3600.0, gt=0.0, description="the simulator's own limit: a flight still "
-                                                                 "flying after this has failed (timed out)")
+    max_flight_time_s: float = Field(3600.0, gt=0.0, description="the simulator's own limit: a sortie still "
+                                                                 "flying after this long has failed (timed out)")
     navigation: NavigationSection = NavigationSection()
     gimbal: GimbalSection = GimbalSection()
     capture: CaptureSection = CaptureSection()
     battery: BatterySection = BatterySection()
+    mission: MissionSection = MissionSection()
+
+    @model_validator(mode="before")
+    @classmethod
+    def _old_wind_rule(cls, data):
+        """Configs and stored campaigns from before ``sim.mission`` say ``wind_limit_m_s`` / ``wind_average_s``
+        (a 30 s average over 10 m/s sent the vehicle home): read them as the operator policy they were."""
+        if not isinstance(data, dict) or not ({"wind_limit_m_s", "wind_average_s"} & data.keys()):
+            return data
+        data = dict(data)
+        mission = dict(data.get("mission") or {})
+        if "wind_limit_m_s" in data:
+            mission.setdefault("operator_wind_limit_m_s", data.pop("wind_limit_m_s"))
+        if "wind_average_s" in data:
+            mission.setdefault("operator_wind_average_s", data.pop("wind_average_s"))
+        data["mission"] = mission
+        return data

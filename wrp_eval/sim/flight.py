@@ -54,7 +54,11 @@ from wrp_eval.sim.controller import (
     yaw_of,
 )
 from wrp_eval.sim.flight_state import (
+    AWAY,
+    COMPLETED,
     ENDED,
+    LOST_OUTSIDE,
+    RETURNED_BATTERY,
     FlightState,
     FlightTargets,
     TrajectoryLog,
@@ -69,6 +73,9 @@ from wrp_eval.sim.phases import (
     apply_transitions,
     check_failures,
     check_returns,
+    no_headway,
+    resume,
+    swap_batteries,
     control,
     outcome_reasons,
     parked_pose,
@@ -102,6 +109,13 @@ def _wind_at(wind, points, t, batch):
     if out.shape != (batch, 3):
         raise ValueError(f"wind model returned shape {out.shape} for {batch} flights, expected ({batch}, 3)")
     return out
+
+
+def _inside_field(wind, points: np.ndarray) -> np.ndarray:
+    """(n,) bool: ``points`` (n, 3) m inside the wind model's domain (its optional ``inside(points)``; a model
+    without one is everywhere)."""
+    inside = getattr(wind, "inside", None)
+    return np.ones(len(points), dtype=bool) if inside is None else np.asarray(inside(points), dtype=bool)
 
 
 def _pad(rows: np.ndarray, padded: int) -> np.ndarray:
@@ -321,7 +335,7 @@ class FlightSimulator:
         motors, quat_d = control(controller, position, velocity, body.rot,
                                  setpoints(ref, state.phase, run.park[run.batch:, :3], nav.yaw_error, through), dt,
                                  par)
-        dead = _pad(state.phase == ENDED, run.padded)
+        dead = _pad(state.phase >= ENDED, run.padded)          # ended, or away for a battery swap
         if np.any(dead):
             run.hold(dead, parked_pose(body.position[dead], run.park[dead]))
             motors[dead] = par.weight_n / 4.0
@@ -372,18 +386,33 @@ class FlightSimulator:
         controller = PositionController(par, self.gains, run.padded)
         log = TrajectoryLog()
         record_every = max(1, int(round(sec.record_interval_s / dt)))
-        max_chunks = int(np.ceil(sec.max_flight_time_s / dt))
+        mission = sec.mission
+        # the simulator's guard: every sortie within max_flight_time_s, every time away within its cap
+        away_cap_s = mission.swap_time_s + 2.0 * sec.max_flight_time_s
+        max_chunks = int(np.ceil((mission.max_sorties * sec.max_flight_time_s
+                                  + (mission.max_sorties - 1) * away_cap_s) / dt))
         latency = sec.capture.trigger_latency_s
+        home = targets.body[:, 0]
         wind_next = None
         for chunk in range(max_chunks + 1):
             t = chunk * dt
             body = run.body()
             p_b, v_b, yaw, rot_b = body.position[:batch], body.velocity[:batch], body.yaw[:batch], body.rot[:batch]
             nav = onboard.sense(start_time_s + t, p_b, v_b, yaw)
+            back = np.flatnonzero((state.phase == AWAY) & (state.resume_at <= t + 1e-9))
+            if back.size:       # the next sortie: a fresh battery, from the breakpoint where the last one turned
+                onboard.fresh_battery(back, p_b[back])
+                resume(state, targets, back, nav.position[back], nav.yaw[back], t, profile)
             ref = reference(state, nav.position, profile, sec.leash_m)
-            wind_b = _wind_at(wind, p_b, start_time_s + t, batch) if wind_next is None else wind_next
-            apply_endings(state, check_failures(state, p_b, v_b, chunk == max_chunks), t)
-            apply_endings(state, check_returns(state, *onboard.must_return(p_b, wind_b)), t)
+            inside = _inside_field(wind, p_b)
+            if wind_next is None:
+                wind_b = _wind_at(wind, np.where(inside[:, None], p_b, home), start_time_s + t, batch)
+            else:
+                wind_b = wind_next
+            out_of_time = ((t - state.sortie_start) >= sec.max_flight_time_s) | (chunk == max_chunks)
+            apply_endings(state, check_failures(state, p_b, v_b, out_of_time), t)
+            apply_endings(state, np.where(state.flying & ~inside, LOST_OUTSIDE, COMPLETED), t)
+            self._mission_rules(state, onboard, nav, p_b, wind_b, t, sec, away_cap_s)
             attitude = onboard.point_camera(rot_b, yaw, targets.plan_pitch[np.minimum(state.photo,
                                                                                        targets.n_views - 1)])
             shoot = partial(onboard.shoot, t=t, position=p_b, velocity=v_b, rot=rot_b, nav=nav, attitude=attitude,
@@ -405,21 +434,41 @@ class FlightSimulator:
                 log.append(t, position=p_b, reference=ref.position, yaw=yaw, tilt=tilt_of(rot_b),
                            thrust=motors[:batch].sum(axis=1), wind=wind_b, drag=drag[:batch], power=power,
                            charge=onboard.battery.charge)
-            # the last chunk is still recorded (wind, drag, control included) before the loop ends, so a
-            # flight's record does not depend on whether other flights of its batch are still flying
-            if not np.any(state.flying):
+            # the loop ends on a recorded chunk at or after every flight's last shutter (a photo's shutter opens
+            # the trigger latency after its chunk), so a flight's record up to its end does not depend on whether
+            # other flights of its batch are still flying
+            if not np.any(state.active) and chunk % record_every == 0 and t >= state.flight_time.max() - 1e-9:
                 break
             run.set_controls(motors, drag, quat_d)
             if self.ship_mocap is not None and onboard.motion is not None:
                 self._move_ship(run, onboard, start_time_s + t + dt)
             # prefetch: the wind of the next chunk is sampled while this one's rollout runs, at the
             # positions predicted for its end, p + v dt (the vehicle moves < 0.5 m per chunk, the
-            # prediction is off by 0.5 a dt^2 < 1 cm, and the wind field varies over metres; README.md).
-            sample = (partial(_wind_at, wind, p_b + v_b * dt, start_time_s + t + dt, batch)
-                      if sec.prefetch_wind else None)
+            # prediction is off by 0.5 a dt^2 < 1 cm, and the wind field varies over metres; README.md);
+            # a prediction outside the field is sampled at home instead (the flight ends there next chunk)
+            ahead = p_b + v_b * dt
+            ahead = np.where(_inside_field(wind, ahead)[:, None], ahead, home)
+            sample = partial(_wind_at, wind, ahead, start_time_s + t + dt, batch) if sec.prefetch_wind else None
             wind_next = self._run_chunk(run, sec, sample)
             tick(state, ref, dt)
+        stranded = state.phase == AWAY      # only past the simulator's guard: home on energy for good
+        apply_endings(state, np.where(stranded, RETURNED_BATTERY, COMPLETED), t)
         return self._result(state, path, log, sec)
+
+    @staticmethod
+    def _mission_rules(state: FlightState, onboard: Onboard, nav, position: np.ndarray, wind_b: np.ndarray, t: float,
+                       sec: SimSection, away_cap_s: float) -> None:
+        """The autopilot's decisions this chunk (sim/mission.py): home on energy (away for a battery swap while
+        sorties are left), on a wind limit, or without headway (lost when home is out of reach)."""
+        m = sec.mission
+        decisions = onboard.decide(position, wind_b)
+        stuck = no_headway(state, nav.position, t, m.headway_timeout_s, m.headway_progress_m, sec.leash_m)
+        cause = check_returns(state, decisions.battery_due, decisions.px4_wind, decisions.operator_wind, stuck,
+                              decisions.home_reachable)
+        away, cause = swap_batteries(state, cause, m.max_sorties)
+        if away.size:
+            state.resume_at[away] = t + np.minimum(onboard.away_time_s(away, position[away]), away_cap_s)
+        apply_endings(state, cause, t)
 
     def _move_ship(self, run: _Batch, onboard: Onboard, t: float) -> None:
         """Pose the scene's ship body of each model for the next chunk (held over it): the ship of the model's
@@ -448,7 +497,8 @@ class FlightSimulator:
         return FlightResult(cap.capture_sets(path.camera), cap.offsets, cap.estimated_offsets, cap.taken, cap.time,
                             cap.pitch, cap.roll, cap.saturated, cap.blur_px, cap.charge, cap.ship_motion,
                             state.outcome, outcome_reasons(state, sec), state.failed, state.flight_time,
-                            log.trajectory(), sec.timestep_s, sec.chunk_steps)
+                            log.trajectory(), sec.timestep_s, sec.chunk_steps, state.sortie.copy(),
+                            state.view_sortie.copy())
 
     def hover(self, wind, position, yaw: float, duration_s: float, batch: int = 1, flight_rngs=None) -> FlightResult:
         """Hold a hover at ``position`` (3,) m (camera position) with heading ``yaw`` rad for ``duration_s``:

@@ -17,14 +17,21 @@ from wrp_eval.sim.controller import wrap_angle
 from wrp_eval.sim.results import Trajectory
 
 # flight phases: fly the segment, wait to be within the tolerances, hold still, then the photo (trigger);
-# DONE after the last photo; ENDED: crashed or gone home early (parked, no further photos)
-TRANSIT, SETTLE, DWELL, DONE, ENDED = 0, 1, 2, 3, 4
+# DONE after the last photo; ENDED: crashed, lost or gone home for good (parked, no further photos); AWAY:
+# home for a battery swap between two sorties (parked until it resumes at its breakpoint)
+TRANSIT, SETTLE, DWELL, DONE, ENDED, AWAY = 0, 1, 2, 3, 4, 5
 
-# how a flight ends, in the order they are reported when several hold at once. A real autopilot keeps trying
-# against the wind (the leash holds the reference); it turns home on its battery reserve or on its wind limit
-# (the views not reached are not taken: not a failure); crashes and the simulator's time limit are failures.
-COMPLETED, NON_FINITE, DITCHED, TIMED_OUT, RETURNED_BATTERY, RETURNED_WIND = 0, 1, 2, 3, 4, 5
-FAILURES = (NON_FINITE, DITCHED, TIMED_OUT)
+# how a mission ends (sim/mission.py has the rules and their sources), in the order they are reported when
+# several hold at once. A real autopilot keeps trying against the wind (the leash holds the reference); it
+# turns home on its energy (after its last sortie), on a wind limit when one is set, or when it makes no
+# headway (the views not reached are not taken: not a failure). Crashes, a vehicle that can neither make
+# headway nor get home, one blown out of the wind field, and the simulator's time limit are failures.
+(COMPLETED, NON_FINITE, DITCHED, TIMED_OUT, RETURNED_BATTERY, RETURNED_WIND, RETURNED_WIND_AVERAGE,
+ RETURNED_HEADWAY, LOST_HEADWAY, LOST_OUTSIDE) = range(10)
+FAILURES = (NON_FINITE, DITCHED, TIMED_OUT, LOST_HEADWAY, LOST_OUTSIDE)
+# one word per outcome for tables and records
+OUTCOME_NAMES = ("completed", "non-finite", "ditched", "timed out", "returned: battery", "returned: wind limit",
+                 "returned: wind policy", "returned: no headway", "lost: no headway", "lost: left the wind field")
 
 
 @dataclass(frozen=True)
@@ -232,8 +239,13 @@ class FlightState:
     reference is flying to. photo (batch,) int: the next viewpoint to photograph (= index in stop mode; in
     fly-through the vehicle may still be short of a view the reference has passed). phase_time (batch,) s
     in the current phase (it stands still while the leash holds the reference back). segment: the
-    reference's current segment. outcome (batch,) int: COMPLETED (also while flying) ... RETURNED_WIND.
-    flight_time (batch,) s: time of the last photo or of the end. captures: the photos taken so far.
+    reference's current segment. outcome (batch,) int: COMPLETED (also while flying) ... LOST_OUTSIDE.
+    flight_time (batch,) s: time of the last photo or of the end (mission time: the swaps included).
+    captures: the photos taken so far. sortie (batch,) int: the sortie flying (1 ..); sortie_start (batch,) s:
+    when it started; resume_at (batch,) s: when an AWAY flight resumes; view_sortie (batch, n_views) int: the
+    sortie that took each view (0: not taken); progress_m (batch,) m and progress_time (batch,) s: the
+    closest the vehicle has come to its waypoint on this leg, and when; progress_view (batch,) int: the leg's
+    waypoint.
     """
 
     phase: np.ndarray
@@ -244,19 +256,33 @@ class FlightState:
     outcome: np.ndarray
     flight_time: np.ndarray
     captures: CaptureLog
+    sortie: np.ndarray
+    sortie_start: np.ndarray
+    resume_at: np.ndarray
+    view_sortie: np.ndarray
+    progress_m: np.ndarray
+    progress_time: np.ndarray
+    progress_view: np.ndarray
 
     @classmethod
-    def start(cls, targets: FlightTargets) -> FlightState:
-        """Every flight hovering at its first viewpoint, settling there before the first photo."""
+    def start(cls, targets: FlightTargets, t: float = 0.0) -> FlightState:
+        """Every flight hovering at its first viewpoint at ``t`` s, settling there before the first photo."""
         batch = targets.batch
         return cls(np.full(batch, SETTLE), np.zeros(batch, dtype=int), np.zeros(batch, dtype=int), np.zeros(batch),
                    Segment.at_rest(targets.body[:, 0], targets.yaw[:, 0]), np.full(batch, COMPLETED),
-                   np.zeros(batch), CaptureLog.empty(batch, targets.n_views))
+                   np.zeros(batch), CaptureLog.empty(batch, targets.n_views), np.ones(batch, dtype=int),
+                   np.full(batch, float(t)), np.full(batch, np.inf), np.zeros((batch, targets.n_views), dtype=int),
+                   np.full(batch, np.inf), np.full(batch, float(t)), np.zeros(batch, dtype=int))
 
     @property
     def flying(self) -> np.ndarray:
-        """(batch,) bool: neither done nor ended."""
+        """(batch,) bool: neither done, ended nor away for a battery swap."""
         return self.phase < DONE
+
+    @property
+    def active(self) -> np.ndarray:
+        """(batch,) bool: flying or away between two sorties (the mission is not over)."""
+        return self.flying | (self.phase == AWAY)
 
     @property
     def failed(self) -> np.ndarray:

@@ -3,6 +3,12 @@
 In a steady horizontal wind W the hovering vehicle tilts until thrust balances weight and drag:
 |thrust| = hypot(|F_drag|, m g) and tan(tilt) = |F_drag| / (m g), with F_drag = 0.5 rho C_d A(W) |W| W
 (:func:`wrp_eval.sim.aero.drag_force`, at the hover's yaw 0).
+
+A default hover (``wrp-eval fly --hover``) flies the config's ``sim:`` section in a constant wind: no ship air
+wake and no ship motion (no ship in the scene), but the navigation estimate of the config's preset (GNSS +
+IMU fused errors: the airframe answers them, a few tenths of a degree of tilt noise), so its tilt only
+approaches the balance. :func:`airframe_only` is the hover of the airframe alone (ideal navigation): the
+exact balance.
 """
 
 from __future__ import annotations
@@ -12,6 +18,7 @@ import numpy as np
 from wrp_eval.sim.aero import drag_force
 from wrp_eval.sim.config import SimSection
 from wrp_eval.sim.controller import wrap_angle
+from wrp_eval.sim.navigation import NavigationSection
 from wrp_eval.sim.results import FlightResult
 from wrp_eval.sim.vehicle import PHANTOM4, QuadrotorParams
 
@@ -41,3 +48,9 @@ def analytic_hover_balance(wind_m_s: np.ndarray, section: SimSection, params: Qu
     return {"drag_force_n": float(np.linalg.norm(f)),
             "tilt_deg": float(np.degrees(np.arctan2(np.linalg.norm(f), params.weight_n))),
             "thrust_n": float(np.hypot(np.linalg.norm(f), params.weight_n))}
+
+
+def airframe_only(section: SimSection) -> SimSection:
+    """``section`` with ideal navigation (the controller sees the true state): with a constant wind, no air
+    wake and no ship (what :meth:`FlightSimulator.hover` flies) the hover is the airframe's exact balance."""
+    return section.model_copy(update={"navigation": NavigationSection(preset="ideal")})

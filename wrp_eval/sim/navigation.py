@@ -1,17 +1,34 @@
-"""The drone's navigation estimate: what the controller believes (GNSS + barometer + compass), batch-first.
+"""The drone's navigation estimate: what the controller believes (GNSS + IMU + barometer + compass), batch-first.
 
 The controller flies on :meth:`NavigationEstimator.estimate` (once per 20 Hz control chunk); captures happen
-at the true state. Error model per flight (all SI, radians):
+at the true state. Two estimators (``NavigationSection.estimator``):
+
+* ``fused`` (default, issue 26): a GNSS + IMU navigation filter like PX4's EKF2 or DJI's flight controller.
+  The filter is linear in its errors, so only its **error state** is simulated (the truth cancels): per axis
+  (position error, velocity error), driven between fixes by the IMU's white acceleration error (the preset's
+  ``accel_noise_density``) and corrected at every GNSS fix by the filter's steady-state Kalman gain
+  (:func:`fusion_gain`, from ``scipy.linalg.solve_discrete_are``) for EKF2's process noise (EKF2_ACC_NOISE
+  0.35 m/s^2 per 10 ms prediction, EKF2_PREDICT_US) and observation noise (``max(receiver accuracy,
+  EKF2_GPS_P_NOISE 0.5 m)``, vertical ``1.5 x``; velocity ``max(., EKF2_GPS_V_NOISE 0.3 m/s)``, vertical
+  ``1.5 x``). The fixes it fuses carry the preset's GNSS errors (below): the slow GM part passes the filter
+  (it is indistinguishable from a position offset), the per-fix white parts are smoothed. Heading: one error
+  state driven by the gyro's rate error and corrected at each fix by the compass (EKF2_GYR_NOISE,
+  EKF2_HEAD_NOISE 0.3 rad); the compass biases pass it. The filter starts from the first fix (EKF2 resets
+  position and velocity to the GNSS when it starts fusing it). Fix delays up to EKF2_GPS_DELAY are
+  compensated (fusion on a delayed horizon).
+* ``raw-fix`` (the model before issue 26): the estimate is the truth plus the last fix's errors, held between
+  fixes: the controller sees a step at every fix.
+
+GNSS / compass error model per flight (all SI, radians), the same for both:
 
 * horizontal / vertical GNSS error: a first-order Gauss-Markov (GM) process with stationary std sigma and
   correlation time tau, advanced every chunk with the exact discretisation
-  ``x[k+1] = exp(-dt/tau) x[k] + sigma sqrt(1 - exp(-2 dt/tau)) n[k]``, plus a per-fix white noise. Both are
-  sampled at the GNSS update rate and **held** between fixes: between fixes the estimate follows the truth
-  plus the held error, as an EKF dead-reckoning on the IMU does (the IMU carries the motion, the fix the
-  offset).
+  ``x[k+1] = exp(-dt/tau) x[k] + sigma sqrt(1 - exp(-2 dt/tau)) n[k]``, plus a per-fix white noise; sampled
+  at the GNSS update rate. Velocity: a per-fix white noise.
 * latency: an uncompensated fix delay L makes the estimate lag the truth by ``-v L``.
-* barometer: a per-flight linear altitude drift ``rate * (t - t0)`` added to the vertical error.
-* compass: a per-flight constant heading bias, a held white heading noise per fix and, near the steel hull,
+* barometer: a per-flight linear altitude drift ``rate * (t - t0)`` added to the vertical error (far slower
+  than the filter: it passes it unchanged).
+* compass: a per-flight constant heading bias, a white heading noise per fix and, near the steel hull,
   an extra per-flight bias scaled by :func:`near_hull_taper` of the distance to the hull.
 
 Presets (``ideal``, ``rtk``, ``consumer``, ``px4-sitl``) with their sources are in ``_PRESETS``; every
@@ -28,6 +45,7 @@ from typing import Literal, NamedTuple
 
 import numpy as np
 from pydantic import Field
+from scipy.linalg import solve_discrete_are
 
 from wrp_eval.compiled import as_rows, kernel
 from wrp_eval.streams import BlockNormals, flight_generators
@@ -118,6 +136,46 @@ _COMPASS = {"compass_bias_deg": 2.0, "compass_noise_deg": 0.3, "near_hull_bias_d
 _BARO_CONSUMER_M_PER_MIN = 1.0 * M_PER_HPA / 180.0
 
 
+# The fused estimator (issue 26): PX4 EKF2 defaults (PX4/PX4-Autopilot src/modules/ekf2/module.yaml and
+# params_gnss.yaml): EKF2_ACC_NOISE 0.35 m/s^2 and EKF2_GYR_NOISE 0.015 rad/s ("noise for covariance
+# prediction"), applied as a variance (noise * dt)^2 per prediction step (EKF/covariance.cpp) of
+# EKF2_PREDICT_US = 10000 us: a white rate error of power spectral density noise^2 * 0.01 s.
+# EKF2_GPS_P_NOISE 0.5 m and EKF2_GPS_V_NOISE 0.3 m/s are lower bounds of the GNSS observation noise: the
+# filter uses max(receiver accuracy, parameter) (aid_sources/gnss/gps_control.cpp: pos_noise =
+# max(hacc, gps_pos_noise); gnss_velocity: vel_var = max(sacc, gps_vel_noise)^2, vertical x 1.5^2;
+# gnss_height_control.cpp: max(vacc, 1.5 * gps_pos_noise), "1.5 as a typical ratio of vacc/hacc").
+# EKF2_HEAD_NOISE 0.3 rad: magnetic heading fusion. EKF2_GPS_DELAY 110 ms: the fix delay EKF2 compensates by
+# fusing on a delayed horizon.
+EKF2_PREDICT_S = 0.010
+EKF2_ACC_NOISE_M_S2 = 0.35
+EKF2_GYR_NOISE_RAD_S = 0.015
+EKF2_GPS_P_NOISE_M = 0.5
+EKF2_GPS_V_NOISE_M_S = 0.3
+EKF2_VERTICAL_RATIO = 1.5
+EKF2_HEAD_NOISE_RAD = 0.3
+EKF2_GPS_DELAY_S = 0.110
+FILTER_ACCEL_PSD = EKF2_ACC_NOISE_M_S2**2 * EKF2_PREDICT_S      # (m/s^2)^2/Hz, the filter's process noise
+FILTER_GYRO_PSD = EKF2_GYR_NOISE_RAD_S**2 * EKF2_PREDICT_S      # (rad/s)^2/Hz
+# The IMU errors that drive the fused estimate's error (white acceleration / rate errors, densities):
+# consumer, rtk: what EKF2's defaults describe, sqrt(0.35^2 x 0.01) = 0.035 m/s^2/sqrt(Hz) and 0.0015
+# rad/s/sqrt(Hz) (the filter matched to its vehicle: EKF2_ACC_NOISE covers sensor noise, vibration and the
+# gravity leak of attitude errors; a bare MEMS accelerometer is ~20x quieter, e.g. Bosch BMI088 175
+# ug/sqrt(Hz) = 0.0017 m/s^2/sqrt(Hz)). px4-sitl: PX4-SITL_gazebo-classic include/gazebo_imu_plugin.h
+# (commit 0859997e) kDefaultAdisAccelerometerNoiseDensity 2 x 2.0e-3 m/s^2/sqrt(Hz),
+# kDefaultAdisGyroscopeNoiseDensity 2 x 35 / 3600 deg/s/sqrt(Hz) (bias random walks not modelled: EKF2
+# estimates the biases).
+_IMU = {"accel_noise_density": EKF2_ACC_NOISE_M_S2 * math.sqrt(EKF2_PREDICT_S),
+        "gyro_noise_density_deg_s": math.degrees(EKF2_GYR_NOISE_RAD_S * math.sqrt(EKF2_PREDICT_S)),
+        "gnss_position_floor_m": EKF2_GPS_P_NOISE_M, "gnss_velocity_floor_m_s": EKF2_GPS_V_NOISE_M_S}
+_SITL_IMU = {**_IMU, "accel_noise_density": 2 * 2.0e-3, "gyro_noise_density_deg_s": 2 * 35.0 / 3600.0}
+# RTK: the GNSS noise floors a PX4 RTK set-up flies with, EKF2_GPS_P_NOISE = EKF2_GPS_V_NOISE = 0.2 (CTU-MRS
+# "PX4 RTK Knowledge Base", ctu-mrs.github.io/docs/hardware/px4/px4_rtk, u-blox F9P); DJI does not publish its
+# P4 RTK filter.
+_RTK_IMU = {**_IMU, "gnss_position_floor_m": 0.2, "gnss_velocity_floor_m_s": 0.2}
+_NO_IMU = {"accel_noise_density": 0.0, "gyro_noise_density_deg_s": 0.0,
+           "gnss_position_floor_m": EKF2_GPS_P_NOISE_M, "gnss_velocity_floor_m_s": EKF2_GPS_V_NOISE_M_S}
+
+
 def _preset(**values) -> dict:
     """One preset: every NavigationSection field (section units: m, s, Hz, deg, m/min) + spec_source."""
     return values
@@ -129,7 +187,7 @@ _PRESETS: dict[str, dict] = {
                      update_rate_hz=20.0, latency_s=0.0, white_noise_m=0.0, vertical_white_noise_m=0.0,
                      velocity_noise_m_s=0.0, baro_drift_m_per_min=0.0, compass_bias_deg=0.0,
                      compass_noise_deg=0.0, near_hull_bias_deg=0.0, near_hull_distance_m=20.0,
-                     spec_source="ideal: estimate == truth"),
+                     spec_source="ideal: estimate == truth", **_NO_IMU),
     # DJI Phantom 4 without vision positioning (over water): hover accuracy +-1.5 m horizontal, +-0.5 m
     # vertical with GPS positioning (DJI Phantom 4 spec sheet), read as 95 % bounds: sigma_h from the 2-D
     # radius, sigma_v from the 1-D bound, net of the white part. Rate 10 Hz: assumed, upper end of consumer
@@ -139,7 +197,7 @@ _PRESETS: dict[str, dict] = {
                         vertical_sigma_m=gm_sigma_from_p95(0.5, K95_1D, _CONSUMER_WHITE_V),
                         correlation_time_s=_TAU_BEARD_MCLAIN_S, update_rate_hz=10.0, latency_s=0.0,
                         white_noise_m=_CONSUMER_WHITE_H, vertical_white_noise_m=_CONSUMER_WHITE_V,
-                        velocity_noise_m_s=0.05, baro_drift_m_per_min=_BARO_CONSUMER_M_PER_MIN, **_COMPASS,
+                        velocity_noise_m_s=0.05, baro_drift_m_per_min=_BARO_CONSUMER_M_PER_MIN, **_COMPASS, **_IMU,
                         spec_source="DJI Phantom 4 spec sheet: hover accuracy +-1.5 m H / +-0.5 m V (GPS "
                                     "positioning), read as 95 % bounds; tau 1100 s (Beard & McLain 2012, 7.5)"),
     # DJI Phantom 4 RTK: hover accuracy with RTK enabled +-0.1 m vertical and horizontal (DJI Phantom 4 RTK
@@ -149,7 +207,7 @@ _PRESETS: dict[str, dict] = {
                    vertical_sigma_m=gm_sigma_from_p95(0.1, K95_1D, _RTK_WHITE_V),
                    correlation_time_s=_TAU_BEARD_MCLAIN_S, update_rate_hz=5.0, latency_s=0.0,
                    white_noise_m=_RTK_WHITE_H, vertical_white_noise_m=_RTK_WHITE_V, velocity_noise_m_s=0.02,
-                   baro_drift_m_per_min=0.0, **_COMPASS,
+                   baro_drift_m_per_min=0.0, **_COMPASS, **_RTK_IMU,
                    spec_source="DJI Phantom 4 RTK spec sheet: hover accuracy +-0.1 m H and V (RTK), read as "
                                "95 % bounds; positioning 1 cm + 1 ppm H, 1.5 cm + 1 ppm V (RMS)"),
     # PX4 SITL Gazebo GPS plugin as it runs (see px4_plugin_gm): millimetre-level GM error with tau 0.24 s,
@@ -160,7 +218,7 @@ _PRESETS: dict[str, dict] = {
                         white_noise_m=_PX4_WHITE_H, vertical_white_noise_m=_PX4_WHITE_V,
                         velocity_noise_m_s=_PX4_VEL, baro_drift_m_per_min=0.0, compass_bias_deg=0.0,
                         compass_noise_deg=_PX4_COMPASS_NOISE_DEG, near_hull_bias_deg=0.0,
-                        near_hull_distance_m=20.0,
+                        near_hull_distance_m=20.0, **_SITL_IMU,
                         spec_source="PX4-SITL_gazebo-classic gazebo_gps_plugin defaults as implemented (bias "
                                     "recursion per 4 ms physics step: sigma 2.8 mm, tau 0.24 s), 5 Hz, 120 ms"),
 }
@@ -179,7 +237,8 @@ class NavigationSection(StrictModel):
     vertical_sigma_m: float | None = _sigma("stationary std of the vertical GM GNSS error, m")
     correlation_time_s: float | None = Field(None, gt=0.0, description="GM correlation time, s; None: preset")
     update_rate_hz: float | None = Field(None, gt=0.0, description="GNSS fix rate, Hz; None: preset")
-    latency_s: float | None = _sigma("uncompensated fix delay (estimate lags by -v * latency), s")
+    latency_s: float | None = _sigma("fix delay, s: the raw-fix estimate lags by -v * latency; the fused one by "
+                                     "-v * (latency - EKF2_GPS_DELAY 0.11 s), what EKF2 leaves uncompensated")
     white_noise_m: float | None = _sigma("per-fix white noise per horizontal axis, m")
     vertical_white_noise_m: float | None = _sigma("per-fix white noise, vertical, m")
     velocity_noise_m_s: float | None = _sigma("per-fix white noise of the horizontal velocity estimate (vertical "
@@ -191,6 +250,17 @@ class NavigationSection(StrictModel):
     near_hull_bias_deg: float | None = _sigma("std of the extra per-flight heading bias at the hull, deg")
     near_hull_distance_m: float | None = Field(None, gt=0.0, description="the near-hull bias tapers to 0 at "
                                                                          "this distance, m; None: preset")
+    estimator: Literal["fused", "raw-fix"] = Field(
+        "fused", description="fused: GNSS + IMU navigation filter (EKF2-like, steady-state gains); raw-fix: the "
+                             "last fix's errors held between fixes (the model before issue 26)")
+    accel_noise_density: float | None = _sigma("white acceleration error of the IMU driving the fused estimate, "
+                                               "m/s^2/sqrt(Hz)")
+    gyro_noise_density_deg_s: float | None = _sigma("white rate error of the gyro driving the fused heading, "
+                                                    "deg/s/sqrt(Hz)")
+    gnss_position_floor_m: float | None = Field(None, gt=0.0, description="the fused filter's floor of the GNSS "
+                                                "position noise (EKF2_GPS_P_NOISE; vertical 1.5x), m; None: preset")
+    gnss_velocity_floor_m_s: float | None = Field(None, gt=0.0, description="the fused filter's floor of the GNSS "
+                                                  "velocity noise (EKF2_GPS_V_NOISE; vertical 1.5x), m/s; None: preset")
 
 
 @dataclass(frozen=True)
@@ -212,13 +282,41 @@ class NavigationParams:
     near_hull_bias_rad: float
     near_hull_distance_m: float
     spec_source: str
+    estimator: str = "fused"              # "fused" or "raw-fix"
+    accel_noise_density: float = 0.0      # IMU white acceleration error, m/s^2/sqrt(Hz)
+    gyro_noise_density: float = 0.0       # gyro white rate error, rad/s/sqrt(Hz)
+    gnss_position_floor_m: float = EKF2_GPS_P_NOISE_M
+    gnss_velocity_floor_m_s: float = EKF2_GPS_V_NOISE_M_S
+
+    @property
+    def fused(self) -> bool:
+        """True for the GNSS + IMU filter, False for the held raw fixes."""
+        return self.estimator == "fused"
+
+    @property
+    def uncompensated_latency_s(self) -> float:
+        """The fix delay the estimate lags by: all of it for raw fixes; for the fused filter what exceeds
+        EKF2_GPS_DELAY (EKF2 fuses each fix at its own time on a delayed horizon and predicts forward)."""
+        return max(self.latency_s - EKF2_GPS_DELAY_S, 0.0) if self.fused else self.latency_s
+
+    @property
+    def filter_noise(self) -> tuple[float, float, float, float, float]:
+        """The fused filter's assumed observation noise, EKF2's rule ``max(receiver accuracy, floor)``:
+        (horizontal position m, vertical position m, horizontal velocity m/s, vertical velocity m/s, heading
+        rad). The receiver's accuracy is taken as the preset's own per-axis 1-sigma fix error (GM + white)."""
+        h = max(math.hypot(self.horizontal_sigma_m, self.white_noise_m), self.gnss_position_floor_m)
+        v = max(math.hypot(self.vertical_sigma_m, self.vertical_white_noise_m),
+                EKF2_VERTICAL_RATIO * self.gnss_position_floor_m)
+        vel = max(self.velocity_noise_m_s, self.gnss_velocity_floor_m_s)
+        return h, v, vel, EKF2_VERTICAL_RATIO * vel, EKF2_HEAD_NOISE_RAD
 
     @property
     def is_ideal(self) -> bool:
         """True when every error term is zero: the estimate is the truth and nothing is drawn."""
         return not any((self.horizontal_sigma_m, self.vertical_sigma_m, self.latency_s, self.white_noise_m,
                         self.vertical_white_noise_m, self.velocity_noise_m_s, self.baro_drift_rate_m_s,
-                        self.compass_bias_rad, self.compass_noise_rad, self.near_hull_bias_rad))
+                        self.compass_bias_rad, self.compass_noise_rad, self.near_hull_bias_rad,
+                        self.fused and self.accel_noise_density, self.fused and self.gyro_noise_density))
 
 
 def navigation_params(section: NavigationSection | None = None) -> NavigationParams:
@@ -237,7 +335,11 @@ def navigation_params(section: NavigationSection | None = None) -> NavigationPar
         compass_bias_rad=math.radians(values["compass_bias_deg"]),
         compass_noise_rad=math.radians(values["compass_noise_deg"]),
         near_hull_bias_rad=math.radians(values["near_hull_bias_deg"]),
-        near_hull_distance_m=values["near_hull_distance_m"], spec_source=values["spec_source"])
+        near_hull_distance_m=values["near_hull_distance_m"], spec_source=values["spec_source"],
+        estimator=section.estimator, accel_noise_density=values["accel_noise_density"],
+        gyro_noise_density=math.radians(values["gyro_noise_density_deg_s"]),
+        gnss_position_floor_m=values["gnss_position_floor_m"],
+        gnss_velocity_floor_m_s=values["gnss_velocity_floor_m_s"])
 
 
 def hover_p95_spec_m(params: NavigationParams) -> float:
@@ -268,23 +370,99 @@ def _taper(distance_m, reach_m: float):
     return (1.0 - d) ** 3
 
 
+def inertial_error_step(psd: float, dt_s: float) -> tuple[np.ndarray, np.ndarray]:
+    """(F (2, 2), Q (2, 2)) of one axis's (position m, velocity m/s) error over ``dt_s`` s when a white
+    acceleration error of power spectral density ``psd`` (m/s^2)^2/Hz drives it (the exact discretisation of
+    p' = v, v' = w: F = [[1, dt], [0, 1]], Q = psd [[dt^3/3, dt^2/2], [dt^2/2, dt]])."""
+    f = np.array([[1.0, dt_s], [0.0, 1.0]])
+    q = psd * np.array([[dt_s**3 / 3.0, dt_s**2 / 2.0], [dt_s**2 / 2.0, dt_s]])
+    return f, q
+
+
+def fusion_gain(psd: float, interval_s: float, position_noise: float, velocity_noise: float):
+    """Steady-state Kalman gain K (2, 2) and prior covariance P (2, 2) of one axis's (position, velocity)
+    filter fusing a position and a velocity fix (1-sigma ``position_noise`` m, ``velocity_noise`` m/s) every
+    ``interval_s`` s, the IMU driving it between fixes (white acceleration error, PSD ``psd``): P solves the
+    discrete algebraic Riccati equation P = F (P - P (P + R)^-1 P) F^T + Q (H = I), K = P (P + R)^-1. The
+    correction is x += K (z - x). With psd = 0 the gain is 0 (an inertial estimate needs no fix)."""
+    f, q = inertial_error_step(psd, interval_s)
+    r = np.diag([position_noise**2, velocity_noise**2])
+    if psd <= 0.0:
+        return np.zeros((2, 2)), np.zeros((2, 2))
+    p = solve_discrete_are(f.T, np.eye(2), q, r)
+    return p @ np.linalg.inv(p + r), p
+
+
+def heading_gain(psd: float, interval_s: float, heading_noise: float) -> tuple[float, float]:
+    """Steady-state Kalman gain and prior variance (rad^2) of a heading error driven by a white gyro rate
+    error (PSD ``psd`` (rad/s)^2/Hz) and corrected by a compass heading (1-sigma ``heading_noise`` rad) every
+    ``interval_s`` s (the scalar Riccati equation, solved by ``solve_discrete_are``)."""
+    if psd <= 0.0:
+        return 0.0, 0.0
+    p = float(solve_discrete_are(np.eye(1), np.eye(1), np.array([[psd * interval_s]]),
+                                 np.array([[heading_noise**2]]))[0, 0])
+    return p / (p + heading_noise**2), p
+
+
 @kernel
-def _estimate_rows(position, velocity, yaw, held_pos, held_vel, held_yaw, compass_bias, hull_bias, hull_distance,
+def _navigation_steps(rows, fixes, first, fused, dt_s, gm, pos_err, vel_err, yaw_noise, gm_phi, gm_drive, white,
+                      vel_sigma, compass_noise, accel_chol, gyro_step, gains, yaw_gain):
+    """Advance every flight's error state over the m steps of ``rows`` (n, m, _WIDTH) standard normals (column
+    layout: :class:`NavigationEstimator`), in place: gm, pos_err, vel_err (n, 3) m, m/s; yaw_noise (n,) rad.
+    Per step: the GM moves (not on the very first step, ``first``), the fused error propagates on the IMU
+    (accel_chol (2, 2): Cholesky factor of Q per step; gyro_step: rad per normal), and on a fix step
+    (``fixes`` (m,) bool) the fix errors are drawn: raw-fix (or the first fix) takes them as the error,
+    fused corrects towards them with ``gains`` (2, 2, 2): [horizontal, vertical] K, and ``yaw_gain``."""
+    n, m = rows.shape[0], rows.shape[1]
+    for row in range(n):
+        for j in range(m):
+            start = first and j == 0
+            if not start:
+                for d in range(3):
+                    gm[row, d] = gm_phi * gm[row, d] + gm_drive[d] * rows[row, j, d]
+                if fused:
+                    for d in range(3):
+                        n1, n2 = rows[row, j, 10 + 2 * d], rows[row, j, 11 + 2 * d]
+                        p = pos_err[row, d] + dt_s * vel_err[row, d] + accel_chol[0, 0] * n1
+                        v = vel_err[row, d] + accel_chol[1, 0] * n1 + accel_chol[1, 1] * n2
+                        pos_err[row, d], vel_err[row, d] = p, v
+                    yaw_noise[row] = yaw_noise[row] + gyro_step * rows[row, j, 16]
+            if fixes[j]:
+                for d in range(3):
+                    zp = gm[row, d] + white[d] * rows[row, j, 3 + d]
+                    zv = vel_sigma[d] * rows[row, j, 6 + d]
+                    if fused and not start:
+                        a = 0 if d < 2 else 1
+                        yp, yv = zp - pos_err[row, d], zv - vel_err[row, d]
+                        pos_err[row, d] = pos_err[row, d] + gains[a, 0, 0] * yp + gains[a, 0, 1] * yv
+                        vel_err[row, d] = vel_err[row, d] + gains[a, 1, 0] * yp + gains[a, 1, 1] * yv
+                    else:
+                        pos_err[row, d], vel_err[row, d] = zp, zv
+                zy = compass_noise * rows[row, j, 9]
+                if fused and not start:
+                    yaw_noise[row] = yaw_noise[row] + yaw_gain * (zy - yaw_noise[row])
+                else:
+                    yaw_noise[row] = zy
+
+
+@kernel
+def _estimate_rows(position, velocity, yaw, err_pos, err_vel, yaw_noise, compass_bias, hull_bias, hull_distance,
                    reach_m, baro_rate, elapsed_s, latency_s):
-    """(position, velocity (n, 3), yaw (n,), position error (n, 3), yaw error (n,)) of the estimate: the held
-    fix errors, the latency lag -v * latency, the baro drift and the compass biases (the near-hull one tapered
-    by ``hull_distance`` (n,) m; empty: far from any hull)."""
+    """(position, velocity (n, 3), yaw (n,), position error (n, 3), yaw error (n,)) of the estimate: the
+    filter's (or the held fix's) errors ``err_pos``, ``err_vel`` (n, 3), ``yaw_noise`` (n,), the latency lag
+    -v * latency, the baro drift and the compass biases (the near-hull one tapered by ``hull_distance`` (n,)
+    m; empty: far from any hull)."""
     n = position.shape[0]
     est_pos, est_vel, pos_err = np.empty((n, 3)), np.empty((n, 3)), np.empty((n, 3))
     est_yaw, yaw_err = np.empty(n), np.empty(n)
     for row in range(n):
         for d in range(3):
-            pos_err[row, d] = held_pos[row, d] - velocity[row, d] * latency_s
+            pos_err[row, d] = err_pos[row, d] - velocity[row, d] * latency_s
         pos_err[row, 2] += baro_rate[row] * elapsed_s
         for d in range(3):
             est_pos[row, d] = position[row, d] + pos_err[row, d]
-            est_vel[row, d] = velocity[row, d] + held_vel[row, d]
-        yaw_err[row] = compass_bias[row] + held_yaw[row]
+            est_vel[row, d] = velocity[row, d] + err_vel[row, d]
+        yaw_err[row] = compass_bias[row] + yaw_noise[row]
         if hull_distance.size:
             yaw_err[row] = yaw_err[row] + hull_bias[row] * _taper(hull_distance[row], reach_m)
         est_yaw[row] = yaw[row] + yaw_err[row]
@@ -301,19 +479,26 @@ class NavigationEstimate(NamedTuple):
     yaw_error: np.ndarray       # (n,) rad
 
 
-# per step and flight: GM driving noise (3), white position (3), velocity (3), heading (1)
-_WIDTH = 10
+# per step and flight: GM driving noise (3), white position (3), velocity (3), heading (1), IMU acceleration
+# error (2 per axis: x, y, z), gyro (1)
+_WIDTH = 17
 
 
 class NavigationEstimator:
     """Batched navigation errors for ``n_flights`` flights, one Generator per flight, stepping ``dt_s``.
 
     Flight i's draws, in its own stream order: first 6 normals (compass bias, near-hull bias, baro drift
-    rate, initial GM state x/y/z from the stationary distribution), then 10 normals per time step
-    (:class:`wrp_eval.streams.BlockNormals`), whether or not the step brings a fix, so row i never depends on
-    the batch, and the GM path does not depend on the fix rate. With an ideal ``params`` nothing is drawn.
-    ``block_steps``: steps per stacked draw (memory n_flights x block_steps x 10 doubles; 256 x 1024 flights
-    = 21 MB).
+    rate, initial GM state x/y/z from the stationary distribution), then 17 normals per time step
+    (:class:`wrp_eval.streams.BlockNormals`; columns 0-2 GM drive, 3-5 white fix position, 6-8 fix velocity,
+    9 compass, 10-15 the IMU's acceleration error (two per axis: the exact (position, velocity) increment of
+    white acceleration over the step), 16 gyro), whether or not the step brings a fix and whichever the
+    estimator, so row i never depends on the batch, and the GM path does not depend on the fix rate or the
+    estimator. With an ideal ``params`` nothing is drawn. ``block_steps``: steps per stacked draw (memory
+    n_flights x block_steps x 17 doubles; 256 x 1024 flights = 36 MB).
+
+    Fused: the gains are the steady state of the fix interval 1 / update_rate (:func:`fusion_gain`); the
+    IMU error propagates every ``dt_s`` step between fixes (the filter's own predictions at 100 Hz in
+    between change nothing at the fix instants: the process noise over the interval is the same).
     """
 
     def __init__(self, params: NavigationParams, rngs, n_flights: int, dt_s: float, block_steps: int = 256):
@@ -338,43 +523,49 @@ class NavigationEstimator:
         self._phi = math.exp(-self.dt_s / p.correlation_time_s)
         self._gm_drive = self._gm_sigma * math.sqrt(1 - self._phi**2)     # (3,) per-step driving std
         self._noise = BlockNormals(gens, n_flights, _WIDTH, block_steps)    # block size never changes the numbers
+        # the fused filter: the IMU's true error per step (the preset's densities) and the steady-state gains of
+        # the fix interval from EKF2's process noise (FILTER_ACCEL_PSD, FILTER_GYRO_PSD) and observation noise
+        _, q_step = inertial_error_step(p.accel_noise_density**2, self.dt_s)
+        self._accel_chol = np.linalg.cholesky(q_step) if p.accel_noise_density > 0 else np.zeros((2, 2))
+        self._gyro_step = p.gyro_noise_density * math.sqrt(self.dt_s)
+        interval = 1.0 / p.update_rate_hz
+        h, v, vel_h, vel_v, head = p.filter_noise
+        self.gains = np.stack([fusion_gain(FILTER_ACCEL_PSD, interval, h, vel_h)[0],
+                               fusion_gain(FILTER_ACCEL_PSD, interval, v, vel_v)[0]])  # (2, 2, 2): horizontal, vertical
+        self.yaw_gain = heading_gain(FILTER_GYRO_PSD, interval, head)[0]
         self._fix_index = -1
-        self._held_pos = np.zeros((n_flights, 3))
-        self._held_vel = np.zeros((n_flights, 3))
-        self._held_yaw = np.zeros(n_flights)
+        self._pos_err = np.zeros((n_flights, 3))
+        self._vel_err = np.zeros((n_flights, 3))
+        self._yaw_noise = np.zeros(n_flights)
+
+    def _fix_steps(self, k0: int, m: int) -> np.ndarray:
+        """(m,) bool: which of the steps k0 .. k0 + m - 1 start a new fix interval (updates the fix index)."""
+        fixes = np.zeros(m, np.bool_)
+        for j in range(m):
+            index = math.floor((k0 + j) * self.dt_s * self.params.update_rate_hz + 1e-9)
+            if index != self._fix_index:
+                self._fix_index, fixes[j] = index, True
+        return fixes
 
     def _advance(self, t_s: float) -> int:
-        """Move the GM state to the step of ``t_s``; returns the step index."""
+        """Move the error state to the step of ``t_s`` (each step in turn); returns the step index."""
         if self._k is None:
-            self._t0, k = float(t_s), 0
-            rows = self._noise.draw(1)                                 # step 0: fix noises only
+            self._t0, k, k0 = float(t_s), 0, 0
+            rows = self._noise.draw(1)                                 # step 0: the first fix only
         else:
             k = round((t_s - self._t0) / self.dt_s)
             if k < self._k:
                 raise ValueError(f"time went backwards: t={t_s} before step {self._k}")
+            k0 = self._k + 1
             rows = self._noise.draw(k - self._k)
-            m = rows.shape[1]
-            if m == 1:      # the flight loop's case: one chunk
-                self._gm = self._phi * self._gm + self._gm_drive * rows[:, 0, 0:3]
-            elif m:
-                # m exact steps at once: x_m = phi^m x_0 + s sum_j phi^(m-1-j) n_j (identical to m single steps)
-                weights = self._phi ** np.arange(m - 1, -1, -1)
-                drive = np.einsum("j,njc->nc", weights, rows[:, :, 0:3])
-                self._gm = self._phi**m * self._gm + self._gm_drive * drive
         if rows.shape[1]:
-            self._maybe_fix(k, rows[:, -1])
+            p = self.params
+            _navigation_steps(rows, self._fix_steps(k0, rows.shape[1]), self._k is None, p.fused, self.dt_s,
+                              self._gm, self._pos_err, self._vel_err, self._yaw_noise, self._phi, self._gm_drive,
+                              self._white, self._vel_sigma, p.compass_noise_rad, self._accel_chol,
+                              self._gyro_step, self.gains, self.yaw_gain)
         self._k = k
         return k
-
-    def _maybe_fix(self, k: int, row: np.ndarray) -> None:
-        """Take a new fix if step k starts a new fix interval: sample the GM and draw the per-fix noises."""
-        fix_index = math.floor(k * self.dt_s * self.params.update_rate_hz + 1e-9)
-        if fix_index == self._fix_index:
-            return
-        self._fix_index = fix_index
-        self._held_pos = self._gm + self._white * row[:, 3:6]
-        self._held_vel = self._vel_sigma * row[:, 6:9]
-        self._held_yaw = self.params.compass_noise_rad * row[:, 9]
 
     def estimate(self, t_s: float, position, velocity, yaw, hull_distance_m=None) -> NavigationEstimate:
         """The estimated state at time ``t_s`` (the first call sets t0; later ones advance by multiples of dt).
@@ -393,7 +584,7 @@ class NavigationEstimator:
         hull = np.empty(0) if hull_distance_m is None else as_rows("hull_distance_m", hull_distance_m, (n,))
         self._advance(t_s)
         p = self.params
-        return NavigationEstimate(*_estimate_rows(position, velocity, yaw, self._held_pos, self._held_vel,
-                                                  self._held_yaw, self._compass_bias, self._hull_bias, hull,
+        return NavigationEstimate(*_estimate_rows(position, velocity, yaw, self._pos_err, self._vel_err,
+                                                  self._yaw_noise, self._compass_bias, self._hull_bias, hull,
                                                   float(p.near_hull_distance_m), self._baro_rate,
-                                                  float(t_s - self._t0), float(p.latency_s)))
+                                                  float(t_s - self._t0), float(p.uncompensated_latency_s)))

@@ -16,24 +16,20 @@ import numpy as np
 from scipy.spatial.transform import Rotation
 
 from wrp_eval.camera import Camera, camera_angles, camera_rotations, optical_axes
-from wrp_eval.compiled import as_rows, kernel
+from wrp_eval.compiled import as_rows
 from wrp_eval.ship.motion import ShipMotion, ShipMotionSection, ship_motion
 from wrp_eval.ship.nofly import distance_to_box, ray_box_distance
 from wrp_eval.sim.blur import angular_velocity, motion_blur_px
 from wrp_eval.sim.config import SimSection
 from wrp_eval.sim.flight_state import FlightTargets, Shot
 from wrp_eval.sim.gimbal import CameraAttitude, Gimbal, GimbalParams
+from wrp_eval.sim.mission import Decisions, WindEstimate, decide, travel_time_s
 from wrp_eval.sim.navigation import (
     NavigationEstimate,
     NavigationEstimator,
     navigation_params,
 )
-from wrp_eval.sim.power import (
-    Battery,
-    electrical_power_w,
-    level_flight_power_w,
-    straight_home_energy_j,
-)
+from wrp_eval.sim.power import Battery, electrical_power_w, level_flight_power_w
 from wrp_eval.sim.vehicle import QuadrotorParams
 from wrp_eval.streams import children, flight_generators
 
@@ -69,29 +65,6 @@ def view_depths(path, box: np.ndarray | None) -> np.ndarray:
     return np.where(np.isfinite(along), along, np.where(nearest > 0.0, nearest, np.nan))
 
 
-@kernel
-def _return_rows(home, position, wind, wind_estimate, weight, judged, limit, cruise_m_s, cruise_power_w, energy_j,
-                 reserve_j, enabled):
-    """(battery due (n,) bool, wind over the limit (n,) bool) of :meth:`Onboard.must_return`, row by row; the
-    horizontal ``wind_estimate`` (n, 3) moves by ``weight`` towards ``wind`` (n, 3) in place (weight 1: it
-    starts there). Due: the energy home, flown straight at cruise airspeed plus the estimated tail wind (at
-    least 1 m/s), would leave no more than the reserve (:meth:`Battery.needs_return`)."""
-    n = position.shape[0]
-    due, over = np.zeros(n, np.bool_), np.zeros(n, np.bool_)
-    for row in range(n):
-        for d in range(3):      # the horizontal wind: z times 0 (a non-finite z stays NaN, as wind * (1, 1, 0))
-            sample = wind[row, d] * (0.0 if d == 2 else 1.0)
-            wind_estimate[row, d] = wind_estimate[row, d] + weight * (sample - wind_estimate[row, d])
-        over[row] = judged and np.hypot(wind_estimate[row, 0], wind_estimate[row, 1]) > limit
-        hx, hy, hz = home[row, 0] - position[row, 0], home[row, 1] - position[row, 1], home[row, 2] - position[row, 2]
-        distance = np.sqrt(hx ** 2 + hy ** 2 + hz ** 2)
-        tailwind = (wind_estimate[row, 0] * hx + wind_estimate[row, 1] * hy + wind_estimate[row, 2] * hz) \
-            / np.maximum(distance, 1e-9)
-        ground = np.maximum(cruise_m_s + tailwind, 1.0)
-        due[row] = enabled and energy_j[row] - straight_home_energy_j(distance, ground, cruise_power_w) <= reserve_j
-    return due, over
-
-
 class Onboard:
     """The instruments of ``batch`` flights (module docstring), advanced once per chunk of ``dt_s`` s."""
 
@@ -111,10 +84,10 @@ class Onboard:
         self.gimbal: Gimbal | None = None
         self.attitude: CameraAttitude | None = None        # the cameras now ...
         self._previous: CameraAttitude | None = None       # ... and one chunk ago (their rate: the blur)
-        self.wind_estimate = None              # (batch, 3) m/s, the autopilot's averaged horizontal wind
-        self.wind_time = 0.0
-        self.cruise_power_w = float(level_flight_power_w(np.array([cruise_m_s]), params, sec.battery,
-                                                         sec.drag_coefficient, sec.air_density_kg_m3)[0])
+        self.wind_estimate = WindEstimate(batch, dt_s, sec.mission)     # the autopilot's horizontal wind
+        self.cruise_power_w, self.return_power_w = (float(p) for p in level_flight_power_w(
+            np.array([cruise_m_s, sec.mission.return_airspeed_m_s]), params, sec.battery, sec.drag_coefficient,
+            sec.air_density_kg_m3))
 
     def sense(self, t: float, position: np.ndarray, velocity: np.ndarray, yaw: np.ndarray) -> NavigationEstimate:
         """The navigation estimate at ``t`` s of vehicles at ``position``, ``velocity`` (batch, 3), ``yaw``."""
@@ -139,28 +112,29 @@ class Onboard:
         self.battery.drain(power, self.dt_s, flying)
         return power
 
-    def must_return(self, position: np.ndarray, wind: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-        """(battery due (batch,) bool, wind over the limit (batch,) bool) for vehicles at ``position`` (batch, 3)
-        in ``wind`` (batch, 3) m/s. The way home is flown at cruise airspeed, its ground speed helped or
-        hindered by the estimated (averaged) wind along it (at least 1 m/s)."""
+    def decide(self, position: np.ndarray, wind: np.ndarray) -> Decisions:
+        """The autopilot's :class:`~wrp_eval.sim.mission.Decisions` this chunk for vehicles at ``position``
+        (batch, 3) m in ``wind`` (batch, 3) m/s (its wind estimates advance by one chunk)."""
         n = len(self.home)
         position, wind = as_rows("position", position, (n, 3)), as_rows("wind", wind, (n, 3))
-        if self.wind_estimate is None:
-            self.wind_estimate, self.wind_time, self.wind_samples = np.zeros((n, 3)), 0.0, 1
-            weight = 1.0
-        else:
-            # a first-order average, which starts as the running mean (the weight of a new sample is never below
-            # 1/(samples so far), so the first gust after take-off does not dominate the first time constant)
-            self.wind_samples += 1
-            weight = max(1.0 - np.exp(-self.dt_s / self.sec.wind_average_s), 1.0 / self.wind_samples)
-            self.wind_time += self.dt_s
-        limit = self.sec.wind_limit_m_s
-        # judged once the average has had its time constant to form (not on the first gust after take-off)
-        judged = limit is not None and self.wind_time >= self.sec.wind_average_s
         bat = self.battery
-        return _return_rows(self.home, position, wind, self.wind_estimate, float(weight), judged,
-                            float(limit or 0.0), float(self.cruise_m_s), float(self.cruise_power_w), bat.energy_j,
-                            float(bat.reserve_j), bool(bat.section.enabled))
+        return decide(self.wind_estimate, self.home, position, wind, self.cruise_m_s, self.cruise_power_w,
+                      self.return_power_w, bat.energy_j, bat.reserve_j, bool(bat.section.enabled))
+
+    def away_time_s(self, rows: np.ndarray, position: np.ndarray) -> np.ndarray:
+        """(m,) s that flights ``rows`` (m,) at their breakpoints ``position`` (m, 3) m spend away: home at the
+        cruise airspeed with the estimated wind, the swap on deck, back to the breakpoint."""
+        wind, home = self.wind_estimate.current[rows], self.home[rows]
+        return (travel_time_s(position, home, wind, self.cruise_m_s) + self.sec.mission.swap_time_s
+                + travel_time_s(home, position, wind, self.cruise_m_s))
+
+    def fresh_battery(self, rows: np.ndarray, position: np.ndarray) -> None:
+        """Flights ``rows`` (m,) get a full battery at home, less the energy to fly back to their breakpoints
+        ``position`` (m, 3) m at the cruise airspeed with the estimated wind."""
+        wind, home = self.wind_estimate.current[rows], self.home[rows]
+        back = travel_time_s(home, position, wind, self.cruise_m_s) * self.cruise_power_w
+        bat = self.battery
+        bat.energy_j[rows] = np.maximum(bat.section.start_charge * bat.capacity_j - back, 0.0)
 
     def shoot(self, rows: np.ndarray, views: np.ndarray, delay_s: np.ndarray, t: float, position: np.ndarray,
               velocity: np.ndarray, rot: np.ndarray, nav: NavigationEstimate, attitude: CameraAttitude,

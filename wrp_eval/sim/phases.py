@@ -21,14 +21,19 @@ from wrp_eval.sim.capture_mode import through_profile, through_row
 from wrp_eval.sim.config import SimSection
 from wrp_eval.sim.controller import PositionController, wrap_angle, wrapped
 from wrp_eval.sim.flight_state import (
+    AWAY,
     COMPLETED,
     DITCHED,
     DONE,
     DWELL,
     ENDED,
+    LOST_HEADWAY,
+    LOST_OUTSIDE,
     NON_FINITE,
     RETURNED_BATTERY,
+    RETURNED_HEADWAY,
     RETURNED_WIND,
+    RETURNED_WIND_AVERAGE,
     SETTLE,
     TIMED_OUT,
     TRANSIT,
@@ -209,15 +214,14 @@ def reference(state: FlightState, position: np.ndarray, profile: Profile, leash_
 
 
 # -- how flights end ----------------------------------------------------------------------------------------
-def check_failures(state: FlightState, position: np.ndarray, velocity: np.ndarray, out_of_time: bool) -> np.ndarray:
+def check_failures(state: FlightState, position: np.ndarray, velocity: np.ndarray, out_of_time) -> np.ndarray:
     """(batch,) outcome codes of flights failing now (COMPLETED elsewhere): non-finite state, below the sea
-    surface (ditched), or still flying when ``out_of_time``. ``position``, ``velocity`` (batch, 3): true."""
+    surface (ditched), or still flying when ``out_of_time`` ((batch,) bool or one bool for all: the sortie has
+    run past the simulator's limit). ``position``, ``velocity`` (batch, 3): true."""
     active = state.flying
     bad = ~np.isfinite(position.sum(axis=1) + velocity.sum(axis=1))
     ditched = position[:, 2] < 0.0
-    newly = active & (ditched | bad)
-    if out_of_time:
-        newly |= active
+    newly = active & (ditched | bad | out_of_time)
     cause = np.full(len(newly), COMPLETED)
     if newly.any():     # rare: np.select alone would cost a fifth of this function every chunk
         first = np.select([bad, ditched], [NON_FINITE, DITCHED], TIMED_OUT)
@@ -225,11 +229,31 @@ def check_failures(state: FlightState, position: np.ndarray, velocity: np.ndarra
     return cause
 
 
-def check_returns(state: FlightState, battery_due: np.ndarray, wind_over: np.ndarray) -> np.ndarray:
-    """(batch,) outcome codes of flights the autopilot sends home now: the battery at its reserve (plus the
-    energy home), or its wind estimate over the limit; COMPLETED elsewhere."""
+def no_headway(state: FlightState, position: np.ndarray, t: float, timeout_s: float, progress_m: float,
+               leash_m: float) -> np.ndarray:
+    """(batch,) bool: flights that have not come ``progress_m`` closer to their waypoint (the current segment's
+    end) for ``timeout_s`` s and are more than ``leash_m`` from it (a vehicle holding at its viewpoint makes no
+    progress and needs none). Updates the state's progress record (a new waypoint starts a new record).
+    ``position`` (batch, 3) m: as the navigation estimates it."""
+    distance = np.linalg.norm(position - state.segment.end, axis=1)
+    new_leg = state.index != state.progress_view
+    better = new_leg | (distance < state.progress_m - progress_m)
+    state.progress_m = np.where(better, distance, state.progress_m)
+    state.progress_time = np.where(better, t, state.progress_time)
+    state.progress_view = state.index.copy()
+    return state.flying & (t - state.progress_time >= timeout_s) & (distance > leash_m)
+
+
+def check_returns(state: FlightState, battery_due: np.ndarray, px4_wind: np.ndarray, operator_wind: np.ndarray,
+                  stuck: np.ndarray, home_reachable: np.ndarray) -> np.ndarray:
+    """(batch,) outcome codes of flights the autopilot sends home now (COMPLETED elsewhere), each (batch,) bool:
+    the battery at its reserve plus the energy home; the PX4-style wind limit; the operator's average-wind
+    policy; no headway (``stuck``), when home is ``home_reachable``, else the vehicle is lost."""
     active = state.flying
-    return np.where(active & battery_due, RETURNED_BATTERY, np.where(active & wind_over, RETURNED_WIND, COMPLETED))
+    stuck = active & stuck
+    return np.select([active & battery_due, active & px4_wind, active & operator_wind, stuck & home_reachable, stuck],
+                     [RETURNED_BATTERY, RETURNED_WIND, RETURNED_WIND_AVERAGE, RETURNED_HEADWAY, LOST_HEADWAY],
+                     COMPLETED)
 
 
 def apply_endings(state: FlightState, cause: np.ndarray, t: float) -> None:
@@ -242,20 +266,62 @@ def apply_endings(state: FlightState, cause: np.ndarray, t: float) -> None:
     state.phase = np.where(newly, ENDED, state.phase)
 
 
+def swap_batteries(state: FlightState, cause: np.ndarray, max_sorties: int) -> np.ndarray:
+    """Flights sent home on energy with sorties left go AWAY for a battery swap instead of ending: their cause
+    becomes COMPLETED (the mission goes on). A sortie that took no view ends the mission instead (the battery
+    is spent getting to the breakpoint and back: another one would do the same; an operator stops there).
+    Returns (rows (m,) int of those flights, the causes left)."""
+    took_a_view = (state.view_sortie == state.sortie[:, None]).any(axis=1)
+    swap = (cause == RETURNED_BATTERY) & (state.sortie < max_sorties) & took_a_view
+    rows = np.flatnonzero(swap)
+    if rows.size:
+        state.phase[rows] = AWAY
+    return rows, np.where(swap, COMPLETED, cause)
+
+
+def resume(state: FlightState, targets: FlightTargets, rows: np.ndarray, position: np.ndarray, yaw: np.ndarray,
+           t: float, profile: Profile) -> None:
+    """Flights ``rows`` (m,) int start their next sortie at ``t`` s, hovering at their breakpoint ``position``
+    (m, 3) m with heading ``yaw`` (m,) rad: the reference flies from there to the viewpoint it was flying to
+    (from rest; in fly-through on to that viewpoint's planned speed), the way a resumed mission does."""
+    if not rows.size:
+        return
+    k = state.index[rows]
+    speeds = {}
+    if profile.through:
+        speeds = dict(v0=np.zeros(rows.size), v1=targets.vertex_speed[rows, k],
+                      v_max=targets.leg_speed[rows, np.maximum(k - 1, 0)])
+    state.segment.assign(rows, plan_segments(position, targets.body[rows, k], yaw, targets.yaw[rows, k], profile,
+                                             **speeds))
+    state.phase[rows] = TRANSIT
+    state.phase_time[rows] = 0.0
+    state.sortie[rows] += 1
+    state.sortie_start[rows] = t
+    state.resume_at[rows] = np.inf
+    state.progress_m[rows] = np.inf
+    state.progress_time[rows] = t
+
+
 def outcome_reason(cause: int, t: float, view: int, sec: SimSection) -> str:
     """The text of outcome ``cause`` at ``t`` s before viewpoint ``view`` ("" for COMPLETED)."""
-    if cause == NON_FINITE:
-        return f"non-finite state at t={t:.2f}s"
-    if cause == DITCHED:
-        return f"ditched (below sea level) at t={t:.2f}s"
-    if cause == TIMED_OUT:
-        return f"not finished within max_flight_time_s={sec.max_flight_time_s:g}"
-    if cause == RETURNED_BATTERY:
-        return (f"returned home: battery at its reserve ({sec.battery.reserve:g}) plus the energy home at "
-                f"t={t:.2f}s (before view {view})")
-    if cause == RETURNED_WIND:
-        return (f"returned home: wind estimate over {sec.wind_limit_m_s:g} m/s at t={t:.2f}s (before view {view})")
-    return ""
+    m = sec.mission
+    texts = {
+        NON_FINITE: f"non-finite state at t={t:.2f}s",
+        DITCHED: f"ditched (below sea level) at t={t:.2f}s",
+        TIMED_OUT: f"a sortie not finished within max_flight_time_s={sec.max_flight_time_s:g}",
+        RETURNED_BATTERY: (f"returned home: battery at its reserve ({sec.battery.reserve:g}) plus the energy home at "
+                           f"t={t:.2f}s (before view {view}; no sortie left of {m.max_sorties})"),
+        RETURNED_WIND: (f"returned home: wind estimate over the PX4-style limit {m.px4_wind_limit_m_s or 0:g} m/s at "
+                        f"t={t:.2f}s (before view {view})"),
+        RETURNED_WIND_AVERAGE: (f"returned home: {m.operator_wind_average_s:g} s average wind over the operator's "
+                                f"limit {m.operator_wind_limit_m_s or 0:g} m/s at t={t:.2f}s (before view {view})"),
+        RETURNED_HEADWAY: (f"returned home: no headway towards view {view} for {m.headway_timeout_s:g} s at "
+                           f"t={t:.2f}s"),
+        LOST_HEADWAY: (f"lost: no headway towards view {view} and no way home at {m.return_airspeed_m_s:g} m/s "
+                       f"airspeed at t={t:.2f}s"),
+        LOST_OUTSIDE: f"lost: left the wind field at t={t:.2f}s (before view {view})",
+    }
+    return texts.get(cause, "")
 
 
 def outcome_reasons(state: FlightState, sec: SimSection) -> tuple[str, ...]:
@@ -358,6 +424,7 @@ def take_photos(state: FlightState, targets: FlightTargets, rows: np.ndarray, sh
         return
     view = state.photo[rows]
     state.captures.record(rows, view, shot, targets)
+    state.view_sortie[rows, view] = state.sortie[rows]
     state.flight_time[rows] = shot.time
     state.photo[rows] = view + 1
 

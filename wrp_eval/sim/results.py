@@ -44,7 +44,10 @@ class FlightResult:
     outcome (batch,) int (:mod:`wrp_eval.sim.flight_state` codes) with outcome_reason (batch,) str ("" when
     the flight completed); failed (batch,) bool: crashed or timed out (a flight that turned home early on
     its battery or wind limit did not fail: its remaining views are simply not taken);
-    flight_time_s (batch,): time of the last photo (or of the end).
+    flight_time_s (batch,): time of the last photo (or of the end): the mission time, battery swaps included.
+    sorties (batch,) int: the sorties flown (a return on energy with sorties left is followed by a battery swap
+    and a resumed sortie, sim/mission.py); view_sortie (batch, n_views) int: the sortie that took each view
+    (0: not taken by any).
     """
 
     captures: tuple[CaptureSet, ...]
@@ -65,6 +68,8 @@ class FlightResult:
     trajectory: Trajectory
     timestep_s: float
     chunk_steps: int
+    sorties: np.ndarray
+    view_sortie: np.ndarray
 
     @property
     def batch(self) -> int:
@@ -73,6 +78,12 @@ class FlightResult:
     @property
     def n_views(self) -> int:
         return int(self.offsets.shape[1])
+
+    @property
+    def views_per_sortie(self) -> np.ndarray:
+        """(batch, max sorties) int: the views each sortie took."""
+        top = max(int(self.sorties.max(initial=1)), 1)
+        return (self.view_sortie[:, :, None] == np.arange(1, top + 1)).sum(axis=1)
 
     @property
     def failure_reason(self) -> tuple[str, ...]:

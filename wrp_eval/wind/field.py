@@ -61,6 +61,12 @@ class WindField:
         mean = self.mean.velocity(np.tile([0.0, 0.0, 10.0], (n_flights, 1)), 0.0)
         return np.hypot(mean[:, 0], mean[:, 1])
 
+    def inside(self, points: np.ndarray) -> np.ndarray:
+        """(n,) bool: the rows of ``points`` (n, 3) m inside the mean field's domain (a mean model without an
+        ``inside`` covers everywhere). The simulator ends a flight blown outside as lost, instead of raising."""
+        inside = getattr(self.mean, "inside", None)
+        return np.ones(len(points), dtype=bool) if inside is None else inside(points)
+
     def velocity(self, points: np.ndarray, t: float) -> np.ndarray:
         points = np.asarray(points, dtype=float)
         wind = self.mean.velocity(points, t)

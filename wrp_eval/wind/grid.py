@@ -227,6 +227,36 @@ def _interpolate_rows(points, grid_yaw, x_axis, y_axis, heights, values, field, 
     return out, _INSIDE, -1
 
 
+@kernel
+def _inside_rows(points, grid_yaw, x_axis, y_axis, heights):
+    """(n,) bool: ship-frame ``points`` (n, 3) that :func:`_interpolate_rows` (clamp off) accepts: within the
+    axes' ranges, and in height within [the lowest bottom, the highest top] of the cell's four columns."""
+    n = points.shape[0]
+    c, s = np.cos(grid_yaw), np.sin(grid_yaw)
+    nz = heights.shape[2]
+    out = np.zeros(n, np.bool_)
+    for row in range(n):
+        x = c * points[row, 0] + s * points[row, 1]
+        y = -s * points[row, 0] + c * points[row, 1]
+        z = points[row, 2]
+        if not (x >= x_axis[0] and x <= x_axis[-1] and y >= y_axis[0] and y <= y_axis[-1]):
+            continue
+        i, j = _lower_index(x_axis, x), _lower_index(y_axis, y)
+        bottom = np.minimum(np.minimum(heights[i, j, 0], heights[i + 1, j, 0]),
+                            np.minimum(heights[i, j + 1, 0], heights[i + 1, j + 1, 0]))
+        top = np.maximum(np.maximum(heights[i, j, nz - 1], heights[i + 1, j, nz - 1]),
+                         np.maximum(heights[i, j + 1, nz - 1], heights[i + 1, j + 1, nz - 1]))
+        out[row] = z >= bottom and z <= top
+    return out
+
+
+def inside(grid: WindGrid, points: np.ndarray) -> np.ndarray:
+    """(n,) bool: ship-frame ``points`` (n, 3) m where :func:`interpolate` (clamp off) answers instead of raising
+    :class:`OutsideWindGridError` (NaN coordinates are outside)."""
+    points = as_rows("points", points, (len(points), 3))
+    return _inside_rows(points, float(grid.grid_yaw_rad), grid.x_m, grid.y_m, grid.heights_m)
+
+
 def interpolate(grid: WindGrid, points: np.ndarray, method: str = "idw", idw_power: float = 2.0,
                 clamp: bool = False, values: np.ndarray | None = None,
                 value_index: np.ndarray | None = None) -> np.ndarray:
@@ -324,6 +354,20 @@ class GriddedMeanWind:
                 rows = np.flatnonzero(np.isin(self.flight_field, fields))
                 values = np.stack([self.grids[f].velocity_mps for f in fields])
                 self._groups.append((self.grids[fields[0]], values, rows, stack_index[self.flight_field[rows]]))
+
+    def inside(self, points: np.ndarray) -> np.ndarray:
+        """(n,) bool: the rows of ship-frame ``points`` (n, 3) m :meth:`velocity` answers for (everywhere with
+        ``clamp``); with several fields row i is tested in flight i's."""
+        points = np.asarray(points, dtype=float)
+        if self.clamp:
+            return np.ones(len(points), dtype=bool)
+        if not self._groups:
+            return inside(self.grids[0], points)
+        out = np.zeros(len(points), dtype=bool)
+        for geometry, _, rows, _ in self._groups:
+            if rows.size:
+                out[rows] = inside(geometry, points[rows])
+        return out
 
     def velocity(self, points: np.ndarray, t: float = 0.0) -> np.ndarray:
         """Mean wind (n, 3) m/s at ship-frame points (n, 3) m (row i = flight i with several fields)."""

@@ -21,9 +21,10 @@ Issue 18 adds what tells a WRP's gain from chance (``robustness`` of :func:`summ
 * the **verdict**: a WRP is recommended only when its gain's CI excludes 0 (lower bound > 0) AND its mean gain
   exceeds the placebos' 95th percentile; otherwise the initial path is kept and the reason is stated;
 * per path the probability of meeting a reconstruction spec (error <= ``spec_error_m`` and completeness >=
-  ``spec_completeness``; a failed trial does not meet it), the mean number of views not taken and the expected
-  sorties (n_views / the mean views a flight takes: the flights a mission needs when every sortie is cut short
-  as these were), with CIs.
+  ``spec_completeness``; a failed trial does not meet it), the mean number of views not taken (by any sortie),
+  the expected sorties (the mean of the sorties each mission flew: battery swaps and resumes, sim/mission.py;
+  stores from before the swaps have no sortie column: there, n_views / the mean views a flight took) and the
+  mean mission time (swaps included), with CIs.
 """
 
 from __future__ import annotations
@@ -45,7 +46,9 @@ from wrp_eval.errors import InputError
 @dataclass(frozen=True)
 class PathTrials:
     """One path's campaign: trial_id (n,), error_m (n,) (NaN where none), failed (n,) bool; completeness (n,)
-    (NaN where none) and views_not_taken (n,) where the store has them (None for hand-made trials)."""
+    (NaN where none) and views_not_taken (n,) where the store has them (None for hand-made trials); sorties (n,)
+    and mission_time_s (n,) s where the store has them (None for stores from before the battery swaps; NaN for
+    a trial that raised)."""
 
     name: str
     trial_id: np.ndarray
@@ -54,22 +57,28 @@ class PathTrials:
     completeness: np.ndarray | None = None
     views_not_taken: np.ndarray | None = None
     n_views: int | None = None
+    sorties: np.ndarray | None = None
+    mission_time_s: np.ndarray | None = None
 
 
 def read_trials(name: str, folder: str | Path) -> PathTrials:
     """The error, completeness, failure and views not taken of every stored trial of a campaign folder, in
     trial-id order."""
     table = TrialStore(folder).read_table(["trial_id", "n_views", "error_m", "completeness", "failed",
-                                           "flown_offsets"])
+                                           "flown_offsets", "sorties", "mission_time_s"])
     order = np.argsort(table.column("trial_id").to_numpy())
     flown = column_array(table, "flown_offsets")
     not_taken = (~np.all(np.isfinite(flown), axis=2)).sum(axis=1).astype(float)
 
     def col(name):
         return table.column(name).to_numpy(zero_copy_only=False).astype(float)[order]
+
+    def mission_col(name):      # None for a store from before the column (every value null)
+        return col(name) if table.column(name).null_count < len(table) else None
     return PathTrials(name, table.column("trial_id").to_numpy()[order], col("error_m"),
                       table.column("failed").to_numpy(zero_copy_only=False).astype(bool)[order],
-                      col("completeness"), not_taken[order], int(flown.shape[1]))
+                      col("completeness"), not_taken[order], int(flown.shape[1]), mission_col("sorties"),
+                      mission_col("mission_time_s"))
 
 
 def _ci(samples, statistic, rng, resamples: int, confidence: float, paired: bool = False) -> list | None:
@@ -121,13 +130,24 @@ def path_summary(p: PathTrials, rng: np.random.Generator, resamples: int, confid
     if p.views_not_taken is not None:
         out["mean_views_not_taken"] = float(p.views_not_taken.mean()) if p.views_not_taken.size else float("nan")
         out["mean_views_not_taken_ci"] = _ci((p.views_not_taken,), mean, rng, resamples, confidence)
-        if p.n_views:
-            # every sortie takes on average n - (views not taken) views: the whole mission needs n / that
+        if p.n_views and p.sorties is None:
+            # a store from before the battery swaps: every sortie took on average n - (views not taken) views,
+            # the whole mission needs n / that
             taken = p.n_views - p.views_not_taken
             out["expected_sorties"] = float(p.n_views / taken.mean()) if taken.size and taken.mean() > 0 \
                 else float("inf")
             out["expected_sorties_ci"] = _ci((taken,), lambda x, axis: p.n_views / x.mean(axis=axis), rng,
                                              resamples, confidence) if taken.size > 2 and taken.min() > 0 else None
+    for key, values in (("expected_sorties", p.sorties), ("mean_mission_time_s", p.mission_time_s)):
+        if values is not None:
+            v = values[np.isfinite(values)]
+            out[key] = float(v.mean()) if v.size else float("nan")
+            out[key + "_ci"] = _ci((v,), mean, rng, resamples, confidence) if v.size > 2 and np.ptp(v) > 0 else \
+                ([float(v[0]), float(v[0])] if v.size > 2 else None)
+    if p.sorties is not None:
+        one = p.sorties[np.isfinite(p.sorties)] == 1
+        out["p_one_sortie"] = float(one.mean()) if one.size else float("nan")
+        out["p_one_sortie_ci"] = proportion_ci(int(one.sum()), int(one.size), confidence)
     return out
 
 

@@ -1,0 +1,59 @@
+"""Is a campaign's turbulence the one its wind implies? The stress-test note.
+
+MIL-F-8785C ties the low-altitude Dryden intensity to the mean wind at 20 ft (sigma_w = 0.1 W20): a severity
+preset (light / moderate / severe: W20 = 15 / 30 / 45 kt) is a fixed W20 whatever the wind, so at U10 = 3-8 m/s
+``moderate`` (15.4 m/s) is 2-5 times the turbulence that wind implies. ``from_mean`` (the default) takes W20 from
+each trial's own mean wind. A preset stays available as an explicit stress test; when its W20 exceeds
+:data:`STRESS_RATIO` times what the trial's mean wind implies, the run says so (:func:`turbulence_stress_note`).
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from wrp_eval.campaign.config import CampaignSection
+from wrp_eval.campaign.sampling import draw_wind, trial_wind_section
+from wrp_eval.wind.config import WindSection
+from wrp_eval.wind.dryden import severity_w20_mps
+from wrp_eval.wind.field import TWENTY_FT_M, build_mean_wind
+
+# a preset is reported when its W20 is more than this many times the W20 of the trial's mean wind (issue 26)
+STRESS_RATIO = 1.5
+PRESETS = ("light", "moderate", "severe")
+
+
+def preset_w20_mps(severity: str, sigma_w_mps: float | None) -> float | None:
+    """The W20 (m/s) a trial's turbulence fixes regardless of its wind: 10 sigma_w when given, the preset's,
+    or None (``from_mean`` / ``none``: no fixed W20)."""
+    if sigma_w_mps is not None:
+        return 10.0 * float(sigma_w_mps)
+    return severity_w20_mps(severity) if severity in PRESETS else None
+
+
+def turbulence_ratios(base: WindSection, campaign: CampaignSection, root_seed: int, n_trials: int, ship,
+                      base_dir=None) -> np.ndarray:
+    """(n_trials,) fixed W20 / the W20 of the trial's own mean wind (20 ft over the ship), NaN where the trial's
+    turbulence follows its wind (``from_mean``, ``none``). ``ship``: what :func:`build_mean_wind` takes."""
+    draws = [draw_wind(campaign, root_seed, k) for k in range(n_trials)]
+    fixed = np.array([np.nan if (w := preset_w20_mps(d.severity, d.sigma_w_mps)) is None else w for d in draws])
+    if not np.isfinite(fixed).any():
+        return fixed
+    sections = [trial_wind_section(base, d) for d in draws]
+    mean = build_mean_wind(sections, ship, base_dir).velocity(np.tile([0.0, 0.0, TWENTY_FT_M], (n_trials, 1)), 0.0)
+    implied = np.hypot(mean[:, 0], mean[:, 1])
+    with np.errstate(divide="ignore", invalid="ignore"):
+        return np.where(np.isfinite(fixed), fixed / implied, np.nan)
+
+
+def turbulence_stress_note(ratios: np.ndarray) -> str | None:
+    """One line when some trials' fixed turbulence exceeds :data:`STRESS_RATIO` x what their wind implies, else
+    None."""
+    over = ratios[np.isfinite(ratios) & (ratios > STRESS_RATIO)]
+    calm = np.isinf(ratios).sum()        # a preset over a calm mean wind: infinitely more than it implies
+    if not over.size and not calm:
+        return None
+    finite = over[np.isfinite(over)]
+    spread = (f"median {np.median(finite):.1f}x, max {finite.max():.1f}x" if finite.size else "over a calm mean wind")
+    return (f"turbulence stress test: in {over.size} of {ratios.size} trials the turbulence preset's W20 is more than "
+            f"{STRESS_RATIO:g}x what the trial's mean wind implies ({spread}); MIL-F-8785C ties sigma_w = 0.1 W20 to "
+            "the actual wind at 20 ft: `severity: from_mean` flies the turbulence of the wind")
