@@ -14,6 +14,13 @@ from wrp_eval.cli import main
     ("sim: {gimbal: {pitch_range_deg: [30, -90]}}\n", "sim.gimbal"),
     ("ship: {motion: {sea_state: 9}}\n", "ship.motion.sea_state"),
     ("wind: {air_wake: {lee_deficit: -0.2}}\n", "wind.air_wake.lee_deficit"),
+    # the mission section (issue 26)
+    ("sim: {mission: {max_sorties: 0}}\n", "sim.mission.max_sorties"),
+    ("sim: {mission: {swap_time_s: -5}}\n", "sim.mission.swap_time_s"),
+    ("sim: {mission: {px4_wind_limit_m_s: -1}}\n", "sim.mission.px4_wind_limit_m_s"),
+    ("sim: {mission: {headway_timeout_s: 0}}\n", "sim.mission.headway_timeout_s"),
+    ("sim: {mission: {battery_swaps: 2}}\n", "sim.mission.battery_swaps"),
+    ("sim: {wind_limit_m_s: -3}\n", "sim.mission.operator_wind_limit_m_s"),
 ])
 def test_bad_capture_settings_exit_2_with_one_line(tmp_path, capsys, yaml_text, key):
     config = tmp_path / "bad.yaml"
