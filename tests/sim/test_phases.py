@@ -262,7 +262,7 @@ def test_a_battery_return_with_sorties_left_is_a_swap_and_the_resume_flies_from_
     state.index[:] = 1
     state.photo[:] = 1
     state.sortie[:] = [1, 3, 2, 2]
-    state.view_sortie[:, 0] = [1, 3, 2, 1]          # flight 3's second sortie took no view
+    state.sortie_views[:] = [1, 1, 1, 0]            # flight 3's second sortie took no view
     cause = np.array([RETURNED_BATTERY, RETURNED_BATTERY, COMPLETED, RETURNED_BATTERY])
     away, left = swap_batteries(state, cause, max_sorties=3)
     assert away.tolist() == [0] and left.tolist() == [COMPLETED, RETURNED_BATTERY, COMPLETED, RETURNED_BATTERY]

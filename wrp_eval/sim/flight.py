@@ -399,8 +399,8 @@ class FlightSimulator:
             body = run.body()
             p_b, v_b, yaw, rot_b = body.position[:batch], body.velocity[:batch], body.yaw[:batch], body.rot[:batch]
             nav = onboard.sense(start_time_s + t, p_b, v_b, yaw)
-            back = np.flatnonzero((state.phase == AWAY) & (state.resume_at <= t + 1e-9))
-            if back.size:       # the next sortie: a fresh battery, from the breakpoint where the last one turned
+            if state.resume_at.min() <= t + 1e-9:     # the next sortie: a fresh battery, from the breakpoint
+                back = np.flatnonzero(state.resume_at <= t + 1e-9)
                 onboard.fresh_battery(back, p_b[back])
                 resume(state, targets, back, nav.position[back], nav.yaw[back], t, profile)
             ref = reference(state, nav.position, profile, sec.leash_m)
@@ -409,9 +409,12 @@ class FlightSimulator:
                 wind_b = _wind_at(wind, np.where(inside[:, None], p_b, home), start_time_s + t, batch)
             else:
                 wind_b = wind_next
-            out_of_time = ((t - state.sortie_start) >= sec.max_flight_time_s) | (chunk == max_chunks)
+            out_of_time = chunk == max_chunks or t - state.sortie_start.min() >= sec.max_flight_time_s
+            if out_of_time:     # rare: the sorties past the simulator's limit
+                out_of_time = ((t - state.sortie_start) >= sec.max_flight_time_s) | (chunk == max_chunks)
             apply_endings(state, check_failures(state, p_b, v_b, out_of_time), t)
-            apply_endings(state, np.where(state.flying & ~inside, LOST_OUTSIDE, COMPLETED), t)
+            if not inside.all():
+                apply_endings(state, np.where(state.flying & ~inside, LOST_OUTSIDE, COMPLETED), t)
             self._mission_rules(state, onboard, nav, p_b, wind_b, t, sec, away_cap_s)
             attitude = onboard.point_camera(rot_b, yaw, targets.plan_pitch[np.minimum(state.photo,
                                                                                        targets.n_views - 1)])
@@ -437,7 +440,7 @@ class FlightSimulator:
             # the loop ends on a recorded chunk at or after every flight's last shutter (a photo's shutter opens
             # the trigger latency after its chunk), so a flight's record up to its end does not depend on whether
             # other flights of its batch are still flying
-            if not np.any(state.active) and chunk % record_every == 0 and t >= state.flight_time.max() - 1e-9:
+            if chunk % record_every == 0 and not state.active.any() and t >= state.flight_time.max() - 1e-9:
                 break
             run.set_controls(motors, drag, quat_d)
             if self.ship_mocap is not None and onboard.motion is not None:

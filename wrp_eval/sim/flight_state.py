@@ -243,7 +243,8 @@ class FlightState:
     flight_time (batch,) s: time of the last photo or of the end (mission time: the swaps included).
     captures: the photos taken so far. sortie (batch,) int: the sortie flying (1 ..); sortie_start (batch,) s:
     when it started; resume_at (batch,) s: when an AWAY flight resumes; view_sortie (batch, n_views) int: the
-    sortie that took each view (0: not taken); progress_m (batch,) m and progress_time (batch,) s: the
+    sortie that took each view (0: not taken); sortie_views (batch,) int: the views the current sortie took;
+    progress_m (batch,) m and progress_time (batch,) s: the
     closest the vehicle has come to its waypoint on this leg, and when; progress_view (batch,) int: the leg's
     waypoint.
     """
@@ -260,6 +261,7 @@ class FlightState:
     sortie_start: np.ndarray
     resume_at: np.ndarray
     view_sortie: np.ndarray
+    sortie_views: np.ndarray
     progress_m: np.ndarray
     progress_time: np.ndarray
     progress_view: np.ndarray
@@ -272,7 +274,8 @@ class FlightState:
                    Segment.at_rest(targets.body[:, 0], targets.yaw[:, 0]), np.full(batch, COMPLETED),
                    np.zeros(batch), CaptureLog.empty(batch, targets.n_views), np.ones(batch, dtype=int),
                    np.full(batch, float(t)), np.full(batch, np.inf), np.zeros((batch, targets.n_views), dtype=int),
-                   np.full(batch, np.inf), np.full(batch, float(t)), np.zeros(batch, dtype=int))
+                   np.zeros(batch, dtype=int), np.full(batch, np.inf), np.full(batch, float(t)),
+                   np.zeros(batch, dtype=int))
 
     @property
     def flying(self) -> np.ndarray:

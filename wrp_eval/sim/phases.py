@@ -16,7 +16,7 @@ from typing import NamedTuple
 
 import numpy as np
 
-from wrp_eval.compiled import kernel
+from wrp_eval.compiled import as_rows, kernel
 from wrp_eval.sim.capture_mode import through_profile, through_row
 from wrp_eval.sim.config import SimSection
 from wrp_eval.sim.controller import PositionController, wrap_angle, wrapped
@@ -229,19 +229,51 @@ def check_failures(state: FlightState, position: np.ndarray, velocity: np.ndarra
     return cause
 
 
+@kernel
+def _headway_rows(phase, index, end, position, progress_m, progress_time, progress_view, t, timeout_s, step_m,
+                  leash_m):
+    """(batch,) bool of :func:`no_headway`, row by row; the progress record is updated in place."""
+    n = phase.size
+    stuck = np.zeros(n, np.bool_)
+    for row in range(n):
+        distance = np.sqrt((position[row, 0] - end[row, 0]) ** 2 + (position[row, 1] - end[row, 1]) ** 2
+                           + (position[row, 2] - end[row, 2]) ** 2)
+        if index[row] != progress_view[row] or distance < progress_m[row] - step_m:
+            progress_m[row], progress_time[row] = distance, t
+        progress_view[row] = index[row]
+        stuck[row] = phase[row] < DONE and t - progress_time[row] >= timeout_s and distance > leash_m
+    return stuck
+
+
 def no_headway(state: FlightState, position: np.ndarray, t: float, timeout_s: float, progress_m: float,
                leash_m: float) -> np.ndarray:
     """(batch,) bool: flights that have not come ``progress_m`` closer to their waypoint (the current segment's
     end) for ``timeout_s`` s and are more than ``leash_m`` from it (a vehicle holding at its viewpoint makes no
     progress and needs none). Updates the state's progress record (a new waypoint starts a new record).
     ``position`` (batch, 3) m: as the navigation estimates it."""
-    distance = np.linalg.norm(position - state.segment.end, axis=1)
-    new_leg = state.index != state.progress_view
-    better = new_leg | (distance < state.progress_m - progress_m)
-    state.progress_m = np.where(better, distance, state.progress_m)
-    state.progress_time = np.where(better, t, state.progress_time)
-    state.progress_view = state.index.copy()
-    return state.flying & (t - state.progress_time >= timeout_s) & (distance > leash_m)
+    n = len(state.phase)
+    return _headway_rows(state.phase, state.index, state.segment.end, as_rows("position", position, (n, 3)),
+                         state.progress_m, state.progress_time, state.progress_view, float(t), float(timeout_s),
+                         float(progress_m), float(leash_m))
+
+
+@kernel
+def _return_rows(phase, battery_due, px4_wind, operator_wind, stuck, home_reachable):
+    """(batch,) outcome codes of :func:`check_returns`, row by row."""
+    n = phase.size
+    cause = np.zeros(n, np.int64)
+    for row in range(n):
+        if phase[row] >= DONE:
+            continue
+        if battery_due[row]:
+            cause[row] = RETURNED_BATTERY
+        elif px4_wind[row]:
+            cause[row] = RETURNED_WIND
+        elif operator_wind[row]:
+            cause[row] = RETURNED_WIND_AVERAGE
+        elif stuck[row]:
+            cause[row] = RETURNED_HEADWAY if home_reachable[row] else LOST_HEADWAY
+    return cause
 
 
 def check_returns(state: FlightState, battery_due: np.ndarray, px4_wind: np.ndarray, operator_wind: np.ndarray,
@@ -249,11 +281,11 @@ def check_returns(state: FlightState, battery_due: np.ndarray, px4_wind: np.ndar
     """(batch,) outcome codes of flights the autopilot sends home now (COMPLETED elsewhere), each (batch,) bool:
     the battery at its reserve plus the energy home; the PX4-style wind limit; the operator's average-wind
     policy; no headway (``stuck``), when home is ``home_reachable``, else the vehicle is lost."""
-    active = state.flying
-    stuck = active & stuck
-    return np.select([active & battery_due, active & px4_wind, active & operator_wind, stuck & home_reachable, stuck],
-                     [RETURNED_BATTERY, RETURNED_WIND, RETURNED_WIND_AVERAGE, RETURNED_HEADWAY, LOST_HEADWAY],
-                     COMPLETED)
+    n = len(state.phase)
+    flags = (as_rows(name, np.asarray(v, dtype=np.bool_), (n,)) for name, v in (
+        ("battery_due", battery_due), ("px4_wind", px4_wind), ("operator_wind", operator_wind), ("stuck", stuck),
+        ("home_reachable", home_reachable)))
+    return _return_rows(state.phase, *flags)
 
 
 def apply_endings(state: FlightState, cause: np.ndarray, t: float) -> None:
@@ -271,11 +303,12 @@ def swap_batteries(state: FlightState, cause: np.ndarray, max_sorties: int) -> n
     becomes COMPLETED (the mission goes on). A sortie that took no view ends the mission instead (the battery
     is spent getting to the breakpoint and back: another one would do the same; an operator stops there).
     Returns (rows (m,) int of those flights, the causes left)."""
-    took_a_view = (state.view_sortie == state.sortie[:, None]).any(axis=1)
-    swap = (cause == RETURNED_BATTERY) & (state.sortie < max_sorties) & took_a_view
+    home = cause == RETURNED_BATTERY
+    if not home.any():      # the usual chunk: no copies
+        return np.empty(0, dtype=int), cause
+    swap = home & (state.sortie < max_sorties) & (state.sortie_views > 0)
     rows = np.flatnonzero(swap)
-    if rows.size:
-        state.phase[rows] = AWAY
+    state.phase[rows] = AWAY
     return rows, np.where(swap, COMPLETED, cause)
 
 
@@ -296,6 +329,7 @@ def resume(state: FlightState, targets: FlightTargets, rows: np.ndarray, positio
     state.phase[rows] = TRANSIT
     state.phase_time[rows] = 0.0
     state.sortie[rows] += 1
+    state.sortie_views[rows] = 0
     state.sortie_start[rows] = t
     state.resume_at[rows] = np.inf
     state.progress_m[rows] = np.inf
@@ -425,6 +459,7 @@ def take_photos(state: FlightState, targets: FlightTargets, rows: np.ndarray, sh
     view = state.photo[rows]
     state.captures.record(rows, view, shot, targets)
     state.view_sortie[rows, view] = state.sortie[rows]
+    state.sortie_views[rows] += 1
     state.flight_time[rows] = shot.time
     state.photo[rows] = view + 1
 
