@@ -281,10 +281,9 @@ def check_returns(state: FlightState, battery_due: np.ndarray, px4_wind: np.ndar
     """(batch,) outcome codes of flights the autopilot sends home now (COMPLETED elsewhere), each (batch,) bool:
     the battery at its reserve plus the energy home; the PX4-style wind limit; the operator's average-wind
     policy; no headway (``stuck``), when home is ``home_reachable``, else the vehicle is lost."""
-    n = len(state.phase)
-    flags = (as_rows(name, np.asarray(v, dtype=np.bool_), (n,)) for name, v in (
-        ("battery_due", battery_due), ("px4_wind", px4_wind), ("operator_wind", operator_wind), ("stuck", stuck),
-        ("home_reachable", home_reachable)))
+    flags = [np.asarray(v, dtype=np.bool_) for v in (battery_due, px4_wind, operator_wind, stuck, home_reachable)]
+    if any(f.shape != state.phase.shape for f in flags):     # the kernel does not check its indices
+        raise ValueError(f"check_returns needs ({len(state.phase)},) flags, got {[f.shape for f in flags]}")
     return _return_rows(state.phase, *flags)
 
 
