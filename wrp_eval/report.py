@@ -131,14 +131,17 @@ def operator_section(ev: dict) -> list[str]:
         f"In the forecast wind ({fc['wind_speed_10m_mps']:g} m/s at 10 m from {fc['wind_direction_deg']:g} deg, "
         f"turbulence as the campaign draws it), {fc['trials']} simulated flights of the path to fly:",
         "",
-        "| P(meets spec) | CI | views not taken (mean) | expected sorties | CI | P(one sortie) | mission time (s) |",
-        "|---|---|---|---|---|---|---|",
+        "| P(meets spec) | CI | views not taken (mean) | P(completed) | P(one sortie) | expected sorties | CI | "
+        "mission time (s) |",
+        "|---|---|---|---|---|---|---|---|",
         f"| {fmt(fc.get('p_meets_spec'), 3)} | {_ci(ci)} | {fmt(fc.get('mean_views_not_taken'), 2)} | "
-        f"{fmt(fc.get('expected_sorties'), 3)} | {_ci(sorties_ci)} | {fmt(fc.get('p_one_sortie'), 3)} | "
-        f"{fmt(fc.get('mean_mission_time_s'), 4)} |",
+        f"{fmt(fc.get('p_completed'), 3)} | {fmt(fc.get('p_one_sortie'), 3)} | {fmt(fc.get('expected_sorties'), 3)} | "
+        f"{_ci(sorties_ci)} | {fmt(fc.get('mean_mission_time_s'), 4)} |",
         "",
         "Sorties: after a return home on energy the operator swaps the battery and resumes at the breakpoint "
-        "(`sim.mission`: up to max_sorties, swap_time_s on deck); the mission time counts the swaps.",
+        "(`sim.mission`: up to max_sorties, swap_time_s on deck). P(completed): the mission flown to its end; "
+        "P(one sortie): completed on one battery; sorties and mission time (swaps included) are those of the "
+        "completed missions.",
         "",
         *fc.get("stress_notes", []),
         f"Spec: error <= {fmt(fc.get('spec_error_m'), 4)} m and completeness >= {fmt(fc.get('spec_completeness'), 2)}. "

@@ -89,6 +89,14 @@ def test_settings_outside_the_flight_do_not_orphan_stored_trials(tmp_path, path_
     # a setting a flight does read still refuses the folder
     with pytest.raises(InputError, match="different config"):
         run_analytic(make_config(path_file, n_trials=6, perturbation={"design": "box"}), out)
+    # a folder flown before sim.mission (issue 26: other rules end a flight) is not extended by today's flights
+    meta = json.loads(meta_file.read_text())
+    del meta["config"]["sim"]["mission"]
+    meta["config"]["sim"]["wind_limit_m_s"] = 10.0
+    meta["fingerprint"] = "0123456789abcdef"          # computed by the code of its day
+    meta_file.write_text(json.dumps(meta))
+    with pytest.raises(InputError, match="different config"):
+        run_analytic(make_config(path_file, n_trials=7), out)
 
 
 def test_status_counts(tmp_path, path_file, make_config, comparable, run_analytic, tiny_path):

@@ -44,3 +44,10 @@ def test_a_preset_matching_its_wind_is_not_reported():
     # an explicit sigma_w fixes W20 = 10 sigma_w
     assert preset_w20_mps("from_mean", 0.5) == 5.0 and preset_w20_mps("from_mean", None) is None
     assert preset_w20_mps("severe", None) == pytest.approx(severity_w20_mps("severe"))
+
+
+def test_trials_over_a_calm_mean_wind_are_counted():
+    ratios = np.array([np.nan, np.inf, 3.0, 1.2])
+    note = turbulence_stress_note(ratios)
+    assert note.startswith("turbulence stress test: in 2 of 4 trials") and "1 over a calm mean wind" in note
+    assert turbulence_stress_note(np.array([np.inf, np.nan])).startswith("turbulence stress test: in 1 of 2")

@@ -11,6 +11,7 @@ from wrp_eval.sim.flight_state import (
     DONE,
     ENDED,
     FAILURES,
+    LOST_ENERGY,
     LOST_HEADWAY,
     LOST_OUTSIDE,
     NON_FINITE,
@@ -82,16 +83,17 @@ def test_segment_rows_are_replaced_in_place():
 
 
 def test_only_crashes_lost_vehicles_and_the_time_limit_are_failures():
-    state = FlightState.start(_targets(10))
+    state = FlightState.start(_targets(11))
     state.outcome[:] = [COMPLETED, NON_FINITE, DITCHED, TIMED_OUT, RETURNED_BATTERY, RETURNED_WIND,
-                        RETURNED_WIND_AVERAGE, RETURNED_HEADWAY, LOST_HEADWAY, LOST_OUTSIDE]
-    state.phase[:] = [DONE] + [ENDED] * 9
-    assert set(FAILURES) == {NON_FINITE, DITCHED, TIMED_OUT, LOST_HEADWAY, LOST_OUTSIDE}
+                        RETURNED_WIND_AVERAGE, RETURNED_HEADWAY, LOST_HEADWAY, LOST_OUTSIDE, LOST_ENERGY]
+    state.phase[:] = [DONE] + [ENDED] * 10
+    assert set(FAILURES) == {NON_FINITE, DITCHED, TIMED_OUT, LOST_HEADWAY, LOST_OUTSIDE, LOST_ENERGY}
     # going home on the battery reserve, a wind limit or without headway is what a real autopilot does: not a
-    # failure; a vehicle that can neither make headway nor get home, or is blown out of the field, is lost
-    assert state.failed.tolist() == [False, True, True, True, False, False, False, False, True, True]
+    # failure; a vehicle that cannot get home (no headway, no energy against the wind) or is blown out of the
+    # field is lost
+    assert state.failed.tolist() == [False, True, True, True, False, False, False, False, True, True, True]
     assert not state.flying.any() and not state.active.any()
-    assert len(OUTCOME_NAMES) == 10
+    assert len(OUTCOME_NAMES) == 11
 
 
 def test_capture_log_measures_true_and_recorded_offsets_against_the_plan():

@@ -288,7 +288,11 @@ class _StepWind:
 
 def test_a_rising_wind_turns_the_flight_when_its_average_crosses_the_limit():
     tau, limit = 1.0, 9.8
-    # the old keys sim.wind_limit_m_s / wind_average_s (stored campaigns) are read as the operator policy
+    # the old keys sim.wind_limit_m_s / wind_average_s (stored campaigns) are read as the operator policy, also
+    # beside a mission section given as a model
+    from wrp_eval.sim.mission import MissionSection
+    beside = SimSection.model_validate({"wind_limit_m_s": 8.0, "mission": MissionSection(max_sorties=2)})
+    assert beside.mission.operator_wind_limit_m_s == 8.0 and beside.mission.max_sorties == 2
     with _simulator(navigation={"preset": "ideal"}, wind_limit_m_s=limit, wind_average_s=tau) as sim:
         assert sim.section.mission.operator_wind_limit_m_s == limit
         assert sim.section.mission.operator_wind_average_s == tau

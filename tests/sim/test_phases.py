@@ -13,6 +13,8 @@ from wrp_eval.sim.flight_state import (
     DONE,
     DWELL,
     ENDED,
+    FAILURES,
+    LOST_ENERGY,
     LOST_HEADWAY,
     NON_FINITE,
     RETURNED_BATTERY,
@@ -231,13 +233,17 @@ def test_the_autopilot_returns_home_on_its_battery_wind_limit_or_headway_without
     assert state.failed.tolist() == [False, False, False, False, True, False, True]     # lost = failed
     reasons = outcome_reasons(state, sec)
     assert "battery" in reasons[0] and f"({sec.battery.reserve:g})" in reasons[0]
-    assert "t=4.50s" in reasons[0] and "(before view 1;" in reasons[0]
+    assert "t=4.50s" in reasons[0] and "(before view 1)" in reasons[0]
     assert "PX4-style limit 12 m/s" in reasons[1] and "before view 1" in reasons[1]
-    assert reasons[2].startswith("returned home: battery") and "(before view 2;" in reasons[2] and reasons[3] == ""
+    assert reasons[2].startswith("returned home: battery") and "(before view 2)" in reasons[2] and reasons[3] == ""
     assert "no headway towards view 3" in reasons[5] and reasons[6].startswith("lost: no headway")
     operator_only = check_returns(FlightState.start(_targets(1)), *(np.array([v]) for v in
                                                                     (False, False, True, False, True)))
     assert operator_only.tolist() == [RETURNED_WIND_AVERAGE]
+    # due home on energy against a wind it cannot beat: lost, not a return (and so no battery swap)
+    no_way_home = check_returns(FlightState.start(_targets(1)), *(np.array([v]) for v in
+                                                                  (True, False, False, False, False)))
+    assert no_way_home.tolist() == [LOST_ENERGY] and LOST_ENERGY in FAILURES
 
 
 def test_no_headway_needs_the_timeout_without_progress_beyond_the_leash():

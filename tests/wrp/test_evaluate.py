@@ -136,6 +136,24 @@ def test_expected_sorties_cover_the_views_flights_leave():
     assert s["expected_sorties"] == pytest.approx(40 / 30)      # a flight takes 30 of 40 views on average
 
 
+def test_sorties_and_mission_time_are_those_of_the_completed_missions():
+    # 6 missions: 3 completed (1, 1 and 2 sorties), 3 ended early on one short sortie (lost, home without
+    # headway): those say nothing of what the mission needs and must not make a strong wind look cheap
+    sorties = np.array([1.0, 1.0, 2.0, 1.0, 1.0, 1.0])
+    time_s = np.array([360.0, 362.0, 800.0, 80.0, 95.0, 90.0])
+    completed = np.array([True, True, True, False, False, False])
+    p = PathTrials("a", np.arange(6), np.full(6, 0.03), ~completed, np.full(6, 0.97), np.zeros(6), 40, sorties,
+                   time_s, completed)
+    s = path_summary(p, np.random.default_rng(0), 200, 0.9)
+    assert s["p_completed"] == 0.5 and s["p_one_sortie"] == pytest.approx(2 / 6)
+    assert s["expected_sorties"] == pytest.approx(4 / 3) and s["mean_mission_time_s"] == pytest.approx(1522 / 3)
+    assert s["p_one_sortie_ci"][0] < 2 / 6 < s["p_one_sortie_ci"][1]
+    none_done = PathTrials("b", np.arange(3), np.full(3, np.nan), np.ones(3, bool), np.zeros(3), np.full(3, 30.0),
+                           40, np.ones(3), np.full(3, 90.0), np.zeros(3, bool))
+    s = path_summary(none_done, np.random.default_rng(0), 200, 0.9)
+    assert s["p_completed"] == 0.0 and s["p_one_sortie"] == 0.0 and np.isnan(s["expected_sorties"])
+
+
 def test_forecast_verdict_goes_only_when_the_ci_clears_the_bar():
     from types import SimpleNamespace
 

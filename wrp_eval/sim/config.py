@@ -63,7 +63,8 @@ class SimSection(StrictModel):
         if not isinstance(data, dict) or not ({"wind_limit_m_s", "wind_average_s"} & data.keys()):
             return data
         data = dict(data)
-        mission = dict(data.get("mission") or {})
+        mission = data.get("mission") or {}
+        mission = mission.model_dump(exclude_unset=True) if isinstance(mission, StrictModel) else dict(mission)
         if "wind_limit_m_s" in data:
             mission.setdefault("operator_wind_limit_m_s", data.pop("wind_limit_m_s"))
         if "wind_average_s" in data:

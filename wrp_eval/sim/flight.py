@@ -448,9 +448,10 @@ class FlightSimulator:
             # prefetch: the wind of the next chunk is sampled while this one's rollout runs, at the
             # positions predicted for its end, p + v dt (the vehicle moves < 0.5 m per chunk, the
             # prediction is off by 0.5 a dt^2 < 1 cm, and the wind field varies over metres; README.md);
-            # a prediction outside the field is sampled at home instead (the flight ends there next chunk)
+            # a prediction outside the field is sampled where the vehicle is now (home once it is outside too: the
+            # flight has ended)
             ahead = p_b + v_b * dt
-            ahead = np.where(_inside_field(wind, ahead)[:, None], ahead, home)
+            ahead = np.where(_inside_field(wind, ahead)[:, None], ahead, np.where(inside[:, None], p_b, home))
             sample = partial(_wind_at, wind, ahead, start_time_s + t + dt, batch) if sec.prefetch_wind else None
             wind_next = self._run_chunk(run, sec, sample)
             tick(state, ref, dt)

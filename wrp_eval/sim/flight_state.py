@@ -27,11 +27,12 @@ TRANSIT, SETTLE, DWELL, DONE, ENDED, AWAY = 0, 1, 2, 3, 4, 5
 # headway (the views not reached are not taken: not a failure). Crashes, a vehicle that can neither make
 # headway nor get home, one blown out of the wind field, and the simulator's time limit are failures.
 (COMPLETED, NON_FINITE, DITCHED, TIMED_OUT, RETURNED_BATTERY, RETURNED_WIND, RETURNED_WIND_AVERAGE,
- RETURNED_HEADWAY, LOST_HEADWAY, LOST_OUTSIDE) = range(10)
-FAILURES = (NON_FINITE, DITCHED, TIMED_OUT, LOST_HEADWAY, LOST_OUTSIDE)
+ RETURNED_HEADWAY, LOST_HEADWAY, LOST_OUTSIDE, LOST_ENERGY) = range(11)
+FAILURES = (NON_FINITE, DITCHED, TIMED_OUT, LOST_HEADWAY, LOST_OUTSIDE, LOST_ENERGY)
 # one word per outcome for tables and records
 OUTCOME_NAMES = ("completed", "non-finite", "ditched", "timed out", "returned: battery", "returned: wind limit",
-                 "returned: wind policy", "returned: no headway", "lost: no headway", "lost: left the wind field")
+                 "returned: wind policy", "returned: no headway", "lost: no headway", "lost: left the wind field",
+                 "lost: battery, no way home")
 
 
 @dataclass(frozen=True)
@@ -239,7 +240,7 @@ class FlightState:
     reference is flying to. photo (batch,) int: the next viewpoint to photograph (= index in stop mode; in
     fly-through the vehicle may still be short of a view the reference has passed). phase_time (batch,) s
     in the current phase (it stands still while the leash holds the reference back). segment: the
-    reference's current segment. outcome (batch,) int: COMPLETED (also while flying) ... LOST_OUTSIDE.
+    reference's current segment. outcome (batch,) int: COMPLETED (also while flying) ... LOST_ENERGY.
     flight_time (batch,) s: time of the last photo or of the end (mission time: the swaps included).
     captures: the photos taken so far. sortie (batch,) int: the sortie flying (1 ..); sortie_start (batch,) s:
     when it started; resume_at (batch,) s: when an AWAY flight resumes; view_sortie (batch, n_views) int: the

@@ -27,6 +27,7 @@ from wrp_eval.sim.flight_state import (
     DONE,
     DWELL,
     ENDED,
+    LOST_ENERGY,
     LOST_HEADWAY,
     LOST_OUTSIDE,
     NON_FINITE,
@@ -265,8 +266,8 @@ def _return_rows(phase, battery_due, px4_wind, operator_wind, stuck, home_reacha
     for row in range(n):
         if phase[row] >= DONE:
             continue
-        if battery_due[row]:
-            cause[row] = RETURNED_BATTERY
+        if battery_due[row]:    # due home on energy, but against a wind it cannot beat: lost
+            cause[row] = RETURNED_BATTERY if home_reachable[row] else LOST_ENERGY
         elif px4_wind[row]:
             cause[row] = RETURNED_WIND
         elif operator_wind[row]:
@@ -280,7 +281,8 @@ def check_returns(state: FlightState, battery_due: np.ndarray, px4_wind: np.ndar
                   stuck: np.ndarray, home_reachable: np.ndarray) -> np.ndarray:
     """(batch,) outcome codes of flights the autopilot sends home now (COMPLETED elsewhere), each (batch,) bool:
     the battery at its reserve plus the energy home; the PX4-style wind limit; the operator's average-wind
-    policy; no headway (``stuck``), when home is ``home_reachable``, else the vehicle is lost."""
+    policy; no headway (``stuck``). A flight due home on energy or without headway whose home is not
+    ``home_reachable`` (no ground speed towards it at the top airspeed, or not the energy) is lost."""
     flags = [np.asarray(v, dtype=np.bool_) for v in (battery_due, px4_wind, operator_wind, stuck, home_reachable)]
     if any(f.shape != state.phase.shape for f in flags):     # the kernel does not check its indices
         raise ValueError(f"check_returns needs ({len(state.phase)},) flags, got {[f.shape for f in flags]}")
@@ -343,7 +345,10 @@ def outcome_reason(cause: int, t: float, view: int, sec: SimSection) -> str:
         DITCHED: f"ditched (below sea level) at t={t:.2f}s",
         TIMED_OUT: f"a sortie not finished within max_flight_time_s={sec.max_flight_time_s:g}",
         RETURNED_BATTERY: (f"returned home: battery at its reserve ({sec.battery.reserve:g}) plus the energy home at "
-                           f"t={t:.2f}s (before view {view}; no sortie left of {m.max_sorties})"),
+                           f"t={t:.2f}s (before view {view}); the mission ends (max_sorties {m.max_sorties} flown, or "
+                           "the sortie took no view)"),
+        LOST_ENERGY: (f"lost: battery at its reserve plus the energy home at t={t:.2f}s (before view {view}) and no "
+                      f"way home at {m.return_airspeed_m_s:g} m/s airspeed"),
         RETURNED_WIND: (f"returned home: wind estimate over the PX4-style limit {m.px4_wind_limit_m_s or 0:g} m/s at "
                         f"t={t:.2f}s (before view {view})"),
         RETURNED_WIND_AVERAGE: (f"returned home: {m.operator_wind_average_s:g} s average wind over the operator's "

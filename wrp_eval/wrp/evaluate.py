@@ -22,9 +22,9 @@ Issue 18 adds what tells a WRP's gain from chance (``robustness`` of :func:`summ
   exceeds the placebos' 95th percentile; otherwise the initial path is kept and the reason is stated;
 * per path the probability of meeting a reconstruction spec (error <= ``spec_error_m`` and completeness >=
   ``spec_completeness``; a failed trial does not meet it), the mean number of views not taken (by any sortie),
-  the expected sorties (the mean of the sorties each mission flew: battery swaps and resumes, sim/mission.py;
-  stores from before the swaps have no sortie column: there, n_views / the mean views a flight took) and the
-  mean mission time (swaps included), with CIs.
+  P(completed) and P(one sortie), the expected sorties and the mean mission time (swaps included) of the
+  missions flown to their end (battery swaps and resumes, sim/mission.py; stores from before the swaps have no
+  sortie column: there, n_views / the mean views a flight took), with CIs.
 """
 
 from __future__ import annotations
@@ -46,9 +46,9 @@ from wrp_eval.errors import InputError
 @dataclass(frozen=True)
 class PathTrials:
     """One path's campaign: trial_id (n,), error_m (n,) (NaN where none), failed (n,) bool; completeness (n,)
-    (NaN where none) and views_not_taken (n,) where the store has them (None for hand-made trials); sorties (n,)
-    and mission_time_s (n,) s where the store has them (None for stores from before the battery swaps; NaN for
-    a trial that raised)."""
+    (NaN where none) and views_not_taken (n,) where the store has them (None for hand-made trials); sorties (n,),
+    mission_time_s (n,) s and completed (n,) bool (the mission flown to its end) where the store has them (None
+    for stores from before the battery swaps; NaN / False for a trial that raised)."""
 
     name: str
     trial_id: np.ndarray
@@ -59,13 +59,14 @@ class PathTrials:
     n_views: int | None = None
     sorties: np.ndarray | None = None
     mission_time_s: np.ndarray | None = None
+    completed: np.ndarray | None = None
 
 
 def read_trials(name: str, folder: str | Path) -> PathTrials:
     """The error, completeness, failure and views not taken of every stored trial of a campaign folder, in
     trial-id order."""
     table = TrialStore(folder).read_table(["trial_id", "n_views", "error_m", "completeness", "failed",
-                                           "flown_offsets", "sorties", "mission_time_s"])
+                                           "flown_offsets", "sorties", "mission_time_s", "ending"])
     order = np.argsort(table.column("trial_id").to_numpy())
     flown = column_array(table, "flown_offsets")
     not_taken = (~np.all(np.isfinite(flown), axis=2)).sum(axis=1).astype(float)
@@ -75,10 +76,13 @@ def read_trials(name: str, folder: str | Path) -> PathTrials:
 
     def mission_col(name):      # None for a store from before the column (every value null)
         return col(name) if table.column(name).null_count < len(table) else None
+    ending = table.column("ending")
+    completed = None if ending.null_count == len(table) else \
+        np.array([e == "completed" for e in ending.to_pylist()])[order]
     return PathTrials(name, table.column("trial_id").to_numpy()[order], col("error_m"),
                       table.column("failed").to_numpy(zero_copy_only=False).astype(bool)[order],
                       col("completeness"), not_taken[order], int(flown.shape[1]), mission_col("sorties"),
-                      mission_col("mission_time_s"))
+                      mission_col("mission_time_s"), completed)
 
 
 def _ci(samples, statistic, rng, resamples: int, confidence: float, paired: bool = False) -> list | None:
@@ -138,16 +142,28 @@ def path_summary(p: PathTrials, rng: np.random.Generator, resamples: int, confid
                 else float("inf")
             out["expected_sorties_ci"] = _ci((taken,), lambda x, axis: p.n_views / x.mean(axis=axis), rng,
                                              resamples, confidence) if taken.size > 2 and taken.min() > 0 else None
+    if p.sorties is not None and p.completed is not None:
+        out.update(mission_summary(p, rng, resamples, confidence))
+    return out
+
+
+def mission_summary(p: PathTrials, rng: np.random.Generator, resamples: int, confidence: float) -> dict:
+    """P(completed) (the mission flown to its end, whatever the sorties), P(one sortie) (completed on one battery)
+    with exact CIs; expected sorties and mean mission time (battery swaps included) over the COMPLETED missions,
+    with bootstrap CIs: a mission lost or sent home early ends on one short sortie, which says nothing of what
+    the mission needs (NaN when none completed)."""
+    done = p.completed
+    out = {"p_completed": float(done.mean()) if done.size else float("nan"),
+           "p_completed_ci": proportion_ci(int(done.sum()), int(done.size), confidence)}
+    one = done & (p.sorties == 1)
+    out.update(p_one_sortie=float(one.mean()) if one.size else float("nan"),
+               p_one_sortie_ci=proportion_ci(int(one.sum()), int(one.size), confidence))
     for key, values in (("expected_sorties", p.sorties), ("mean_mission_time_s", p.mission_time_s)):
-        if values is not None:
-            v = values[np.isfinite(values)]
-            out[key] = float(v.mean()) if v.size else float("nan")
-            out[key + "_ci"] = _ci((v,), mean, rng, resamples, confidence) if v.size > 2 and np.ptp(v) > 0 else \
-                ([float(v[0]), float(v[0])] if v.size > 2 else None)
-    if p.sorties is not None:
-        one = p.sorties[np.isfinite(p.sorties)] == 1
-        out["p_one_sortie"] = float(one.mean()) if one.size else float("nan")
-        out["p_one_sortie_ci"] = proportion_ci(int(one.sum()), int(one.size), confidence)
+        v = values[done & np.isfinite(values)]
+        out[key] = float(v.mean()) if v.size else float("nan")
+        constant = v.size > 2 and np.ptp(v) == 0       # the bootstrap of a constant is that constant
+        out[key + "_ci"] = [float(v[0])] * 2 if constant else (_ci((v,), lambda x, axis: x.mean(axis=axis), rng,
+                                                                   resamples, confidence) if v.size > 2 else None)
     return out
 
 

@@ -4,8 +4,9 @@ For U10 = 0, 4, 8, 12, 15 m/s (turbulence from each trial's mean wind, direction
 quickstart experiment's path is flown as planned (``physical`` design) with the default settings, as a campaign
 (:func:`wrp_eval.campaign.capture_bench.quickstart_campaign`, the capture bench's flights), and summarised as
 the evaluation summarises a path (:func:`wrp_eval.wrp.evaluate.path_summary`): per speed
-mission.p_one_sortie.u<U> (the mission done on one battery), mission.mean_sorties.u<U> (sorties flown, battery
-swaps and resumes: sim/mission.py), mission.mission_time_s.u<U> (mean, swaps included), mission.p_meets_spec.u<U>
+mission.p_completed.u<U> (the mission flown to its end), mission.p_one_sortie.u<U> (completed on one battery),
+mission.mean_sorties.u<U> and mission.mission_time_s.u<U> (of the completed missions: battery swaps and resumes,
+sim/mission.py; the time includes the swaps; NaN when none completed), mission.p_meets_spec.u<U>
 (error <= 1.1 x the path's wind-free error and completeness >= 0.95: the ``wrp.evaluate`` defaults) and
 mission.views_not_taken.u<U> (mean views no sortie took); each note gives the CIs and the ending causes.
 """
@@ -42,9 +43,11 @@ def speed_records(speed: float, row: dict, endings: dict[str, int]) -> list[Benc
     tag = f"u{speed:g}"
     note = (f"quickstart path, physical design, U10 {speed:g} m/s, turbulence from the mean wind, {row['trials']} "
             f"flights; endings {endings}; P(meets spec) {_ci(row, 'p_meets_spec')}, sorties {_ci(row, 'expected_sorties')}, "
-            f"mission time {_ci(row, 'mean_mission_time_s')} s, P(one sortie) {_ci(row, 'p_one_sortie')} (95 % CIs); "
+            f"mission time {_ci(row, 'mean_mission_time_s')} s (completed missions), P(completed) "
+            f"{_ci(row, 'p_completed')}, P(one sortie) {_ci(row, 'p_one_sortie')} (95 % CIs); "
             f"spec: error <= {row['spec_error_m'] * 1e3:.2f} mm, completeness >= {row['spec_completeness']:g}")
     return [
+        BenchRecord(f"mission.p_completed.{tag}", row.get("p_completed"), "probability", note=note),
         BenchRecord(f"mission.p_one_sortie.{tag}", row.get("p_one_sortie"), "probability", note=note),
         BenchRecord(f"mission.mean_sorties.{tag}", row.get("expected_sorties"), "sorties", note=note),
         BenchRecord(f"mission.mission_time_s.{tag}", row.get("mean_mission_time_s"), "s", note=note),
