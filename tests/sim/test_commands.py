@@ -71,6 +71,9 @@ def test_fly_writes_parquet_and_rerun(config_file, tmp_path, capsys):
     assert caps.num_rows == 9 and trials.num_rows == 3
     col = lambda t, name: t.column(name).to_numpy()  # noqa: E731
     assert col(caps, "taken").all() and not col(trials, "failed").any()
+    # the mission: one sortie took every view, and the table says how each flight ended
+    assert col(trials, "sorties").tolist() == [1, 1, 1] and col(caps, "sortie").tolist() == [1] * 9
+    assert trials.column("ending").to_pylist() == ["completed"] * 3
     assert np.allclose(col(caps, "x_m") - col(caps, "dx_m"), np.tile(path.positions[:, 0], 3))
     assert rrd.stat().st_size > 0
     assert not list(tmp_path.rglob("*.tmp"))

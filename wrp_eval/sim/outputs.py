@@ -15,6 +15,7 @@ from wrp_eval.atomic import atomic_path
 from wrp_eval.camera import camera_rotations
 from wrp_eval.planning.path import Path
 from wrp_eval.recording import recording
+from wrp_eval.sim.flight_state import OUTCOME_NAMES
 from wrp_eval.sim.results import FlightResult
 
 
@@ -49,11 +50,13 @@ def write_flight_tables(result: FlightResult, path: Path, out_dir: FsPath, seed:
         "ship_pitch_deg": np.degrees(result.ship_motion[..., 2]).ravel(),
         "ship_yaw_deg": np.degrees(result.ship_motion[..., 3]).ravel(),
         "gimbal_saturated": result.gimbal_saturated.ravel(), "capture_time_s": result.capture_time_s.ravel(),
+        "sortie": result.view_sortie.ravel(),
     })
     trials = pa.table({
         "trial": np.arange(b), "seed": np.full(b, seed), "failed": result.failed,
         "outcome": list(result.outcome_reason), "views_taken": result.taken.sum(axis=1),
-        "flight_time_s": result.flight_time_s,
+        "flight_time_s": result.flight_time_s, "sorties": result.sorties,
+        "ending": [OUTCOME_NAMES[int(c)] for c in result.outcome],
     })
     out_dir.mkdir(parents=True, exist_ok=True)
     a, c = out_dir / "captures.parquet", out_dir / "trials.parquet"
