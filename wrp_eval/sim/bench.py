@@ -144,10 +144,11 @@ def warm_up_kernels() -> None:
 
 
 def closed_loop_rate(section: SimSection, batch: int, sim_seconds: float) -> tuple[float, float]:
-    """(drone-steps per wall second, per CPU second of all threads) of our flights: the bench path flown through
-    (fly-through, the default) around the swinging ship in its air wake, moderate turbulence, every default
-    of ``sim:`` on (navigation, gimbal, battery, wind limit), for ``sim_seconds`` (the flights then end as
-    timed out: the simulator's own limit)."""
+    """(drone-steps per wall second, per CPU second of all threads) of our flights: the bench path flown in the
+    section's capture mode (stop-and-shoot by default) around the swinging ship in its air wake, moderate
+    turbulence (a fixed load for speed figures), every default of ``sim:`` on (fused navigation, gimbal,
+    battery, the mission rules), for ``sim_seconds`` (the flights then end as timed out: the simulator's own
+    limit)."""
     wind = moderate_wind(section, batch, 0)
     section = section.model_copy(update={"max_flight_time_s": sim_seconds})
     with FlightSimulator(section) as sim:
@@ -182,7 +183,8 @@ def run_bench() -> list[BenchRecord]:
             BenchRecord(f"sim.raw_rollout_steps_per_s{suffix}", raw, "drone-steps/s",
                         note=f"open-loop mujoco.rollout of the flight model, batch {batch}; " + note_common),
             BenchRecord(f"sim.closed_loop_steps_per_s{suffix}", closed, "drone-steps/s",
-                        note=f"the bench path flown through in moderate Dryden turbulence and the ship's air wake, "
+                        note=f"the bench path flown (default capture mode) in moderate Dryden turbulence and the ship's "
+                             f"air wake, "
                              f"batch {batch}; " + note_common),
             BenchRecord(f"sim.ratio{suffix}", closed / raw, "ratio", anchor=RATIO_TARGETS[batch][0],
                         anchor_value=RATIO_TARGETS[batch][1], note=f"batch {batch}, {threads} threads both"),
