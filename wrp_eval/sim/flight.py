@@ -164,6 +164,33 @@ def _body_rows(state, qpos_flat, qvel_flat):
     return position, velocity, rot, yaw_of(rot)
 
 
+def _mission_horizon(sec: SimSection, dt: float) -> tuple[float, int]:
+    """(the cap on a flight's time away between sorties s, the loop's last chunk): the simulator's guard, every
+    sortie within ``max_flight_time_s`` and every time away within its cap."""
+    m = sec.mission
+    away_cap_s = m.swap_time_s + 2.0 * sec.max_flight_time_s
+    return away_cap_s, int(np.ceil((m.max_sorties * sec.max_flight_time_s + (m.max_sorties - 1) * away_cap_s) / dt))
+
+
+def _next_sorties(state: FlightState, targets: FlightTargets, onboard: Onboard, position: np.ndarray, nav, t: float,
+                  profile: Profile) -> None:
+    """The flights due back at ``t`` s start their next sortie: a fresh battery, from the breakpoint (their true
+    ``position`` (batch, 3) m; the reference from the navigation's ``nav``)."""
+    back = np.flatnonzero(state.resume_at <= t + 1e-9)
+    onboard.fresh_battery(back, position[back])
+    resume(state, targets, back, nav.position[back], nav.yaw[back], t, profile)
+
+
+def _predicted_points(wind, position: np.ndarray, velocity: np.ndarray, dt: float, inside: np.ndarray,
+                      home: np.ndarray) -> np.ndarray:
+    """(batch, 3) m where the next chunk's wind is sampled ahead of time: p + v dt (the vehicle moves < 0.5 m per
+    chunk, the prediction is off by 0.5 a dt^2 < 1 cm, and the wind field varies over metres); a prediction
+    outside the field falls back to where the vehicle is now (``inside`` (batch,) bool), else home (the flight
+    has ended)."""
+    ahead = position + velocity * dt
+    return np.where(_inside_field(wind, ahead)[:, None], ahead, np.where(inside[:, None], position, home))
+
+
 class Body(NamedTuple):
     """Vehicles of the padded batch at the start of a chunk: position, velocity (padded, 3) m, m/s world;
     rot (padded, 3, 3) world from body; yaw (padded,) rad (Z-Y-X heading)."""
@@ -374,24 +401,12 @@ class FlightSimulator:
         profile = Profile.of(path.speed_m_s, sec)
         dwell = 0.0 if profile.through else (path.dwell_s if sec.dwell_s is None else sec.dwell_s)
         targets = self._targets(path, batch, view_offsets, ship, profile, sec)
-        onboard = Onboard(sec, par, targets, ship, 0 if flight_rngs is None else flight_rngs, dt, path.speed_m_s,
-                          path.camera)
-        # each vehicle starts hovering where its navigation believes it is on the first target with its first
-        # heading (it has been holding there before the mission starts), not at the true target with its error
-        # as a step at t = 0
-        first = onboard.sense(start_time_s, targets.body[:, 0], np.zeros((batch, 3)), targets.yaw[:, 0])
-        run = self._start_batch(targets, sec, targets.body[:, 0] - first.position_error,
-                                targets.yaw[:, 0] - first.yaw_error)
+        onboard, run = self._launch(path, targets, ship, flight_rngs, dt, start_time_s, sec)
         state = FlightState.start(targets)
         controller = PositionController(par, self.gains, run.padded)
         log = TrajectoryLog()
         record_every = max(1, int(round(sec.record_interval_s / dt)))
-        mission = sec.mission
-        # the simulator's guard: every sortie within max_flight_time_s, every time away within its cap
-        away_cap_s = mission.swap_time_s + 2.0 * sec.max_flight_time_s
-        max_chunks = int(np.ceil((mission.max_sorties * sec.max_flight_time_s
-                                  + (mission.max_sorties - 1) * away_cap_s) / dt))
-        latency = sec.capture.trigger_latency_s
+        away_cap_s, max_chunks = _mission_horizon(sec, dt)
         home = targets.body[:, 0]
         wind_next = None
         for chunk in range(max_chunks + 1):
@@ -399,37 +414,19 @@ class FlightSimulator:
             body = run.body()
             p_b, v_b, yaw, rot_b = body.position[:batch], body.velocity[:batch], body.yaw[:batch], body.rot[:batch]
             nav = onboard.sense(start_time_s + t, p_b, v_b, yaw)
-            if state.resume_at.min() <= t + 1e-9:     # the next sortie: a fresh battery, from the breakpoint
-                back = np.flatnonzero(state.resume_at <= t + 1e-9)
-                onboard.fresh_battery(back, p_b[back])
-                resume(state, targets, back, nav.position[back], nav.yaw[back], t, profile)
+            if state.resume_at.min() <= t + 1e-9:
+                _next_sorties(state, targets, onboard, p_b, nav, t, profile)
             ref = reference(state, nav.position, profile, sec.leash_m)
             inside = _inside_field(wind, p_b)
             if wind_next is None:
                 wind_b = _wind_at(wind, np.where(inside[:, None], p_b, home), start_time_s + t, batch)
             else:
                 wind_b = wind_next
-            out_of_time = chunk == max_chunks or t - state.sortie_start.min() >= sec.max_flight_time_s
-            if out_of_time:     # rare: the sorties past the simulator's limit
-                out_of_time = ((t - state.sortie_start) >= sec.max_flight_time_s) | (chunk == max_chunks)
-            apply_endings(state, check_failures(state, p_b, v_b, out_of_time), t)
-            if not inside.all():
-                apply_endings(state, np.where(state.flying & ~inside, LOST_OUTSIDE, COMPLETED), t)
-            self._mission_rules(state, onboard, nav, p_b, wind_b, t, sec, away_cap_s)
-            attitude = onboard.point_camera(rot_b, yaw, targets.plan_pitch[np.minimum(state.photo,
-                                                                                       targets.n_views - 1)])
-            shoot = partial(onboard.shoot, t=t, position=p_b, velocity=v_b, rot=rot_b, nav=nav, attitude=attitude,
-                            targets=targets)
-            if profile.through:
-                self._passing_photos(state, targets, nav, shoot, dt, sec)
-            moves = transitions(state, nav.position, nav.velocity, nav.yaw, targets, sec, dwell, profile.through)
-            if profile.through:     # the last view, taken at rest: the views still pending before it were missed
-                last = moves.trigger & (state.index == targets.n_views - 1)
-                state.photo = np.where(last, np.maximum(state.photo, state.index), state.photo)
-            due = np.flatnonzero(moves.trigger & (state.photo == state.index))
-            take_photos(state, targets, due, shoot(due, state.photo[due], np.full(due.size, latency)))
-            advance(state, targets, np.flatnonzero(moves.trigger | moves.chain), profile)
-            apply_transitions(state, moves)
+            self._endings(state, onboard, nav, p_b, v_b, wind_b, inside, t, chunk == max_chunks, sec, away_cap_s)
+            shoot = partial(onboard.shoot, t=t, position=p_b, velocity=v_b, rot=rot_b, nav=nav,
+                            attitude=onboard.point_camera(rot_b, yaw, targets.plan_pitch[np.minimum(
+                                state.photo, targets.n_views - 1)]), targets=targets)
+            self._photos_and_phases(state, targets, nav, shoot, dt, sec, dwell, profile)
             motors, quat_d, drag = self._commands(run, controller, body, nav, ref, state, wind_b, dt, sec,
                                                   onboard.navigation.ideal, profile.through)
             power = onboard.spend(motors[:batch], drag[:batch], wind_b - v_b, state.flying)
@@ -445,19 +442,43 @@ class FlightSimulator:
             run.set_controls(motors, drag, quat_d)
             if self.ship_mocap is not None and onboard.motion is not None:
                 self._move_ship(run, onboard, start_time_s + t + dt)
-            # prefetch: the wind of the next chunk is sampled while this one's rollout runs, at the
-            # positions predicted for its end, p + v dt (the vehicle moves < 0.5 m per chunk, the
-            # prediction is off by 0.5 a dt^2 < 1 cm, and the wind field varies over metres; README.md);
-            # a prediction outside the field is sampled where the vehicle is now (home once it is outside too: the
-            # flight has ended)
-            ahead = p_b + v_b * dt
-            ahead = np.where(_inside_field(wind, ahead)[:, None], ahead, np.where(inside[:, None], p_b, home))
-            sample = partial(_wind_at, wind, ahead, start_time_s + t + dt, batch) if sec.prefetch_wind else None
+            # prefetch: the wind of the next chunk is sampled while this one's rollout runs (README.md)
+            sample = (partial(_wind_at, wind, _predicted_points(wind, p_b, v_b, dt, inside, home),
+                              start_time_s + t + dt, batch) if sec.prefetch_wind else None)
             wind_next = self._run_chunk(run, sec, sample)
             tick(state, ref, dt)
         stranded = state.phase == AWAY      # only past the simulator's guard: home on energy for good
         apply_endings(state, np.where(stranded, RETURNED_BATTERY, COMPLETED), t)
         return self._result(state, path, log, sec)
+
+    @staticmethod
+    def _endings(state: FlightState, onboard: Onboard, nav, position: np.ndarray, velocity: np.ndarray,
+                 wind_b: np.ndarray, inside: np.ndarray, t: float, last_chunk: bool, sec: SimSection,
+                 away_cap_s: float) -> None:
+        """End the flights that fail now (crash, a sortie past the time limit, out of the wind field ``inside``
+        (batch,) bool), then apply the autopilot's decisions (:meth:`_mission_rules`)."""
+        out_of_time = last_chunk or t - state.sortie_start.min() >= sec.max_flight_time_s
+        if out_of_time:     # rare: the sorties past the simulator's limit
+            out_of_time = ((t - state.sortie_start) >= sec.max_flight_time_s) | last_chunk
+        apply_endings(state, check_failures(state, position, velocity, out_of_time), t)
+        if not inside.all():
+            apply_endings(state, np.where(state.flying & ~inside, LOST_OUTSIDE, COMPLETED), t)
+        FlightSimulator._mission_rules(state, onboard, nav, position, wind_b, t, sec, away_cap_s)
+
+    @staticmethod
+    def _photos_and_phases(state: FlightState, targets: FlightTargets, nav, shoot, dt: float, sec: SimSection,
+                           dwell: float, profile: Profile) -> None:
+        """This chunk's photos (fly-through triggers, or the photo after the dwell) and phase moves."""
+        if profile.through:
+            FlightSimulator._passing_photos(state, targets, nav, shoot, dt, sec)
+        moves = transitions(state, nav.position, nav.velocity, nav.yaw, targets, sec, dwell, profile.through)
+        if profile.through:     # the last view, taken at rest: the views still pending before it were missed
+            last = moves.trigger & (state.index == targets.n_views - 1)
+            state.photo = np.where(last, np.maximum(state.photo, state.index), state.photo)
+        due = np.flatnonzero(moves.trigger & (state.photo == state.index))
+        take_photos(state, targets, due, shoot(due, state.photo[due], np.full(due.size, sec.capture.trigger_latency_s)))
+        advance(state, targets, np.flatnonzero(moves.trigger | moves.chain), profile)
+        apply_transitions(state, moves)
 
     @staticmethod
     def _mission_rules(state: FlightState, onboard: Onboard, nav, position: np.ndarray, wind_b: np.ndarray, t: float,
@@ -473,6 +494,18 @@ class FlightSimulator:
         if away.size:
             state.resume_at[away] = t + np.minimum(onboard.away_time_s(away, position[away]), away_cap_s)
         apply_endings(state, cause, t)
+
+    def _launch(self, path, targets: FlightTargets, ship, flight_rngs, dt: float, start_time_s: float,
+                sec: SimSection) -> tuple[Onboard, _Batch]:
+        """The instruments and the rollout state of ``targets.batch`` flights at ``start_time_s``: each vehicle
+        hovers where its navigation believes it is on the first target with its first heading (it has been
+        holding there before the mission starts), not at the true target with its error as a step at t = 0."""
+        onboard = Onboard(sec, self.params, targets, ship, 0 if flight_rngs is None else flight_rngs, dt,
+                          path.speed_m_s, path.camera)
+        first = onboard.sense(start_time_s, targets.body[:, 0], np.zeros((targets.batch, 3)), targets.yaw[:, 0])
+        run = self._start_batch(targets, sec, targets.body[:, 0] - first.position_error,
+                                targets.yaw[:, 0] - first.yaw_error)
+        return onboard, run
 
     def _move_ship(self, run: _Batch, onboard: Onboard, t: float) -> None:
         """Pose the scene's ship body of each model for the next chunk (held over it): the ship of the model's

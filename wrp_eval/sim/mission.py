@@ -27,6 +27,8 @@ Every rule is one a real system has (sim/README.md, "How a mission ends"):
 
 from __future__ import annotations
 
+from typing import NamedTuple
+
 import numpy as np
 from pydantic import Field
 
@@ -95,16 +97,15 @@ def _decision_rows(home, position, wind, estimate, average, weight_estimate, wei
     return due, px4, operator, reachable
 
 
-class Decisions:
+class Decisions(NamedTuple):
     """The autopilot's decisions of one chunk, (batch,) bool each: battery due home (reserve + the energy
     home), the PX4-style wind limit exceeded, the operator's average-wind policy exceeded, home reachable
     (ground speed towards home at the top airspeed and the energy for it)."""
 
-    __slots__ = ("battery_due", "px4_wind", "operator_wind", "home_reachable")
-
-    def __init__(self, battery_due, px4_wind, operator_wind, home_reachable):
-        self.battery_due, self.px4_wind = battery_due, px4_wind
-        self.operator_wind, self.home_reachable = operator_wind, home_reachable
+    battery_due: np.ndarray
+    px4_wind: np.ndarray
+    operator_wind: np.ndarray
+    home_reachable: np.ndarray
 
 
 class WindEstimate:
