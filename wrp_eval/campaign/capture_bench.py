@@ -45,24 +45,24 @@ FLIGHTS_PER_SPEED = 64
 LAG_S = 30.0
 
 
-def hover_p95_m(section: SimSection, flights: int = HOVER_FLIGHTS, duration_s: float = HOVER_S) -> float:
-    """The horizontal true position error's 95th percentile (m) of a calm hover, second half pooled."""
+def calm_hover(section: SimSection, flights: int = HOVER_FLIGHTS, duration_s: float = HOVER_S):
+    """The trajectory of ``flights`` calm-air hovers 30 m up (each with its own navigation errors, seed 16)."""
     with FlightSimulator(section) as sim:
         result = sim.hover(ConstantWind(np.zeros(3)), [0.0, 0.0, 30.0], 0.0, duration_s, batch=flights,
                            flight_rngs=np.random.SeedSequence(16).spawn(flights))
-    tr = result.trajectory
-    half = slice(len(tr.time) // 2, None)
-    err = tr.position[:, half, :2] - tr.reference[:, half, :2]
+    return result.trajectory
+
+
+def hover_p95_m(trajectory) -> float:
+    """The horizontal true position error's 95th percentile (m) of a :func:`calm_hover`, second half pooled."""
+    half = slice(len(trajectory.time) // 2, None)
+    err = trajectory.position[:, half, :2] - trajectory.reference[:, half, :2]
     return float(np.percentile(np.hypot(err[..., 0], err[..., 1]), 95))
 
 
-def hover_tilt_std_deg(section: SimSection, flights: int = HOVER_FLIGHTS, duration_s: float = HOVER_S) -> float:
-    """The airframe tilt's std (deg) of a calm hover (the :func:`hover_p95_m` flights), second half pooled."""
-    with FlightSimulator(section) as sim:
-        result = sim.hover(ConstantWind(np.zeros(3)), [0.0, 0.0, 30.0], 0.0, duration_s, batch=flights,
-                           flight_rngs=np.random.SeedSequence(16).spawn(flights))
-    tr = result.trajectory
-    return float(np.degrees(np.std(tr.tilt[:, len(tr.time) // 2:])))
+def hover_tilt_std_deg(trajectory) -> float:
+    """The airframe tilt's std (deg) of a :func:`calm_hover`, second half pooled."""
+    return float(np.degrees(np.std(trajectory.tilt[:, len(trajectory.time) // 2:])))
 
 
 # No published hover attitude-noise figure of a GNSS-held small multicopter was found by this project's
@@ -71,17 +71,24 @@ HOVER_TILT_ANCHOR = ("none: no published hover roll/pitch noise of a GNSS-held s
                      "compare with flight logs (e.g. PX4 Flight Review attitude plots)")
 
 
-def hover_tilt_records(flights: int = HOVER_FLIGHTS, duration_s: float = HOVER_S) -> list[BenchRecord]:
-    """capture.hover_tilt_std_deg.<preset> for every preset (calm hover, default sim section)."""
+def hover_records(flights: int = HOVER_FLIGHTS, duration_s: float = HOVER_S) -> list[BenchRecord]:
+    """capture.hover_p95_m.<preset> and capture.hover_tilt_std_deg.<preset> for every preset, both from one
+    calm hover per preset (default sim section)."""
     base = SimSection()
     records = []
+    note = f"calm hover {duration_s:.0f} s, {flights} flights, second half pooled"
     for preset in PRESETS:
         section = base.model_copy(update={"navigation": base.navigation.model_copy(update={"preset": preset})})
-        records.append(BenchRecord(f"capture.hover_tilt_std_deg.{preset}",
-                                   hover_tilt_std_deg(section, flights, duration_s), "deg", HOVER_TILT_ANCHOR,
-                                   None, f"calm hover {duration_s:.0f} s, {flights} flights, second half pooled, "
-                                         f"airframe tilt std; navigation {preset}, "
-                                         f"{section.navigation.estimator} estimator"))
+        params = navigation_params(section.navigation)
+        trajectory = calm_hover(section, flights, duration_s)
+        records += [
+            BenchRecord(f"capture.hover_p95_m.{preset}", hover_p95_m(trajectory), "m",
+                        f"{preset} specification ({params.spec_source})", hover_p95_spec_m(params),
+                        f"{note}, horizontal true position error"),
+            BenchRecord(f"capture.hover_tilt_std_deg.{preset}", hover_tilt_std_deg(trajectory), "deg",
+                        HOVER_TILT_ANCHOR, None, f"{note}, airframe tilt std; navigation {preset}, "
+                                                 f"{section.navigation.estimator} estimator"),
+        ]
     return records
 
 
@@ -153,16 +160,7 @@ def quickstart_context() -> ExperimentContext:
 
 
 def run_bench() -> list[BenchRecord]:
-    records = []
-    base = SimSection()
-    for preset in PRESETS:
-        section = base.model_copy(update={"navigation": base.navigation.model_copy(update={"preset": preset})})
-        params = navigation_params(section.navigation)
-        records.append(BenchRecord(f"capture.hover_p95_m.{preset}", hover_p95_m(section), "m",
-                                   f"{preset} specification ({params.spec_source})", hover_p95_spec_m(params),
-                                   f"calm hover {HOVER_S:.0f} s, {HOVER_FLIGHTS} flights, second half pooled, "
-                                   f"horizontal true position error"))
-    records += hover_tilt_records()
+    records = hover_records()
     ctx = quickstart_context()
     lag = None
     with tempfile.TemporaryDirectory() as tmp:
