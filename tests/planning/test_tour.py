@@ -76,3 +76,62 @@ def test_open_at_longest_edge():
     cost = np.array([[0, 1, 9, 1], [1, 0, 1, 9], [9, 1, 0, 5], [1, 9, 5, 0]], dtype=float)
     order = open_at_longest_edge(np.array([0, 1, 2, 3]), cost)   # edges 1, 1, 5, 1: cut 2 -> 3
     assert order.tolist() == [3, 0, 1, 2]
+
+
+# -- the compiled move scans against the vectorised numpy scans they replaced (same moves, same ties) -----------
+
+def _two_opt_move_numpy(order, cost):
+    """The 2-opt scan as numpy evaluated it before the compiled kernel (reference for the test)."""
+    n = len(order)
+    a, b = order, np.roll(order, -1)
+    edge = cost[a, b]
+    delta = cost[a[:, None], a[None, :]] + cost[b[:, None], b[None, :]] - edge[:, None] - edge[None, :]
+    i, j = np.triu_indices(n, k=2)
+    keep = ~((i == 0) & (j == n - 1))
+    i, j = i[keep], j[keep]
+    k = int(np.argmin(delta[i, j]))
+    if delta[i[k], j[k]] >= -1e-9:
+        return None
+    new = order.copy()
+    new[i[k] + 1:j[k] + 1] = order[i[k] + 1:j[k] + 1][::-1]
+    return new
+
+
+def _or_opt_best_numpy(order, cost, max_len=3):
+    """(i, j, length, reverse) of the best Or-opt move as the numpy scan found it, or None."""
+    n = len(order)
+    best, best_move = -1e-9, None
+    pos = np.arange(n)
+    u, v = order, np.roll(order, -1)
+    for length in range(1, min(max_len, n - 3) + 1):
+        first, last = order, np.roll(order, -(length - 1))
+        prev, nxt = np.roll(order, 1), np.roll(order, -length)
+        gain = cost[prev, first] + cost[last, nxt] - cost[prev, nxt]
+        fwd = cost[u[None, :], first[:, None]] + cost[last[:, None], v[None, :]] - cost[u, v][None, :]
+        rev = cost[u[None, :], last[:, None]] + cost[first[:, None], v[None, :]] - cost[u, v][None, :]
+        offset = (pos[None, :] - pos[:, None]) % n
+        valid = (offset >= length) & (offset != n - 1)
+        for delta, reverse in ((fwd, False), (rev, True)):
+            d = np.where(valid, delta - gain[:, None], np.inf)
+            k = int(np.argmin(d))
+            if d.flat[k] < best:
+                best, best_move = d.flat[k], (k // n, k % n, length, reverse)
+    return best_move
+
+
+def test_compiled_move_scans_pick_the_moves_the_numpy_scans_picked():
+    from wrp_eval.planning.tour import _best_or_opt, _two_opt_move
+
+    rng = np.random.default_rng(1)
+    for trial in range(150):
+        n = int(rng.integers(4, 50))
+        pts = rng.random((n, 3)) * 50
+        if trial % 3 == 0:
+            pts = np.round(pts / 10)  # many equal costs: the tie-breaking must match too
+        cost = np.linalg.norm(pts[:, None] - pts[None], axis=-1)
+        order = rng.permutation(n)
+        old, new = _two_opt_move_numpy(order, cost), _two_opt_move(order, cost)
+        assert (old is None and new is None) or np.array_equal(old, new)
+        old_move = _or_opt_best_numpy(order, cost)
+        _, i, j, length, reverse = _best_or_opt(order, cost, 3)
+        assert old_move == (None if i < 0 else (i, j, length, reverse))

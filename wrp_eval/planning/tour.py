@@ -7,7 +7,8 @@ level, descend (an upper bound on the shortest way round, always flyable). ``det
 two corner points of such a detour so that the path can include them.
 
 Solvers: ``multistart`` (default; deterministic for a seeded generator): the OR-Tools greedy-descent tour
-and random tours, each taken to a 2-opt / Or-opt local optimum (moves evaluated vectorised), then iterated
+and random tours, each taken to a 2-opt / Or-opt local optimum (the best move found by a compiled scan of
+all moves, :mod:`wrp_eval.compiled`), then iterated
 local search from the best; ``ortools``: OR-Tools routing with guided local search under a time limit;
 ``ga``: a seeded genetic algorithm in the paper's spirit (order crossover + inversion mutation, elitism,
 tournament selection).
@@ -18,6 +19,7 @@ from __future__ import annotations
 import numpy as np
 from ortools.constraint_solver import pywrapcp, routing_enums_pb2
 
+from wrp_eval.compiled import kernel
 from wrp_eval.ship.nofly import segments_intrude
 
 _COST_SCALE = 100.0  # OR-Tools works in integers: centimetres
@@ -58,12 +60,8 @@ def _ortools_route(icost: list, strategy: str, time_limit_s: float) -> tuple[int
     n = len(icost)
     manager = pywrapcp.RoutingIndexManager(n, 1, 0)
     routing = pywrapcp.RoutingModel(manager)
-    index_to_node = manager.IndexToNode
-
-    def arc(i: int, j: int) -> int:
-        return icost[index_to_node(i)][index_to_node(j)]
-
-    routing.SetArcCostEvaluatorOfAllVehicles(routing.RegisterTransitCallback(arc))
+    # the cost matrix handed over whole: no Python callback per arc (the solver asks for millions of arcs)
+    routing.SetArcCostEvaluatorOfAllVehicles(routing.RegisterTransitMatrix(icost))
     params = pywrapcp.DefaultRoutingSearchParameters()
     params.first_solution_strategy = getattr(routing_enums_pb2.FirstSolutionStrategy, strategy)
     metaheuristics = routing_enums_pb2.LocalSearchMetaheuristic
@@ -82,46 +80,73 @@ def _ortools_route(icost: list, strategy: str, time_limit_s: float) -> tuple[int
     return int(solution.ObjectiveValue()), np.array(order, dtype=int)
 
 
-def _two_opt_move(order: np.ndarray, cost: np.ndarray) -> np.ndarray | None:
-    """The best improving 2-opt move of a closed tour (symmetric cost), all pairs evaluated at once."""
+@kernel
+def _best_two_opt(order: np.ndarray, cost: np.ndarray) -> tuple[float, int, int]:
+    """(delta, i, j) of the best 2-opt move of a closed tour (symmetric cost): reversing order[i+1 .. j]
+    changes the length by delta; over i < j - 1, (0, n - 1) excluded, the first best in row-major order."""
     n = len(order)
-    a, b = order, np.roll(order, -1)
-    edge = cost[a, b]
-    delta = cost[a[:, None], a[None, :]] + cost[b[:, None], b[None, :]] - edge[:, None] - edge[None, :]
-    i, j = np.triu_indices(n, k=2)
-    keep = ~((i == 0) & (j == n - 1))
-    i, j = i[keep], j[keep]
-    k = int(np.argmin(delta[i, j]))
-    if delta[i[k], j[k]] >= -1e-9:
+    best, best_i, best_j = np.inf, -1, -1
+    for i in range(n - 2):
+        a_i, b_i = order[i], order[(i + 1) % n]
+        edge_i = cost[a_i, b_i]
+        for j in range(i + 2, n - 1 if i == 0 else n):
+            a_j, b_j = order[j], order[(j + 1) % n]
+            delta = cost[a_i, a_j] + cost[b_i, b_j] - edge_i - cost[a_j, b_j]
+            if delta < best:
+                best, best_i, best_j = delta, i, j
+    return best, best_i, best_j
+
+
+def _two_opt_move(order: np.ndarray, cost: np.ndarray) -> np.ndarray | None:
+    """The best improving 2-opt move of a closed tour (symmetric cost), or None at a 2-opt optimum."""
+    if len(order) < 4:
+        return None
+    delta, i, j = _best_two_opt(order, cost)
+    if delta >= -1e-9:
         return None
     new = order.copy()
-    new[i[k] + 1:j[k] + 1] = order[i[k] + 1:j[k] + 1][::-1]
+    new[i + 1:j + 1] = order[i + 1:j + 1][::-1]
     return new
 
 
-def _or_opt_move(order: np.ndarray, cost: np.ndarray, max_len: int = 3) -> np.ndarray | None:
-    """The best improving Or-opt move (a run of 1..max_len views moved elsewhere, either way round)."""
+@kernel
+def _best_or_opt(order: np.ndarray, cost: np.ndarray, max_len: int) -> tuple[float, int, int, int, bool]:
+    """(delta, i, j, length, reverse) of the best Or-opt move: the run order[i .. i+length-1] (length 1 ..
+    max_len) moved between order[j] and order[j+1], reversed or not; delta < -1e-9 only if it improves.
+    Scanned per length, forward then reversed, each in row-major (i, j) order, the first best kept."""
     n = len(order)
-    best, best_move = -1e-9, None
-    pos = np.arange(n)
-    u, v = order, np.roll(order, -1)                          # insertion edges (u_j, v_j)
+    best, best_i, best_j, best_len, best_rev = -1e-9, -1, -1, 0, False
     for length in range(1, min(max_len, n - 3) + 1):
-        first, last = order, np.roll(order, -(length - 1))   # run i .. i+length-1
-        prev, nxt = np.roll(order, 1), np.roll(order, -length)
-        gain = cost[prev, first] + cost[last, nxt] - cost[prev, nxt]              # (n,) per start i
-        fwd = cost[u[None, :], first[:, None]] + cost[last[:, None], v[None, :]] - cost[u, v][None, :]
-        rev = cost[u[None, :], last[:, None]] + cost[first[:, None], v[None, :]] - cost[u, v][None, :]
-        # edge j must lie outside the run and not be the edge just before it
-        offset = (pos[None, :] - pos[:, None]) % n
-        valid = (offset >= length) & (offset != n - 1)
-        for delta, reverse in ((fwd, False), (rev, True)):
-            d = np.where(valid, delta - gain[:, None], np.inf)
-            k = int(np.argmin(d))
-            if d.flat[k] < best:
-                best, best_move = d.flat[k], (k // n, k % n, length, reverse)
-    if best_move is None:
+        for reverse in (False, True):
+            low, low_i, low_j = np.inf, -1, -1
+            for i in range(n):
+                first, last = order[i], order[(i + length - 1) % n]
+                prev, nxt = order[(i - 1) % n], order[(i + length) % n]
+                gain = cost[prev, first] + cost[last, nxt] - cost[prev, nxt]
+                for j in range(n):
+                    offset = (j - i) % n
+                    if offset < length or offset == n - 1:  # edge j must lie outside the run, not just before it
+                        continue
+                    u, v = order[j], order[(j + 1) % n]
+                    if reverse:
+                        d = cost[u, last] + cost[first, v] - cost[u, v] - gain
+                    else:
+                        d = cost[u, first] + cost[last, v] - cost[u, v] - gain
+                    if d < low:
+                        low, low_i, low_j = d, i, j
+            if low < best:
+                best, best_i, best_j, best_len, best_rev = low, low_i, low_j, length, reverse
+    return best, best_i, best_j, best_len, best_rev
+
+
+def _or_opt_move(order: np.ndarray, cost: np.ndarray, max_len: int = 3) -> np.ndarray | None:
+    """The best improving Or-opt move (a run of 1..max_len views moved elsewhere, either way round), or None."""
+    n = len(order)
+    if n < 4:
         return None
-    i, j, length, reverse = best_move
+    _, i, j, length, reverse = _best_or_opt(order, cost, max_len)
+    if i < 0:
+        return None
     run_idx = (i + np.arange(length)) % n
     run = order[run_idx][::-1] if reverse else order[run_idx]
     rest = np.delete(order, run_idx)
