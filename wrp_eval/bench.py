@@ -29,6 +29,7 @@ BENCH_GROUPS: dict[str, str] = {
     "ship": "wrp_eval.ship.bench",
     "plan": "wrp_eval.planning.bench",
     "oracle": "wrp_eval.recon.bench",
+    "colmap": "wrp_eval.recon.colmap_bench",
     "surrogate": "wrp_eval.surrogate.bench",
     "wrp": "wrp_eval.wrp.bench",
     "robustness": "wrp_eval.wrp.robustness_bench",

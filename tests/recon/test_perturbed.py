@@ -5,7 +5,6 @@ from __future__ import annotations
 
 import dataclasses
 import json
-import time
 from collections import Counter
 
 import numpy as np
@@ -15,8 +14,9 @@ from wrp_eval.cli import main
 from wrp_eval.experiment import ExperimentContext
 from wrp_eval.planning.path import Path
 from wrp_eval.recon.capture_io import captures_from_path
-from wrp_eval.recon.perturbed import (HEADING_BIAS_DEG, NAV_DRIFT_RMS_M, drift_shape, flight_capture_sets,
-                                      perturbed_capture_sets)
+from wrp_eval.recon.perturbed import (BLUR_PX, BLUR_SHARES, HEADING_BIAS_DEG, NAV_DRIFT_RMS_M, drift_shape,
+                                      flight_capture_sets, flown_capture_sets, perturbed_capture_sets,
+                                      recorded_blur_sets)
 from wrp_eval.recon.scenarios import reference_capture_set
 
 
@@ -35,11 +35,11 @@ def test_count_and_kinds(path):
     sets = perturbed_capture_sets(path, seed=0, flights=_fake_flights(path))
     assert sets[0][0] == "unperturbed" and sets[0][1] == "reference"
     kinds = Counter(kind for _, kind, _ in sets)
-    assert kinds == {"reference": 1, "jitter": 3, "single_view": 6, "nav_drift": 3, "heading_bias": 2, "blur": 3,
-                     "flight": 8}
-    assert len(sets) - 1 >= 20
+    assert kinds == {"reference": 1, "jitter": 3, "single_view": 6, "drop": 6, "nav_drift": 3, "heading_bias": 2,
+                     "blur": 6, "flight": 8}
+    assert len(sets) - 1 - kinds["jitter"] >= 24
     assert len({name for name, _, _ in sets}) == len(sets)  # names are unique (they name COLMAP work folders)
-    assert len(perturbed_capture_sets(path, seed=0)) == 18  # no flights given
+    assert len(perturbed_capture_sets(path, seed=0)) == 27  # no flights given
 
 
 def _arrays(cs):
@@ -99,10 +99,33 @@ def test_heading_bias_and_blur_sets(path):
         _, cs = sets[f"heading_bias_{bias:g}deg"]
         np.testing.assert_allclose(np.degrees(cs.yaw - path.yaw), bias)
         np.testing.assert_array_equal(cs.positions, path.positions)
-    assert np.all(sets["blur_8px"][1].blur() == 8.0) and np.all(sets["blur_25px"][1].blur() == 25.0)
-    every_other = sets["blur_40px_every_other"][1].blur()
-    np.testing.assert_array_equal(every_other, np.where(np.arange(len(path)) % 2 == 0, 40.0, 0.0))
-    np.testing.assert_array_equal(sets["blur_8px"][1].positions, path.positions)
+    for share in BLUR_SHARES:
+        blurred = [sets[f"blur_{px:g}px_{100 * share:g}pct"][1] for px in BLUR_PX]
+        chosen = blurred[0].blur() > 0
+        assert chosen.sum() == round(share * len(path))  # the share of the views, the same views at every length
+        for px, cs in zip(BLUR_PX, blurred):
+            np.testing.assert_array_equal(cs.blur(), np.where(chosen, px, 0.0))
+            np.testing.assert_array_equal(cs.positions, path.positions)
+
+
+def test_drop_sets_leave_out_exactly_one_view_each(path):
+    drops = [cs for _, kind, cs in perturbed_capture_sets(path, seed=0) if kind == "drop"]
+    missing = [sorted(set(range(len(path))) - set(cs.planned_index.tolist())) for cs in drops]
+    assert all(len(m) == 1 for m in missing) and len({m[0] for m in missing}) == len(drops) == 6
+    for cs, (view,) in zip(drops, missing):
+        keep = np.arange(len(path)) != view
+        np.testing.assert_array_equal(cs.positions, path.positions[keep])
+
+
+def test_recorded_blur_puts_a_fly_through_flights_blur_on_the_planned_poses(path):
+    flown = captures_from_path(path, offsets=np.full((len(path), 4), 0.3), blur_px=np.arange(len(path), dtype=float))
+    partial = flown.subset(np.arange(len(path)) % 3 != 0)
+    flights = [("flight_fly-through_u8_1", "flight", partial), ("flight_stop_u8_1", "flight", flown),
+               ("flight_fly-through_u0_1", "flight", flown)]
+    (name, kind, cs), = recorded_blur_sets(path, flights)
+    assert (name, kind) == ("recorded_blur_u8_1", "recorded_blur")
+    np.testing.assert_array_equal(cs.positions, path.positions)  # the flight's pose errors are not carried
+    np.testing.assert_array_equal(cs.blur(), np.where(np.arange(len(path)) % 3 != 0, np.arange(len(path)), 0.0))
 
 
 def test_flight_sets_carry_the_flight_errors():
@@ -112,11 +135,22 @@ def test_flight_sets_carry_the_flight_errors():
     keep = slice(0, 5)
     short = dataclasses.replace(full, positions=full.positions[keep], yaw=full.yaw[keep], pitch=full.pitch[keep],
                                 face_id=full.face_id[keep], kind=full.kind[keep], sortie=full.sortie[keep])
-    t0 = time.perf_counter()
     sets = flight_capture_sets(ctx, short, seed=0, speeds=(0.0, 8.0), per_speed=1)
-    assert time.perf_counter() - t0 < 15.0
     assert [kind for _, kind, _ in sets] == ["flight", "flight"]
     assert sets[0][0].startswith("flight_u0_1") and sets[1][0].startswith("flight_u8_1")
+    # the same random numbers in both capture modes: the stop flight hovers for its photos, the fly-through
+    # one shoots on the move (more blur); an ideal navigation's photo tags sit closer to the true positions than
+    # a consumer GNSS's (both still differ from the ship-frame truth by the ship's motion)
+    stop, = flight_capture_sets(ctx, short, seed=0, speeds=(8.0,), per_speed=1, mode="stop")
+    through, = flight_capture_sets(ctx, short, seed=0, speeds=(8.0,), per_speed=1, mode="fly-through")
+    assert np.median(through[2].blur()) > 2 * np.median(stop[2].blur())
+    ideal, = flight_capture_sets(ctx, short, seed=0, speeds=(8.0,), per_speed=1, preset="ideal", prefix="nav_ideal")
+    assert ideal[0].startswith("nav_ideal_u8_1")
+    consumer, = flight_capture_sets(ctx, short, seed=0, speeds=(8.0,), per_speed=1, preset="consumer")
+
+    def tag_error(cs):
+        return np.sqrt(np.mean(np.sum((cs.prior_positions - cs.positions) ** 2, axis=1)))
+    assert tag_error(ideal[2]) < 0.5 * tag_error(consumer[2])
     for name, _, cs in sets:
         assert 0 < len(cs) <= len(short) and ("_partial" in name) == (len(cs) < len(short))
         off = np.linalg.norm(cs.positions - short.positions[cs.planned_index], axis=1)

@@ -156,7 +156,8 @@ class ColmapOracle(MeshOracle):
                               names: list[str]) -> tuple[dict, bool]:
         """Render, SIFT, match into ``work/database.db`` unless a database with the same fingerprint is there.
 
-        Returns (timings, reused)."""
+        Returns (timings in s: render_s, features_s (SIFT), matching_s (matching + geometric verification),
+        features_matching_s (their sum); reused)."""
         import pycolmap  # lazily: pycolmap is the optional [photogrammetry] extra
         from PIL import Image  # lazily: pillow comes with the [photogrammetry] extra
 
@@ -186,6 +187,7 @@ class ColmapOracle(MeshOracle):
         pycolmap.extract_features(database, image_dir, image_names=names, camera_mode=pycolmap.CameraMode.SINGLE,
                                   reader_options=reader, extraction_options=extraction,
                                   device=pycolmap.Device.cpu)
+        t_features = time.perf_counter() - t0 - t_render
         matching = pycolmap.FeatureMatchingOptions()
         matching.use_gpu = False
         verification = pycolmap.TwoViewGeometryOptions()
@@ -203,7 +205,9 @@ class ColmapOracle(MeshOracle):
         if self.work_dir is not None:  # the database is what a re-run needs; the PNGs are 0.5 MB each
             shutil.rmtree(image_dir, ignore_errors=True)
         stamp.write_text(json.dumps({"fingerprint": fingerprint}))
-        return {"render_s": t_render, "features_matching_s": time.perf_counter() - t0 - t_render}, False
+        elapsed = time.perf_counter() - t0
+        return {"render_s": t_render, "features_matching_s": elapsed - t_render, "features_s": t_features,
+                "matching_s": elapsed - t_render - t_features}, False
 
     def _map(self, database: Path, image_dir: Path, out: Path, seed: int) -> dict:
         """COLMAP mapping of ``database`` into ``out``; {index: pycolmap.Reconstruction}."""
