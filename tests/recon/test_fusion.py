@@ -111,3 +111,32 @@ def test_colmap_conditions_coarser_pixels_and_fewer_points_raise_the_error(box_o
     eq = colmap_equivalent(oracle, ring, box_on_water, n_points=60, width_px=800)
     assert full.error_m < eq["width_error_m"] < eq["sparse_error_m"]
     assert eq["sparse_completeness"] < full.completeness
+
+
+def _in_view_numpy(samples, normals, centres, rot, focal_px, width, height, max_dist, cos_min):
+    """The dense (S, V, 3) numpy test observe_samples used before the compiled scan (reference)."""
+    rel = samples[:, None, :] - centres[None, :, :]
+    cam = np.matmul(rel.transpose(1, 0, 2), rot).transpose(1, 0, 2)
+    z = cam[..., 2]
+    zs = np.where(z > 1e-9, z, 1e-9)
+    u = focal_px * cam[..., 0] / zs + width / 2
+    v = focal_px * cam[..., 1] / zs + height / 2
+    dist = np.sqrt(np.sum(rel * rel, axis=2))
+    cos_inc = np.abs(np.matmul(rel, normals[:, :, None])[..., 0]) / np.maximum(dist, 1e-9)
+    return (z > 1e-9) & (u > 0) & (u < width) & (v > 0) & (v < height) & (dist <= max_dist) & (cos_inc > cos_min)
+
+
+def test_compiled_view_test_keeps_the_pairs_the_dense_numpy_test_kept():
+    from wrp_eval.camera import camera_rotations
+    from wrp_eval.recon.fusion import _in_view
+
+    rng = np.random.default_rng(3)
+    samples = rng.uniform(-40, 40, (2000, 3))
+    normals = rng.standard_normal((2000, 3))
+    normals /= np.linalg.norm(normals, axis=1, keepdims=True)
+    centres = rng.uniform(-60, 60, (25, 3))
+    rot = np.ascontiguousarray(camera_rotations(rng.uniform(-np.pi, np.pi, 25), rng.uniform(-1.2, 0.3, 25)))
+    args = (samples, normals, centres, rot, 900.0, 1200.0, 800.0, 70.0, np.cos(np.radians(85.0)))
+    dense = _in_view_numpy(*args)
+    assert 0.02 < dense.mean() < 0.5  # a mix of kept and rejected pairs
+    np.testing.assert_array_equal(_in_view(*args), dense)

@@ -55,10 +55,11 @@ import open3d as o3d
 import scipy.sparse as sp
 from scipy.spatial import cKDTree
 
+from wrp_eval.compiled import kernel
 from wrp_eval.recon.base import GroundTruth, Scores, align_to_ground_truth
 from wrp_eval.recon.config import OracleSection
-from wrp_eval.recon.image_effects import (border_weight, incidence_weight, keypoint_fraction, parallax_weights,
-                                          patch_match_probability, pixel_noise_px)
+from wrp_eval.recon.image_effects import (INCIDENCE_RAMP_DEG, border_weight, incidence_weight, keypoint_fraction,
+                                          parallax_weights, patch_match_probability, pixel_noise_px)
 from wrp_eval.sim.captures import CaptureSet
 
 OCCLUSION_OFFSET_M = 0.01    # occlusion rays start this far off the surface (no self-hits on shared edges)
@@ -93,6 +94,33 @@ class SampleObservations:
     gsd_m: np.ndarray
 
 
+@kernel
+def _in_view(samples: np.ndarray, normals: np.ndarray, centres: np.ndarray, rot: np.ndarray, focal_px: float,
+             width_px: float, height_px: float, max_dist_m: float, cos_incidence_min: float) -> np.ndarray:
+    """(S, V) bool: sample s lies in front of view v, inside its image, within ``max_dist_m`` and at a
+    matchable incidence (cosine above ``cos_incidence_min``). samples, normals (S, 3); centres (V, 3); rot
+    (V, 3, 3) world-from-camera. One pass over the pairs with no (S, V, 3) temporaries: at close range most
+    pairs fail the first tests."""
+    n_s, n_v = samples.shape[0], centres.shape[0]
+    out = np.zeros((n_s, n_v), dtype=np.bool_)
+    for s in range(n_s):
+        for v in range(n_v):
+            rx = samples[s, 0] - centres[v, 0]
+            ry = samples[s, 1] - centres[v, 1]
+            rz = samples[s, 2] - centres[v, 2]
+            z = rx * rot[v, 0, 2] + ry * rot[v, 1, 2] + rz * rot[v, 2, 2]
+            if z <= 1e-9:
+                continue
+            u = focal_px * (rx * rot[v, 0, 0] + ry * rot[v, 1, 0] + rz * rot[v, 2, 0]) / z + width_px / 2
+            w = focal_px * (rx * rot[v, 0, 1] + ry * rot[v, 1, 1] + rz * rot[v, 2, 1]) / z + height_px / 2
+            if u <= 0 or u >= width_px or w <= 0 or w >= height_px:
+                continue
+            dist = np.sqrt(rx * rx + ry * ry + rz * rz)
+            cos_inc = abs(rx * normals[s, 0] + ry * normals[s, 1] + rz * normals[s, 2]) / max(dist, 1e-9)
+            out[s, v] = dist <= max_dist_m and cos_inc > cos_incidence_min
+    return out
+
+
 def observe_samples(capture_set: CaptureSet, gt: GroundTruth, registered: np.ndarray, section: OracleSection,
                     sample_area_m2: float) -> SampleObservations:
     """The observations of step 1 (module docstring) of every ground-truth sample by the registered views."""
@@ -101,21 +129,18 @@ def observe_samples(capture_set: CaptureSet, gt: GroundTruth, registered: np.nda
     f = cam_model.focal_px
     views = np.flatnonzero(registered)
     centres = np.asarray(capture_set.positions, dtype=float)[views]
-    rot = capture_set.rotations()[views]
-    rel = gt.samples[:, None, :] - centres[None, :, :]                       # (S, nv, 3), sample-major
-    cam = np.matmul(rel.transpose(1, 0, 2), rot).transpose(1, 0, 2)         # R^T (p - c), batched per view
-    z = cam[..., 2]
-    zs = np.where(z > 1e-9, z, 1e-9)
-    u = f * cam[..., 0] / zs + cam_model.image_width_px / 2
-    v = f * cam[..., 1] / zs + cam_model.image_height_px / 2
-    dist = np.sqrt(np.sum(rel * rel, axis=2))
-    cos_inc = np.abs(np.matmul(rel, gt.sample_normals[:, :, None])[..., 0]) / np.maximum(dist, 1e-9)
+    rot = np.ascontiguousarray(capture_set.rotations()[views])
     inc_max = np.radians(p.incidence_max_deg)
-    candidate = ((z > 1e-9) & (u > 0) & (u < cam_model.image_width_px) & (v > 0)
-                 & (v < cam_model.image_height_px) & (dist <= cam_model.distance_for_gsd(p.max_gsd_m))
-                 & (incidence_weight(cos_inc, inc_max) > 0))
-    s_idx, v_idx = np.nonzero(candidate)
-    rel_k, dist_k = rel[s_idx, v_idx], dist[s_idx, v_idx]
+    candidate = _in_view(gt.samples, gt.sample_normals, centres, rot, f, float(cam_model.image_width_px),
+                         float(cam_model.image_height_px), float(cam_model.distance_for_gsd(p.max_gsd_m)),
+                         float(np.cos(inc_max + np.radians(INCIDENCE_RAMP_DEG))))
+    s_idx, v_idx = np.nonzero(candidate)                                      # sample-major
+    rel_k = gt.samples[s_idx] - centres[v_idx]
+    dist_k = np.sqrt(np.sum(rel_k * rel_k, axis=1))
+    cam_k = np.einsum("kj,kji->ki", rel_k, rot[v_idx])                        # R^T (p - c)
+    u_k = f * cam_k[:, 0] / cam_k[:, 2] + cam_model.image_width_px / 2
+    v_k = f * cam_k[:, 1] / cam_k[:, 2] + cam_model.image_height_px / 2
+    cos_k = np.abs(np.einsum("ki,ki->k", rel_k, gt.sample_normals[s_idx])) / np.maximum(dist_k, 1e-9)
     # occlusion: is the segment from the sample (just off the surface) to the camera free?
     toward = -rel_k / dist_k[:, None]
     origins = gt.samples[s_idx] + OCCLUSION_OFFSET_M * toward
@@ -123,19 +148,18 @@ def observe_samples(capture_set: CaptureSet, gt: GroundTruth, registered: np.nda
     t_hit = gt.occluder_scene.cast_rays(o3d.core.Tensor(rays))["t_hit"].numpy()
     free = t_hit >= dist_k - 2 * OCCLUSION_OFFSET_M
     s_idx, v_idx, rel_k, dist_k = s_idx[free], v_idx[free], rel_k[free], dist_k[free]
+    u_k, v_k, cos_k, cam_k = u_k[free], v_k[free], cos_k[free], cam_k[free]
     view = views[v_idx]
     blur = capture_set.blur()[view]
     gsd = np.asarray(cam_model.gsd_m(dist_k))
     keep_frac = keypoint_fraction(blur, gsd, p.texture_m)
-    c_inc = cos_inc[s_idx, v_idx]
-    patch_px2 = sample_area_m2 * c_inc / gsd ** 2 * keep_frac
-    weight = (border_weight(u[s_idx, v_idx], v[s_idx, v_idx], cam_model.image_width_px, cam_model.image_height_px)
-              * incidence_weight(c_inc, inc_max) * patch_match_probability(patch_px2))
+    patch_px2 = sample_area_m2 * cos_k / gsd ** 2 * keep_frac
+    weight = (border_weight(u_k, v_k, cam_model.image_width_px, cam_model.image_height_px)
+              * incidence_weight(cos_k, inc_max) * patch_match_probability(patch_px2))
     # the best MAX_VIEWS_PER_SAMPLE observations of each sample (by weight; still sorted by sample)
     order = np.lexsort((-weight, s_idx))
     first = np.searchsorted(s_idx[order], s_idx[order], side="left")
     keep = order[np.arange(len(order)) - first < MAX_VIEWS_PER_SAMPLE]
-    cam_k = cam[s_idx, v_idx]
     return SampleObservations(s_idx[keep], view[keep], rel_k[keep], dist_k[keep], cam_k[keep], weight[keep],
                               pixel_noise_px(p.sigma_px, blur[keep]), patch_px2[keep], gsd[keep])
 
