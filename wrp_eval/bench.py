@@ -34,6 +34,7 @@ BENCH_GROUPS: dict[str, str] = {
     "wrp": "wrp_eval.wrp.bench",
     "robustness": "wrp_eval.wrp.robustness_bench",
     "scaling": "wrp_eval.campaign.scaling_bench",
+    "views": "wrp_eval.campaign.view_scaling",
     "cluster": "wrp_eval.campaign.cluster_bench",
     "peers": "wrp_eval.sim.peers_bench",
 }

@@ -102,11 +102,11 @@ def lag_correlation(offsets: np.ndarray, times: np.ndarray, lag_s: float = LAG_S
     return float(np.corrcoef(a, b)[0, 1])
 
 
-def quickstart_campaign(ctx: ExperimentContext, speed: float, out: Path):
-    """The path of ``ctx`` flown as planned ``FLIGHTS_PER_SPEED`` times at U10 ``speed`` m/s (directions uniform,
+def quickstart_campaign(ctx: ExperimentContext, speed: float, out: Path, flights: int = FLIGHTS_PER_SPEED):
+    """The path of ``ctx`` flown as planned ``flights`` times at U10 ``speed`` m/s (directions uniform,
     turbulence from each trial's mean wind) into ``out``: (the campaign summary, its trial table)."""
     doc = ctx.config.model_dump(mode="json")
-    doc["campaign"].update({"n_trials": FLIGHTS_PER_SPEED, "seed": 16,
+    doc["campaign"].update({"n_trials": flights, "seed": 16,
                             "wind": {**doc["campaign"]["wind"], "speed_10m_m_s": float(speed),
                                      "direction_deg": {"dist": "uniform", "low": 0.0, "high": 360.0},
                                      "turbulence": {"severity": "from_mean", "sigma_w_mps": None}},

@@ -15,7 +15,10 @@ is a record; ``scaling.*_exponent``):
   64 to ``WRP_EVAL_BENCH_SCALING_MAX_TRIALS`` (default 2,048; ~13 min in all on 2 cores), exponent fitted from
   128 trials up (the workers' start-up is a constant). Target: linear, exponent <= 1.1.
 
-The figure (four log-log panels) is written beside the JSON records as ``scaling.png``.
+* views: planning, oracle and campaign cost against the view count of one ship (:mod:`view_scaling`, also its
+  own group ``views``).
+
+The figure (four log-log panels, the first four curves) is written beside the JSON records as ``scaling.png``.
 """
 
 from __future__ import annotations
@@ -34,6 +37,7 @@ from wrp_eval.bench_record import BenchRecord
 from wrp_eval.camera import Camera, yaw_pitch_towards
 from wrp_eval.campaign.bench import reference_config
 from wrp_eval.campaign.jobs import campaign_job
+from wrp_eval.campaign.view_scaling import exponent, view_count_points, view_count_records
 from wrp_eval.config import ExperimentConfig
 from wrp_eval.experiment import ExperimentContext
 from wrp_eval.planning.config import PlanningSection
@@ -52,11 +56,6 @@ ORACLE_VIEWS = (25, 50, 100, 200, 400)
 BATCHES = (1, 4, 16, 64, 256, 1024)
 FLIGHT_SIM_S = 30.0
 MAX_TRIALS = int(os.environ.get("WRP_EVAL_BENCH_SCALING_MAX_TRIALS", "2048"))
-
-
-def exponent(x, y) -> float:
-    """k of the least-squares fit log y = log a + k log x."""
-    return float(np.polyfit(np.log(np.asarray(x, float)), np.log(np.asarray(y, float)), 1)[0])
 
 
 def planning_curve() -> list[tuple[str, float, float, int]]:
@@ -187,6 +186,7 @@ def run_bench(out_dir: Path | None = None) -> list[BenchRecord]:
                 for t, w in campaign]
     records.append(BenchRecord("scaling.campaign_exponent", k, "", "issue 19 target (linear)", 1.1,
                                f"campaign wall ~ trials^k over {fit[0][0]}-{fit[-1][0]} trials"))
+    records += view_count_records(view_count_points())
     if out_dir is not None:
         scaling_figure(curves, Path(out_dir) / "scaling.png")
     return records
