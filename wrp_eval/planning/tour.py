@@ -85,13 +85,15 @@ def _best_two_opt(order: np.ndarray, cost: np.ndarray) -> tuple[float, int, int]
     """(delta, i, j) of the best 2-opt move of a closed tour (symmetric cost): reversing order[i+1 .. j]
     changes the length by delta; over i < j - 1, (0, n - 1) excluded, the first best in row-major order."""
     n = len(order)
+    edge = np.empty(n)
+    for k in range(n):
+        edge[k] = cost[order[k], order[(k + 1) % n]]
     best, best_i, best_j = np.inf, -1, -1
     for i in range(n - 2):
-        a_i, b_i = order[i], order[(i + 1) % n]
-        edge_i = cost[a_i, b_i]
+        row_a, row_b = cost[order[i]], cost[order[i + 1]]
+        edge_i = edge[i]
         for j in range(i + 2, n - 1 if i == 0 else n):
-            a_j, b_j = order[j], order[(j + 1) % n]
-            delta = cost[a_i, a_j] + cost[b_i, b_j] - edge_i - cost[a_j, b_j]
+            delta = row_a[order[j]] + row_b[order[(j + 1) % n]] - edge_i - edge[j]
             if delta < best:
                 best, best_i, best_j = delta, i, j
     return best, best_i, best_j
@@ -113,8 +115,12 @@ def _two_opt_move(order: np.ndarray, cost: np.ndarray) -> np.ndarray | None:
 def _best_or_opt(order: np.ndarray, cost: np.ndarray, max_len: int) -> tuple[float, int, int, int, bool]:
     """(delta, i, j, length, reverse) of the best Or-opt move: the run order[i .. i+length-1] (length 1 ..
     max_len) moved between order[j] and order[j+1], reversed or not; delta < -1e-9 only if it improves.
-    Scanned per length, forward then reversed, each in row-major (i, j) order, the first best kept."""
+    Scanned per length, forward then reversed, each in row-major (i, j) order, the first best kept. ``cost``
+    must be symmetric (the run is read from the rows of its ends)."""
     n = len(order)
+    edge = np.empty(n)
+    for k in range(n):
+        edge[k] = cost[order[k], order[(k + 1) % n]]
     best, best_i, best_j, best_len, best_rev = -1e-9, -1, -1, 0, False
     for length in range(1, min(max_len, n - 3) + 1):
         for reverse in (False, True):
@@ -123,15 +129,13 @@ def _best_or_opt(order: np.ndarray, cost: np.ndarray, max_len: int) -> tuple[flo
                 first, last = order[i], order[(i + length - 1) % n]
                 prev, nxt = order[(i - 1) % n], order[(i + length) % n]
                 gain = cost[prev, first] + cost[last, nxt] - cost[prev, nxt]
+                # the run's end that meets u = order[j] and the one that meets v = order[j + 1]
+                row_u, row_v = (cost[last], cost[first]) if reverse else (cost[first], cost[last])
                 for j in range(n):
-                    offset = (j - i) % n
+                    offset = j - i if j >= i else j - i + n
                     if offset < length or offset == n - 1:  # edge j must lie outside the run, not just before it
                         continue
-                    u, v = order[j], order[(j + 1) % n]
-                    if reverse:
-                        d = cost[u, last] + cost[first, v] - cost[u, v] - gain
-                    else:
-                        d = cost[u, first] + cost[last, v] - cost[u, v] - gain
+                    d = row_u[order[j]] + row_v[order[(j + 1) % n]] - edge[j] - gain
                     if d < low:
                         low, low_i, low_j = d, i, j
             if low < best:
