@@ -51,3 +51,31 @@ def test_overlap_ratio_hand_computed():
     assert overlap_ratio(a, b, w)[0] == pytest.approx(2 / 4)       # 2 / ((3 + 5) / 2)
     m = overlap_matrix(np.concatenate([a, b, np.zeros((1, 4), bool)]))
     np.testing.assert_allclose(m, [[1, 2 / 3, 0], [2 / 3, 1, 0], [0, 0, 0]])
+
+
+def _cheap_tests_numpy(pts, nrm, pos, rot, f, half_w, half_h, d_max, cos_max):
+    """The dense float32 numpy tests visibility() ran before the compiled pass (reference)."""
+    rel = pts[None, :, :] - pos[:, None, :]
+    dist = np.sqrt(np.einsum("cmi,cmi->cm", rel, rel))
+    cam = np.einsum("cij,cmi->cmj", rot, rel)
+    depth = cam[..., 2]
+    in_img = (depth > 0) & (np.abs(cam[..., 0]) * f <= half_w * depth) & (np.abs(cam[..., 1]) * f <= half_h * depth)
+    cos_theta = -np.einsum("cmi,mi->cm", rel, nrm) / np.maximum(dist, 1e-9)
+    return in_img & (dist <= d_max) & (cos_theta >= cos_max)
+
+
+def test_compiled_cheap_tests_match_the_dense_numpy_tests():
+    from wrp_eval.camera import camera_rotations
+    from wrp_eval.planning.visibility import _cheap_tests
+
+    rng = np.random.default_rng(5)
+    pts = rng.uniform(-50, 50, (1500, 3)).astype(np.float32)
+    nrm = rng.standard_normal((1500, 3))
+    nrm = (nrm / np.linalg.norm(nrm, axis=1, keepdims=True)).astype(np.float32)
+    pos = rng.uniform(-80, 80, (40, 3)).astype(np.float32)
+    rot = camera_rotations(rng.uniform(-np.pi, np.pi, 40), rng.uniform(-1.3, 0.3, 40)).astype(np.float32)
+    args = (pts, nrm, pos, rot, np.float32(1200.0), np.float32(1000.0), np.float32(660.0), np.float32(90.0),
+            np.float32(np.cos(np.radians(85.0))))
+    dense = _cheap_tests_numpy(*args)
+    assert 0.01 < dense.mean() < 0.5
+    np.testing.assert_array_equal(_cheap_tests(*args), dense)

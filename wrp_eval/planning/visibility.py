@@ -2,8 +2,8 @@
 
 A view sees a sample when the sample projects inside the image, lies within ``d_max``, the angle theta
 between the ray (sample -> view) and the sample normal is at most ``max_incidence`` (85 deg), and the ray
-is not occluded by the proxy. The cheap tests run vectorised over views x samples in chunks; the survivors
-go to open3d's Embree ray caster in ONE batched ``cast_rays`` call.
+is not occluded by the proxy. The cheap tests run in one compiled pass over the view x sample pairs
+(float32); the survivors go to open3d's Embree ray caster in ONE batched ``cast_rays`` call.
 """
 
 from __future__ import annotations
@@ -12,10 +12,8 @@ import numpy as np
 import open3d as o3d
 
 from wrp_eval.camera import Camera, camera_rotations
+from wrp_eval.compiled import kernel
 from wrp_eval.ship.proxy import Proxy
-
-_CHUNK_ELEMENTS = 2_000_000  # views x samples per vectorised chunk (~100 MB of float32 temporaries)
-
 
 class ProxyRaycaster:
     """The proxy's triangles in an Embree scene (built once per proxy)."""
@@ -32,30 +30,39 @@ class ProxyRaycaster:
         return self.scene.cast_rays(o3d.core.Tensor(rays))["t_hit"].numpy().astype(float)
 
 
+@kernel
+def _cheap_tests(pts: np.ndarray, nrm: np.ndarray, pos: np.ndarray, rot: np.ndarray, f: np.float32,
+                 half_w: np.float32, half_h: np.float32, d_max: np.float32, cos_max: np.float32) -> np.ndarray:
+    """(n_views, n_samples) bool: in the image, within ``d_max``, incidence within the limit (float32, as the
+    ray caster). One pass over the pairs, no (views, samples, 3) temporaries."""
+    n_views, n_samples = pos.shape[0], pts.shape[0]
+    passed = np.zeros((n_views, n_samples), dtype=np.bool_)
+    for c in range(n_views):
+        for m in range(n_samples):
+            r0 = pts[m, 0] - pos[c, 0]
+            r1 = pts[m, 1] - pos[c, 1]
+            r2 = pts[m, 2] - pos[c, 2]
+            depth = rot[c, 0, 2] * r0 + rot[c, 1, 2] * r1 + rot[c, 2, 2] * r2
+            if depth <= 0:
+                continue
+            x = rot[c, 0, 0] * r0 + rot[c, 1, 0] * r1 + rot[c, 2, 0] * r2
+            y = rot[c, 0, 1] * r0 + rot[c, 1, 1] * r1 + rot[c, 2, 1] * r2
+            if abs(x) * f > half_w * depth or abs(y) * f > half_h * depth:
+                continue
+            dist = np.sqrt(r0 * r0 + r1 * r1 + r2 * r2)
+            cos_theta = -(r0 * nrm[m, 0] + r1 * nrm[m, 1] + r2 * nrm[m, 2]) / max(dist, np.float32(1e-9))
+            passed[c, m] = dist <= d_max and cos_theta >= cos_max
+    return passed
+
+
 def visibility(points: np.ndarray, normals: np.ndarray, positions: np.ndarray, yaw: np.ndarray,
                pitch: np.ndarray, camera: Camera, raycaster: ProxyRaycaster, d_max: float,
                max_incidence_rad: float) -> np.ndarray:
     """Boolean (n_views, n_samples): view i sees sample j under all four conditions."""
-    n_views, n_samples = len(positions), len(points)
-    rot = camera_rotations(yaw, pitch).astype(np.float32)
-    pts = points.astype(np.float32)
-    nrm = normals.astype(np.float32)
-    pos = positions.astype(np.float32)
-    f = np.float32(camera.focal_px)
-    half_w, half_h = np.float32(camera.image_width_px / 2.0), np.float32(camera.image_height_px / 2.0)
-    cos_max = np.float32(np.cos(max_incidence_rad))
-    passed = np.zeros((n_views, n_samples), dtype=bool)
-    step = max(1, _CHUNK_ELEMENTS // max(n_samples, 1))
-    for start in range(0, n_views, step):  # chunks of views, each fully vectorised
-        sl = slice(start, min(start + step, n_views))
-        rel = pts[None, :, :] - pos[sl, None, :]                       # view -> sample (c, m, 3)
-        dist = np.sqrt(np.einsum("cmi,cmi->cm", rel, rel))
-        cam = np.einsum("cij,cmi->cmj", rot[sl], rel)                  # R^T (p - c)
-        depth = cam[..., 2]
-        in_img = (depth > 0) & (np.abs(cam[..., 0]) * f <= half_w * depth) & \
-                 (np.abs(cam[..., 1]) * f <= half_h * depth)
-        cos_theta = -np.einsum("cmi,mi->cm", rel, nrm) / np.maximum(dist, 1e-9)
-        passed[sl] = in_img & (dist <= d_max) & (cos_theta >= cos_max)
+    passed = _cheap_tests(points.astype(np.float32), normals.astype(np.float32), positions.astype(np.float32),
+                          camera_rotations(yaw, pitch).astype(np.float32), np.float32(camera.focal_px),
+                          np.float32(camera.image_width_px / 2.0), np.float32(camera.image_height_px / 2.0),
+                          np.float32(d_max), np.float32(np.cos(max_incidence_rad)))
     vi, si = np.nonzero(passed)
     if vi.size:
         rel = points[si] - positions[vi]
