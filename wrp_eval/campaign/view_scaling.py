@@ -1,5 +1,5 @@
 """Cost against the view count (``wrp-eval bench --only views``, also part of ``--only scaling``): the quickstart
-ship planned at decreasing ground sampling distance (``GSDS_MM``: about 46 / 143 / 330 / 600 views), and per
+ship planned at decreasing ground sampling distance (``GSDS_MM``: 46 / 143 / 330 / 559 views), and per
 plan
 
 * planning: the ``ours`` planner's wall time and its stages (sampling, visibility, Min, Max, tour, transitions);

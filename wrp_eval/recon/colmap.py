@@ -131,6 +131,39 @@ def write_position_priors(database_path: Path, names: list[str], capture_set: Ca
         db.close()
 
 
+def _georeferenced_points(model, names: list[str], capture_set: CaptureSet, extra: dict) -> np.ndarray:
+    """The sparse points (k, 3) of the COLMAP ``model`` carried into the capture frame by the similarity from its
+    registered cameras' centres to the true capture positions (fewer than 3 cameras: as they are); the camera
+    residuals and the rotation check go into ``extra``. ``names``: the image names in view order."""
+    # georeference with the registered cameras' centres -> true capture positions
+    name_to_view = {name: i for i, name in enumerate(names)}
+    centres, views, model_rot = [], [], []
+    for image in model.images.values():
+        if image.has_pose:
+            centres.append(np.asarray(image.projection_center()))
+            views.append(name_to_view[image.name])
+            pose = image.cam_from_world() if callable(image.cam_from_world) else image.cam_from_world
+            model_rot.append(np.asarray(pose.rotation.matrix()).T)  # world-from-camera, model frame
+    centres, truth = np.asarray(centres), capture_set.positions[np.asarray(views, dtype=int)]
+    if len(centres) and capture_set.prior_positions is not None:
+        # how far the model sits from the recorded positions it was held to (prior BA), before any similarity
+        priors = capture_set.position_priors()[np.asarray(views, dtype=int)]
+        extra["camera_prior_residual_m"] = float(np.sqrt(np.mean(np.sum((centres - priors) ** 2, axis=1))))
+    pts = np.array([p.xyz for p in model.points3D.values()]) if model.num_points3D() else np.zeros((0, 3))
+    if len(centres) >= 3:
+        extra["camera_residual_before_m"] = float(np.sqrt(np.mean(np.sum((centres - truth) ** 2, axis=1))))
+        transform = _similarity_from_centres(centres, truth)
+        pts = pts @ transform[:3, :3].T + transform[:3, 3]
+        moved = centres @ transform[:3, :3].T + transform[:3, 3]
+        extra["camera_residual_m"] = float(np.sqrt(np.mean(np.sum((moved - truth) ** 2, axis=1))))
+        # orientation check of the whole chain (render, camera model with roll, SfM): median angle between
+        # the model's georeferenced cameras and the capture rotations
+        truth_rot = capture_set.rotations()[np.asarray(views, dtype=int)]
+        extra["camera_rotation_error_deg"] = float(np.median(rotation_errors_deg(np.asarray(model_rot),
+                                                                                 transform, truth_rot)))
+    return pts
+
+
 class ColmapOracle(MeshOracle):
     """Render + pycolmap SfM. ``evaluate(capture_set, ship_mesh, seed)`` -> :class:`ReconResult`."""
 
@@ -274,32 +307,7 @@ class ColmapOracle(MeshOracle):
         registered = int(best.num_reg_images())
         extra["model_sizes"] = sorted((int(r.num_reg_images()) for r in models.values()), reverse=True)
 
-        # georeference with the registered cameras' centres -> true capture positions
-        name_to_view = {name: i for i, name in enumerate(names)}
-        centres, views, model_rot = [], [], []
-        for image in best.images.values():
-            if image.has_pose:
-                centres.append(np.asarray(image.projection_center()))
-                views.append(name_to_view[image.name])
-                pose = image.cam_from_world() if callable(image.cam_from_world) else image.cam_from_world
-                model_rot.append(np.asarray(pose.rotation.matrix()).T)  # world-from-camera, model frame
-        centres, truth = np.asarray(centres), capture_set.positions[np.asarray(views, dtype=int)]
-        if len(centres) and capture_set.prior_positions is not None:
-            # how far the model sits from the recorded positions it was held to (prior BA), before any similarity
-            priors = capture_set.position_priors()[np.asarray(views, dtype=int)]
-            extra["camera_prior_residual_m"] = float(np.sqrt(np.mean(np.sum((centres - priors) ** 2, axis=1))))
-        pts = np.array([p.xyz for p in best.points3D.values()]) if best.num_points3D() else np.zeros((0, 3))
-        if len(centres) >= 3:
-            extra["camera_residual_before_m"] = float(np.sqrt(np.mean(np.sum((centres - truth) ** 2, axis=1))))
-            transform = _similarity_from_centres(centres, truth)
-            pts = pts @ transform[:3, :3].T + transform[:3, 3]
-            moved = centres @ transform[:3, :3].T + transform[:3, 3]
-            extra["camera_residual_m"] = float(np.sqrt(np.mean(np.sum((moved - truth) ** 2, axis=1))))
-            # orientation check of the whole chain (render, camera model with roll, SfM): median angle between
-            # the model's georeferenced cameras and the capture rotations
-            truth_rot = capture_set.rotations()[np.asarray(views, dtype=int)]
-            extra["camera_rotation_error_deg"] = float(np.median(rotation_errors_deg(np.asarray(model_rot),
-                                                                                     transform, truth_rot)))
+        pts = _georeferenced_points(best, names, capture_set, extra)
         pts = pts[np.isfinite(pts).all(axis=1)]
         extra["points3D"] = int(len(pts))
         reason = ""
