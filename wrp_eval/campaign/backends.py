@@ -1,7 +1,11 @@
 """Where batches of trials run: in the calling process, a local process pool, or Ray tasks.
 
-Each backend is a generator of completed batches (lists of records), in completion order, keeping a bounded
-number of batches in flight (so that memory stays flat and a kill loses little work).
+:class:`TrialPool` is the one interface: ``with TrialPool(kind, workers) as pool: for index, records in
+pool.run(tasks)``. A task is ``(spec, trials)``: a worker spec (:func:`wrp_eval.campaign.worker.run_batch`) and
+the trial ids (or ready-made :class:`~wrp_eval.campaign.sampling.TrialInputs`) to evaluate together. Batches come
+back in completion order, a bounded number in flight (memory stays flat and a kill loses little work). The pool
+lives across calls of ``run``, so a caller that decides its next tasks from the last results (the envelope's
+sequential cells) starts the worker processes, and builds their evaluators, once.
 """
 
 from __future__ import annotations
@@ -10,27 +14,22 @@ import multiprocessing
 import os
 import socket
 import time
-from collections.abc import Iterator
+from collections.abc import Iterator, Sequence
 from concurrent.futures import FIRST_COMPLETED, ProcessPoolExecutor, wait
 from concurrent.futures.process import BrokenProcessPool
 from contextlib import contextmanager
 
 from wrp_eval.campaign.records import make_record
-from wrp_eval.campaign.sampling import trial_inputs
-from wrp_eval.campaign.worker import ray_run_batch, run_batch, thread_env
+from wrp_eval.campaign.worker import ray_run_batch, run_batch, thread_env, trial_inputs_of
 from wrp_eval.errors import InputError
 
 IN_FLIGHT_PER_WORKER = 2
 
+Task = tuple[dict, Sequence]     # (worker spec, trial ids or TrialInputs)
+
 
 def default_workers() -> int:
     return max(1, len(os.sched_getaffinity(0)) if hasattr(os, "sched_getaffinity") else (os.cpu_count() or 1))
-
-
-def run_serial(spec: dict, batches: list[list[int]]) -> Iterator[list[dict]]:
-    """Every batch in the calling process (``workers: 0``)."""
-    for ids in batches:
-        yield run_batch(spec, ids)
 
 
 @contextmanager
@@ -48,90 +47,140 @@ def _child_environment(threads: int):
                 os.environ[k] = v
 
 
-def _crash_records(spec: dict, ids: list[int], message: str) -> list[dict]:
+def _crash_records(spec: dict, trials: Sequence, message: str) -> list[dict]:
     """Records for trials whose worker process died every time it tried them."""
-
     ctx = spec["context"]
     n_views = len(ctx.path)
-    return [make_record(trial_inputs(ctx.trial.campaign, ctx.root_seed, k, n_views), None, root_seed=ctx.root_seed,
-                        path_digest=ctx.path_digest, n_views=n_views, attempts=spec["max_attempts"],
-                        trial_s=0.0, worker=socket.gethostname(), finished_unix=time.time(), error=message)
-            for k in ids]
+    return [make_record(inp, None, root_seed=ctx.root_seed, path_digest=ctx.path_digest, n_views=n_views,
+                        attempts=spec["max_attempts"], trial_s=0.0, worker=socket.gethostname(),
+                        finished_unix=time.time(), error=message)
+            for inp in trial_inputs_of(spec, trials)]
 
 
-def run_local(spec: dict, batches: list[list[int]], workers: int) -> Iterator[list[dict]]:
-    """A pool of ``workers`` spawned processes (spawn: no forked copies of MuJoCo/open3d/torch threads).
+class TrialPool:
+    """Runs tasks in the calling process (``kind`` local with ``workers`` 0), a pool of ``workers`` spawned
+    processes (spawn: no forked copies of MuJoCo/open3d/torch threads) or Ray (``kind`` ray: connects to
+    ``address`` or starts a local instance with ``workers`` CPUs, reusing one already initialised in this
+    process). ``threads``: CPU threads per worker.
 
-    A worker process that dies (segfault, OOM kill) breaks the pool: the pool is rebuilt and the batches in
-    flight are tried again, up to ``max_attempts`` times, then recorded as failed."""
-    ctx = multiprocessing.get_context("spawn")
-    todo = list(enumerate(batches))[::-1]  # a stack: pop() takes the lowest batch first
-    crashes: dict[int, int] = {}
-    while todo:
-        with _child_environment(spec["context"].threads):
-            # no pool initializer: a worker's set-up error (bad ship mesh, netCDF, ...) then surfaces from
-            # run_batch as that batch's exception and aborts the campaign with its message, instead of
-            # breaking the pool like a crash
-            pool = ProcessPoolExecutor(max_workers=workers, mp_context=ctx)
-        running = {}
-        try:
-            while todo or running:
-                while todo and len(running) < workers * IN_FLIGHT_PER_WORKER:
-                    index, ids = todo.pop()
-                    with _child_environment(spec["context"].threads):
-                        running[pool.submit(run_batch, spec, ids)] = (index, ids)
-                done, _ = wait(running, return_when=FIRST_COMPLETED)
-                for fut in done:
-                    index, ids = running.pop(fut)
-                    yield fut.result()
-        except BrokenProcessPool:
-            for fut, (index, ids) in running.items():
-                crashes[index] = crashes.get(index, 0) + 1
-                if crashes[index] >= spec["max_attempts"]:
-                    yield _crash_records(spec, ids, "worker process died (BrokenProcessPool)")
-                else:
-                    todo.append((index, ids))
-            todo.sort(key=lambda item: -item[0])
-        finally:
-            pool.shutdown(wait=True, cancel_futures=True)
+    A local worker process that dies (segfault, OOM kill) breaks the pool: the pool is rebuilt and the batches
+    in flight are tried again, up to their spec's ``max_attempts``, then recorded as failed. Ray retries a
+    task whose worker died (``max_retries``); exceptions inside a trial are the worker's own retries."""
 
+    def __init__(self, kind: str, workers: int, address: str | None = None, threads: int = 1):
+        self.kind, self.workers, self.address, self.threads = kind, workers, address, threads
+        self._pool: ProcessPoolExecutor | None = None
+        self._ray_started = False
 
-def run_ray(spec: dict, batches: list[list[int]], workers: int, address: str | None) -> Iterator[list[dict]]:
-    """Ray tasks (``pip install .[cluster]``). Connects to ``address`` or starts a local instance with
-    ``workers`` CPUs (reusing one already initialised in this process). Tasks are retried by Ray when a
-    worker dies (``max_retries``); exceptions inside a trial are handled by the worker's own retries."""
-    try:
-        import ray  # lazily: Ray is the optional [cluster] extra, needed only by this backend
-    except ImportError:
-        raise InputError("campaign.backend", "the ray backend needs Ray: pip install '.[cluster]'") from None
-    started_here = False
-    if not ray.is_initialized():
-        kwargs = dict(include_dashboard=False, log_to_driver=False, configure_logging=False)
-        if address:
-            ray.init(address=address, **kwargs)
+    def __enter__(self) -> "TrialPool":
+        if self.kind == "ray":
+            self._start_ray()
+        return self
+
+    def __exit__(self, *exc) -> None:
+        self.close()
+
+    def close(self) -> None:
+        if self._pool is not None:
+            self._pool.shutdown(wait=True, cancel_futures=True)
+            self._pool = None
+        if self._ray_started:
+            import ray
+            ray.shutdown()
+            self._ray_started = False
+
+    def run(self, tasks: Sequence[Task]) -> Iterator[tuple[int, list[dict]]]:
+        """(task index, its records) for every task, in completion order."""
+        if self.kind == "ray":
+            yield from self._run_ray(tasks)
+        elif self.workers == 0:
+            for index, (spec, trials) in enumerate(tasks):
+                yield index, run_batch(spec, trials)
         else:
-            ray.init(num_cpus=workers, **kwargs)
-        started_here = True
-    try:
-        task = ray.remote(num_cpus=1, max_retries=spec["max_attempts"], retry_exceptions=False)(ray_run_batch)
-        spec_ref = ray.put(spec)
-        limit = max(1, int(ray.cluster_resources().get("CPU", workers))) * IN_FLIGHT_PER_WORKER
-        todo = list(batches)[::-1]
+            yield from self._run_local(tasks)
+
+    def _local_pool(self) -> ProcessPoolExecutor:
+        if self._pool is None:
+            with _child_environment(self.threads):
+                # no pool initializer: a worker's set-up error (bad ship mesh, netCDF, ...) then surfaces from
+                # run_batch as that batch's exception and aborts the run with its message, instead of
+                # breaking the pool like a crash
+                self._pool = ProcessPoolExecutor(max_workers=self.workers,
+                                                 mp_context=multiprocessing.get_context("spawn"))
+        return self._pool
+
+    def _run_local(self, tasks: Sequence[Task]) -> Iterator[tuple[int, list[dict]]]:
+        todo = list(range(len(tasks)))[::-1]     # a stack: pop() takes the lowest task first
+        crashes: dict[int, int] = {}
+        while todo:
+            pool = self._local_pool()
+            running = {}
+            try:
+                while todo or running:
+                    while todo and len(running) < self.workers * IN_FLIGHT_PER_WORKER:
+                        index = todo.pop()
+                        with _child_environment(self.threads):
+                            running[pool.submit(run_batch, *tasks[index])] = index
+                    done, _ = wait(running, return_when=FIRST_COMPLETED)
+                    for fut in done:
+                        index = running.pop(fut)
+                        yield index, fut.result()
+            except BrokenProcessPool:
+                for index in running.values():
+                    crashes[index] = crashes.get(index, 0) + 1
+                    spec, trials = tasks[index]
+                    if crashes[index] >= spec["max_attempts"]:
+                        yield index, _crash_records(spec, trials, "worker process died (BrokenProcessPool)")
+                    else:
+                        todo.append(index)
+                todo.sort(reverse=True)
+                self._pool.shutdown(wait=True, cancel_futures=True)
+                self._pool = None
+            except BaseException:
+                # an aborted run (an input error, a kill, the caller closing the generator): no batch of it may
+                # still be running when the caller goes on
+                self.close()
+                raise
+
+    def _start_ray(self) -> None:
+        try:
+            import ray  # lazily: Ray is the optional [cluster] extra, needed only by this backend
+        except ImportError:
+            raise InputError("campaign.backend", "the ray backend needs Ray: pip install '.[cluster]'") from None
+        if not ray.is_initialized():
+            kwargs = dict(include_dashboard=False, log_to_driver=False, configure_logging=False)
+            if self.address:
+                ray.init(address=self.address, **kwargs)
+            else:
+                ray.init(num_cpus=max(1, self.workers), **kwargs)
+            self._ray_started = True
+
+    def _run_ray(self, tasks: Sequence[Task]) -> Iterator[tuple[int, list[dict]]]:
+        import ray
+        refs: dict[int, object] = {}              # one object-store copy per distinct spec
+        remote = {}
+        limit = max(1, int(ray.cluster_resources().get("CPU", self.workers))) * IN_FLIGHT_PER_WORKER
+        todo = list(range(len(tasks)))[::-1]
         running: dict = {}
         while todo or running:
             while todo and len(running) < limit:
-                ids = todo.pop()
-                running[task.remote(spec_ref, ids)] = ids
+                index = todo.pop()
+                spec, trials = tasks[index]
+                attempts = spec["max_attempts"]
+                if attempts not in remote:
+                    remote[attempts] = ray.remote(num_cpus=1, max_retries=attempts,
+                                                  retry_exceptions=False)(ray_run_batch)
+                if id(spec) not in refs:
+                    refs[id(spec)] = ray.put(spec)
+                running[remote[attempts].remote(refs[id(spec)], trials)] = index
             ready, _ = ray.wait(list(running), num_returns=1)
             for ref in ready:
-                ids = running.pop(ref)
+                index = running.pop(ref)
                 try:
                     records = ray.get(ref)
                 except ray.exceptions.RayTaskError as err:  # set-up error in the task: abort with its message
                     raise (err.cause if isinstance(err.cause, Exception) else err) from None
                 except ray.exceptions.RayError as err:  # the task's worker died max_retries + 1 times
-                    records = _crash_records(spec, ids, f"ray task failed: {type(err).__name__}")
-                yield records
-    finally:
-        if started_here:
-            ray.shutdown()
+                    records = _crash_records(tasks[index][0], tasks[index][1],
+                                             f"ray task failed: {type(err).__name__}")
+                yield index, records

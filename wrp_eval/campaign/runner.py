@@ -117,6 +117,49 @@ def versions() -> dict:
     return {"machine": platform.machine(), "system": platform.platform(), "versions": found}
 
 
+def open_store(store: TrialStore, trial: TrialConfig, path_doc: dict, *, root_seed: int, evaluator: str,
+               evaluator_options: dict) -> tuple[str, np.ndarray]:
+    """Check that the (locked) ``store`` holds nothing but this campaign's trials and (re)write its meta;
+    returns (the fingerprint, the stored trial ids). A folder of another campaign is an :class:`InputError`."""
+    digest = digest_of_document(path_doc)
+    config_doc = trial.model_dump(mode="json")
+    print_ = fingerprint(config_doc, digest, root_seed, evaluator, evaluator_options)
+    previous = store.read_meta()
+    if previous is not None and previous.get("fingerprint") != print_ and stored_fingerprint(previous) != print_:
+        raise InputError(store.out_dir, "holds a campaign with a different config, path or seed "
+                                        f"(fingerprint {previous.get('fingerprint')} vs {print_}); use another "
+                                        "--out (or campaign.outputs.dir), or remove the folder")
+    store.write_meta({"fingerprint": print_, "config": config_doc, "root_seed": root_seed, "path_digest": digest,
+                      "n_views": len(path_doc["viewpoints"]),
+                      "n_trials": trial.campaign.n_trials, "evaluator": evaluator,
+                      "evaluator_options": evaluator_options, "environment": versions(),
+                      "updated_unix": time.time()}, path_doc)
+    return print_, store.stored_ids()
+
+
+def worker_spec(trial: TrialConfig, path: FlightPath, *, key: str, root_seed: int, config_dir: Path | None,
+                evaluator: str, evaluator_options: dict) -> dict:
+    """What a worker needs to evaluate trials of ``trial`` flying ``path`` (:func:`wrp_eval.campaign.worker.
+    run_batch`); ``key`` names the evaluator a worker builds once and keeps."""
+    context = CampaignContext(trial=trial, path=path, root_seed=root_seed, path_digest=digest_of_document(
+        path.to_json_dict()), threads=1, config_dir=str(Path(config_dir or ".").resolve()))
+    return {"key": key, "evaluator": evaluator, "evaluator_options": evaluator_options,
+            "max_attempts": trial.campaign.backend.max_attempts, "context": context}
+
+
+def stored_path(path: FlightPath) -> tuple[FlightPath, dict]:
+    """The path as a campaign folder stores it (path.json holds degrees: the workers fly the same floats whether
+    the campaign is run now, resumed from its folder, or re-scored from the stored path later) and its
+    document."""
+    path_doc = path.to_json_dict()
+    return FlightPath.from_json_dict(path_doc, source="path"), path_doc
+
+
+def backend_workers(section: CampaignSection) -> int:
+    """Worker processes of a campaign section (none: one per CPU)."""
+    return section.backend.workers if section.backend.workers is not None else backends.default_workers()
+
+
 def run_campaign(trial: TrialConfig, path: FlightPath, out_dir: str | Path, *, root_seed: int,
                  config_dir: Path | None = None, evaluator: str = DEFAULT_EVALUATOR,
                  evaluator_options: dict | None = None, progress: bool = True,
@@ -129,73 +172,52 @@ def run_campaign(trial: TrialConfig, path: FlightPath, out_dir: str | Path, *, r
     section = trial.campaign
     evaluator_options = dict(evaluator_options or {})
     resolve_factory(evaluator)  # fail early, in the calling process, on a bad name
-    path_doc = path.to_json_dict()
-    # the workers fly the path as the folder stores it (path.json holds degrees): the same floats whether the
-    # campaign is run now, resumed from its folder, or re-scored from the stored path later
-    path = FlightPath.from_json_dict(path_doc, source="path")
-    digest = digest_of_document(path_doc)
-    config_doc = trial.model_dump(mode="json")
-    print_ = fingerprint(config_doc, digest, root_seed, evaluator, evaluator_options)
+    path, path_doc = stored_path(path)
     out = Path(out_dir)
-    workers = section.backend.workers if section.backend.workers is not None else backends.default_workers()
+    workers = backend_workers(section)
 
     store = TrialStore(out)
     with store:
-        previous = store.read_meta()
-        if (previous is not None and previous.get("fingerprint") != print_
-                and stored_fingerprint(previous) != print_):
-            raise InputError(out, "holds a campaign with a different config, path or seed "
-                                  f"(fingerprint {previous.get('fingerprint')} vs {print_}); use another --out "
-                                  "(or campaign.outputs.dir), or remove the folder")
-        store.write_meta({"fingerprint": print_, "config": config_doc, "root_seed": root_seed,
-                          "path_digest": digest, "n_views": len(path), "n_trials": section.n_trials,
-                          "evaluator": evaluator, "evaluator_options": evaluator_options,
-                          "environment": versions(), "updated_unix": time.time()}, path_doc)
-        stored = store.stored_ids()
+        print_, stored = open_store(store, trial, path_doc, root_seed=root_seed, evaluator=evaluator,
+                                    evaluator_options=evaluator_options)
         todo = np.setdiff1d(np.arange(section.n_trials), stored)
         batches = [todo[i:i + section.batch_size].tolist() for i in range(0, todo.size, section.batch_size)]
-        spec = {"key": f"{print_}-{workers}", "evaluator": evaluator, "evaluator_options": evaluator_options,
-                "max_attempts": section.backend.max_attempts,
-                "context": CampaignContext(trial=trial, path=path, root_seed=root_seed, path_digest=digest, threads=1,
-                                           config_dir=str(Path(config_dir or ".").resolve()))}
+        spec = worker_spec(trial, path, key=f"{print_}-{workers}", root_seed=root_seed, config_dir=config_dir,
+                           evaluator=evaluator, evaluator_options=evaluator_options)
 
         recorder = None
         if section.outputs.rerun:
             mesh = ship_mesh if ship_mesh is not None else resolve_ship_full(trial.ship, config_dir or ".").mesh
-            recorder = CampaignRecorder(out, {**path_doc, "digest": digest}, mesh)
+            recorder = CampaignRecorder(out, {**path_doc, "digest": spec["context"].path_digest}, mesh)
             if stored.size:
                 for row in store.read_table().to_pylist():
                     recorder.log_trial(row)
 
         bar = CampaignProgress(section.n_trials, int(np.unique(stored).size), enabled=progress)
-        if section.backend.kind == "ray":
-            stream = backends.run_ray(spec, batches, max(1, workers), section.backend.address)
-        elif workers == 0:
-            stream = backends.run_serial(spec, batches)
-        else:
-            stream = backends.run_local(spec, batches, workers)
-
         buffer: list[dict] = []
         last_flush = time.perf_counter()
         ran = 0
-        try:
-            for records in stream:
-                buffer.extend(records)
-                ran += len(records)
-                if recorder is not None:
-                    for row in records:
-                        recorder.log_trial(row)
-                bar.update(len(records), sum(bool(r["failed"]) for r in records))
-                if len(buffer) >= section.outputs.chunk_trials or \
-                        time.perf_counter() - last_flush >= section.outputs.flush_s:
-                    store.append(buffer)
-                    buffer = []
-                    last_flush = time.perf_counter()
-            store.append(buffer)
-            buffer = []
-        finally:
-            stream.close()
-            bar.close()
+        with backends.TrialPool(section.backend.kind, max(1, workers) if section.backend.kind == "ray" else workers,
+                                section.backend.address) as pool:
+            stream = pool.run([(spec, ids) for ids in batches])
+            try:
+                for _, records in stream:
+                    buffer.extend(records)
+                    ran += len(records)
+                    if recorder is not None:
+                        for row in records:
+                            recorder.log_trial(row)
+                    bar.update(len(records), sum(bool(r["failed"]) for r in records))
+                    if len(buffer) >= section.outputs.chunk_trials or \
+                            time.perf_counter() - last_flush >= section.outputs.flush_s:
+                        store.append(buffer)
+                        buffer = []
+                        last_flush = time.perf_counter()
+                store.append(buffer)
+                buffer = []
+            finally:
+                stream.close()
+                bar.close()
         rerun_s = 0.0
         if recorder is not None:
             recorder.close()

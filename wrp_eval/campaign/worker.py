@@ -12,12 +12,13 @@ import os
 import socket
 import time
 import traceback
+from collections.abc import Sequence
 
 import torch
 
 from wrp_eval.campaign.evaluators import resolve_factory
 from wrp_eval.campaign.records import make_record
-from wrp_eval.campaign.sampling import trial_inputs
+from wrp_eval.campaign.sampling import TrialInputs, trial_inputs
 from wrp_eval.errors import InputError
 
 THREAD_ENV = ("OMP_NUM_THREADS", "OPENBLAS_NUM_THREADS", "MKL_NUM_THREADS", "NUMEXPR_NUM_THREADS")
@@ -47,9 +48,7 @@ def init_worker(spec: dict) -> None:
     _limit_threads(context.threads)
     factory = resolve_factory(spec["evaluator"])
     _STATE.clear()
-    _STATE.update(key=spec["key"], context=context, evaluator=factory(context, **spec["evaluator_options"]),
-                  section=context.trial.campaign,
-                  max_attempts=int(spec["max_attempts"]), n_views=len(context.path),
+    _STATE.update(key=spec["key"], evaluator=factory(context, **spec["evaluator_options"]),
                   worker=f"{socket.gethostname()}:{os.getpid()}")
 
 
@@ -59,8 +58,18 @@ def _error_text(err: BaseException) -> str:
     return f"{type(err).__name__}: {err}{where}"
 
 
-def run_batch(spec: dict, trial_ids: list[int]) -> list[dict]:
-    """Evaluate trials ``trial_ids`` together; returns one record (dict of :data:`SCHEMA`) per trial."""
+def trial_inputs_of(spec: dict, trials: Sequence) -> list[TrialInputs]:
+    """The inputs of ``trials``: trial ids are drawn from the spec's campaign section; ready-made
+    :class:`TrialInputs` (the envelope's cells, each with its own wind) are taken as they are."""
+    ctx = spec["context"]
+    return [t if isinstance(t, TrialInputs) else trial_inputs(ctx.trial.campaign, ctx.root_seed, t, len(ctx.path))
+            for t in trials]
+
+
+def run_batch(spec: dict, trials: Sequence) -> list[dict]:
+    """Evaluate ``trials`` (trial ids or :class:`TrialInputs`) together; returns one record (dict of
+    :data:`SCHEMA`) per trial, in their order. The evaluator is cached by ``spec["key"]``: specs that share a
+    key must differ only in what reaches the evaluator through the trial inputs (the campaign's draws)."""
     try:
         init_worker(spec)
     except InputError:
@@ -68,12 +77,13 @@ def run_batch(spec: dict, trial_ids: list[int]) -> list[dict]:
     except Exception as err:  # noqa: BLE001 - a bug, not an input: keep its text across the process boundary
         raise RuntimeError(f"campaign worker set-up failed: {_error_text(err)}") from None
     st = _STATE
-    ctx = st["context"]
-    inputs = [trial_inputs(st["section"], ctx.root_seed, k, st["n_views"]) for k in trial_ids]
+    ctx = spec["context"]
+    inputs = trial_inputs_of(spec, trials)
+    max_attempts = int(spec["max_attempts"])
 
     def record(inp, outcome, attempts, seconds, error=None):
         return make_record(inp, outcome, root_seed=ctx.root_seed, path_digest=ctx.path_digest,
-                           n_views=st["n_views"], attempts=attempts, trial_s=seconds, worker=st["worker"],
+                           n_views=len(ctx.path), attempts=attempts, trial_s=seconds, worker=st["worker"],
                            finished_unix=time.time(), error=error)
 
     start = time.perf_counter()
@@ -89,7 +99,7 @@ def run_batch(spec: dict, trial_ids: list[int]) -> list[dict]:
     records = []
     for inp in inputs:
         error = None
-        for attempt in range(1, st["max_attempts"] + 1):
+        for attempt in range(1, max_attempts + 1):
             t0 = time.perf_counter()
             try:
                 (outcome,) = st["evaluator"].evaluate([inp])
@@ -98,10 +108,10 @@ def run_batch(spec: dict, trial_ids: list[int]) -> list[dict]:
             except Exception as err:  # noqa: BLE001 - recorded, the campaign goes on
                 error = _error_text(err)
         else:
-            records.append(record(inp, None, st["max_attempts"], time.perf_counter() - t0, error=error))
+            records.append(record(inp, None, max_attempts, time.perf_counter() - t0, error=error))
     return records
 
 
-def ray_run_batch(spec: dict, trial_ids: list[int]) -> list[dict]:
+def ray_run_batch(spec: dict, trials: Sequence) -> list[dict]:
     """The Ray task body (same as :func:`run_batch`; a separate name so Ray ships a plain function)."""
-    return run_batch(spec, trial_ids)
+    return run_batch(spec, trials)
