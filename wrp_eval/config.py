@@ -12,6 +12,7 @@ from pathlib import Path
 from pydantic import Field
 
 from wrp_eval.campaign.config import CampaignSection, TrialConfig
+from wrp_eval.envelope.config import EnvelopeSection
 from wrp_eval.export.config import ExportSection
 from wrp_eval.planning.config import PlanningSection
 from wrp_eval.recon.config import OracleSection
@@ -45,6 +46,7 @@ class ExperimentConfig(StrictModel):
     surrogate: SurrogateSection = SurrogateSection()
     wrp: WrpSection = WrpSection()
     export: ExportSection = ExportSection()
+    envelope: EnvelopeSection = EnvelopeSection()
     study: StudySection | None = Field(None, description="variants of this config measured side by side "
                                        "(the paper's tables, experiments/paper/); none: the single pipeline")
 

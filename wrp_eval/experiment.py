@@ -38,13 +38,14 @@ class RunFolders:
     """Where a run writes: ``root`` = logs/<run.name>; each stage's folder honours its section's override.
 
     plan/, campaign/, surrogate/, evaluate/ (with wrp-<kind>/ and campaign-<path>/ inside), wrp-<kind>/ (the
-    ``optimize`` command alone), missions/, study/; ship.rrd, plan.rrd, run.rrd, report.md, run_summary.json.
+    ``optimize`` command alone), missions/, study/, envelope/; ship.rrd, plan.rrd, run.rrd, report.md, run_summary.json.
     """
 
     root: Path
     campaign: Path
     surrogate: Path
     evaluate: Path
+    envelope: Path
     wrp_out: Path | None = None
 
     @classmethod
@@ -54,6 +55,7 @@ class RunFolders:
                    campaign=Path(config.campaign.outputs.dir or root / "campaign"),
                    surrogate=Path(config.surrogate.out_dir or root / "surrogate"),
                    evaluate=Path(config.wrp.evaluate.out_dir or root / "evaluate"),
+                   envelope=Path(config.envelope.out_dir or root / "envelope"),
                    wrp_out=Path(config.wrp.out_dir) if config.wrp.out_dir else None)
 
     @property

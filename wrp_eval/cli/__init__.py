@@ -15,6 +15,7 @@ from wrp_eval import __version__
 from wrp_eval.cli import (
     bench,
     campaign,
+    envelope,
     evaluate,
     export,
     fly,
@@ -29,8 +30,8 @@ from wrp_eval.cli import (
 )
 from wrp_eval.errors import InputError
 
-COMMANDS = (run, ship, plan, wind, fly, reconstruct, validate_oracle, campaign, train, optimize, evaluate, export,
-            bench)   # in pipeline order; `wrp-eval --help` lists them so
+COMMANDS = (run, ship, plan, wind, fly, reconstruct, validate_oracle, campaign, train, optimize, evaluate,
+            envelope, export, bench)   # in pipeline order; `wrp-eval --help` lists them so
 
 
 def build_parser() -> argparse.ArgumentParser:
