@@ -9,6 +9,7 @@ A bad input raises :class:`InputError`: one line on stderr, exit status 2.
 from __future__ import annotations
 
 import argparse
+import logging
 import sys
 
 from wrp_eval import __version__
@@ -49,6 +50,9 @@ def build_parser() -> argparse.ArgumentParser:
 def main(argv: list[str] | None = None) -> int:
     parser = build_parser()
     args = parser.parse_args(argv)
+    # the jobs report progress through `logging` (wrp_eval.* loggers); the command line shows it on stderr
+    logging.basicConfig(level=logging.WARNING, format="[wrp-eval] %(message)s", stream=sys.stderr)
+    logging.getLogger("wrp_eval").setLevel(logging.INFO)
     try:
         return int(args.func(args) or 0)
     except InputError as err:

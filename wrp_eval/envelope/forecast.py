@@ -37,7 +37,10 @@ def forecast_of(wind: WindSection, ship, base_dir: str | Path | None, source: st
 
 def forecast_from_file(wind: WindSection, ship, file: str | Path, time: str | None) -> ForecastWind:
     """The forecast of a WRF netCDF ``file`` (an MM5 file when the ``wind:`` section says mm5) at ISO ``time``
-    (None: the file's first output). A bad file or time is an :class:`~wrp_eval.errors.InputError` naming it."""
+    (None: the file's first output), interpolated linearly in time between outputs, so that a time outside the
+    file's span is refused (the wind stage's ``nearest`` mode would answer with the closest output, however far).
+    A bad file or time is an :class:`~wrp_eval.errors.InputError` naming it."""
     source = wind.source if wind.source in ("wrf", "mm5") else "wrf"
-    section = wind.model_copy(update={"source": source, "file": str(file), "time": time})
+    section = wind.model_copy(update={"source": source, "file": str(file), "time": time,
+                                      "time_interpolation": "linear"})
     return forecast_of(section, ship, None, f"{source} {file}" + (f" at {time}" if time else " (first output)"))
