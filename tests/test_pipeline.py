@@ -21,6 +21,7 @@ campaign:
 surrogate: {epochs: 20, use_failed_trials: true, validation_moves: 8}   # the fishing path registers 8-10 of 17
                                                                         # views: most trials fail
 wrp: {iterations: 50, acceptance: paper, evaluate: {n_trials: 4, placebos: 2, forecast_trials: 4}}
+envelope: {run_grid: {speeds_m_s: [0, 8], directions: 2, max_flights: 4, look_flights: 4, resolution_m_s: 8}}
 """
 
 
@@ -34,11 +35,12 @@ def test_run_writes_report_recording_and_missions_and_is_reproducible(tmp_path, 
     out = tmp_path / "logs" / "pipeline-test"
     assert "rerun logs/pipeline-test/run.rrd" in printed and "logs/pipeline-test/report.md" in printed
     report = (out / "report.md").read_text()
-    for heading in ("## Go / no-go", "## Ship and path", "## Monte Carlo campaign", "## Surrogate", "## ISWRP and SWRP",
+    assert report.split("\n## ")[1].startswith("Go / no-go")           # the operator's first page
+    for heading in ("## Go / no-go", "### Wind envelope", "**Earth frame**", "## Ship and path", "## Monte Carlo campaign", "## Surrogate", "## ISWRP and SWRP",
                     "## Robustness", "## Per-view risk", "## Missions"):
         assert heading in report
     for png in ("figures/ship_path.png", "figures/wind_field.png", "figures/offsets.png", "figures/view_risk.png",
-                "surrogate/parity.png", "evaluate/boxplot.png"):
+                "surrogate/parity.png", "evaluate/boxplot.png", "envelope/envelope.png"):
         assert (out / png).stat().st_size > 1000, png
     assert sorted(read_trial_ids(out / "run.rrd")) == list(range(12))
     for name in ("initial", "iswrp", "swrp"):
@@ -51,6 +53,8 @@ def test_run_writes_report_recording_and_missions_and_is_reproducible(tmp_path, 
         assert verdict["placebos_flown"] == (2 if moved else 0)
         assert moved or "moved no viewpoint" in verdict["reason"]
     assert first["evaluate"]["recommended_path"] in ("initial", "iswrp", "swrp")
+    assert first["envelope"]["path"] == first["evaluate"]["recommended_path"]
+    assert set(first["envelope"]["boundaries_m_s"]) == {"bow", "stern"}
     assert f"Path to fly: {first['evaluate']['recommended_path']}" in report
 
     assert main(["run", str(cfg)]) == 0

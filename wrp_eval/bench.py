@@ -33,6 +33,7 @@ BENCH_GROUPS: dict[str, str] = {
     "surrogate": "wrp_eval.surrogate.bench",
     "wrp": "wrp_eval.wrp.bench",
     "robustness": "wrp_eval.wrp.robustness_bench",
+    "envelope": "wrp_eval.envelope.bench",
     "scaling": "wrp_eval.campaign.scaling_bench",
     "views": "wrp_eval.campaign.view_scaling",
     "cluster": "wrp_eval.campaign.cluster_bench",

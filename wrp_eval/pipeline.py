@@ -1,7 +1,8 @@
 """The whole job of ``wrp-eval run CONFIG``, stage after stage, into ``logs/<run.name>/``.
 
 ship -> plan -> campaign (perturbed flights scored by the oracle) -> surrogate -> ISWRP and SWRP ->
-evaluation of the three paths under the same winds -> mission export -> report.md + run.rrd.
+evaluation of the three paths under the same winds -> the wind envelope of the recommended path
+(``envelope.run_grid``) -> mission export -> report.md (opening with the envelope's go / no-go) + run.rrd.
 
 Each step calls the stage's own function (the same code as the stage's sub-command) and writes where that
 sub-command would, so a step can be re-run or inspected on its own. The campaign steps resume: re-running
@@ -15,6 +16,7 @@ import time
 from wrp_eval.atomic import write_json_atomic
 from wrp_eval.campaign.jobs import campaign_job
 from wrp_eval.campaign.rerun_log import campaign_recording_id
+from wrp_eval.envelope.jobs import envelope_job
 from wrp_eval.errors import InputError
 from wrp_eval.experiment import ExperimentContext
 from wrp_eval.export.formats import FORMATS, export_path
@@ -101,6 +103,19 @@ def run_pipeline(ctx: ExperimentContext, *, quiet: bool = True, smallest: bool =
         if camp.stress_note and summary["evaluate"].get("forecast"):
             summary["evaluate"]["forecast"]["stress_notes"] = [f"**Stress test**: {camp.stress_note}.", ""]
 
+    envelope = None
+    grid = config.envelope.run_grid
+    if grid is not None:
+        chosen = summary["evaluate"]["recommended_path"]
+        with Step(timings, "envelope", f"wind envelope of the {chosen} path ({grid.directions} directions, "
+                                       f"U10 up to {grid.speeds_m_s[-1]:g} m/s)"):
+            fly = path if chosen == "initial" else FlightPath.load(folders.evaluated_wrp(chosen) / "path.json")
+            job = envelope_job(ctx, grid, path=fly)
+            envelope = job.envelope
+            summary["envelope"] = {"path": chosen, "go": envelope.go, "files": job.files,
+                                   "boundaries_m_s": {b.direction: b.boundary_m_s for b in envelope.boundaries},
+                                   "flights": envelope.flights_total}
+
     with Step(timings, "export", "missions of the three paths"):
         summary["missions"] = export_missions(ctx)
 
@@ -108,6 +123,8 @@ def run_pipeline(ctx: ExperimentContext, *, quiet: bool = True, smallest: bool =
         risk = view_risk(ctx.scored_ship, path, campaign_flown_offsets(campaign_dir))
         save_risk_recording(path, risk, out / "risk.rrd", recording_id=campaign_recording_id(path))
         parts = [out / "ship.rrd", out / "plan.rrd", out / "risk.rrd"]
+        if envelope is not None:
+            parts.append(folders.envelope / "envelope.rrd")
         if (campaign_dir / "campaign.rrd").is_file():
             parts.append(campaign_dir / "campaign.rrd")
         merge_recordings(parts, folders.recording)
@@ -115,7 +132,7 @@ def run_pipeline(ctx: ExperimentContext, *, quiet: bool = True, smallest: bool =
         summary["timings_s"] = timings
         summary["view_risk"] = {"risk_m": risk.risk_m.tolist(), "p_missed": risk.p_missed.tolist(),
                                 "loss_m": risk.loss_m.tolist(), "base_error_m": risk.base_error_m}
-        report = write_report(ctx, path, summary, trials, risk)
+        report = write_report(ctx, path, summary, trials, risk, envelope)
     timings["total"] = time.perf_counter() - job_start
     write_json_atomic(out / "run_summary.json", summary)
     summary["report"] = str(report)

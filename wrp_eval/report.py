@@ -6,6 +6,7 @@ scene, ContextCapture, a Xeon + RTX 3090): they are printed beside what we measu
 
 from __future__ import annotations
 
+import os
 from pathlib import Path
 
 import matplotlib
@@ -14,6 +15,8 @@ from matplotlib.figure import Figure
 from mpl_toolkits.mplot3d.art3d import Poly3DCollection
 
 from wrp_eval.atomic import atomic_path, write_text_atomic
+from wrp_eval.envelope.jobs import boundary_text
+from wrp_eval.envelope.result import Envelope
 from wrp_eval.experiment import ExperimentContext
 from wrp_eval.surrogate.data import TrialData
 from wrp_eval.wind.field import sample_mean_field
@@ -151,10 +154,53 @@ def operator_section(ev: dict) -> list[str]:
     ]
 
 
-def write_report(ctx: ExperimentContext, path, summary: dict, trials: TrialData, risk: ViewRisk | None = None) -> Path:
+# A mission file holds earth-fixed waypoints (WGS84): the ship moves under them (DESIGN.md, ship motion).
+EARTH_FRAME_WARNING = (
+    "**Earth frame**: the exported missions are waypoints fixed to the earth, computed for the ship's position "
+    "and heading in the `ship:` section; the simulation holds the ship there (heave, roll and pitch only). "
+    "For a ship under way, or one swinging at anchor, the waypoints do not follow it: re-plan from a fresh AIS "
+    "position and heading just before take-off, or fly a ship-relative (follow-me) mission.")
+
+
+def envelope_section(env: Envelope, path_name: str, figure: str, risk_figure: str | None) -> list[str]:
+    """The operator's first page: go / no-go at the forecast read off the envelope, the boundary speed per
+    direction and what limits the mission beyond it, sorties and mission time at the forecast, the per-view risk
+    map, the earth-frame warning. figure / risk_figure: the envelope's and the risk map's images, relative to the
+    report."""
+    cell, f, rule = env.forecast_cell, env.forecast, env.rule
+    verdict = "GO" if env.go else "NO-GO"
+    lines = [f"## Go / no-go: **{verdict}** at the forecast (path `{path_name}`)", ""]
+    if cell is not None and f is not None:
+        lines += [
+            f"Forecast {f.speed_m_s:.1f} m/s at 10 m from {f.compass_from_deg:.0f} deg ({cell.direction}, "
+            f"{f.relative_deg:.0f} deg off the bow; {f.source}): P(meets spec) **{cell.p_meets_spec:.2f}** "
+            f"{_ci(cell.p_meets_spec_ci)} over {cell.flights} simulated flights; the sequential test says "
+            f"*{cell.decision}* (GO needs its lower bound {_ci(cell.repeated_ci)} >= {rule['threshold']:g}).", "",
+            "| at the forecast | P(completed) | expected sorties | mission time (s) | views lost (mean) | "
+            "mean error (mm) | p95 error (mm) |", "|---|---|---|---|---|---|---|",
+            f"| {cell.direction} {cell.speed_m_s:g} m/s | {fmt(cell.p_completed, 3)} | {fmt(cell.expected_sorties, 3)} | "
+            f"{fmt(cell.mission_time_s, 4)} | {fmt(cell.views_lost, 2)} | {fmt(1e3 * cell.error_mean_m, 4)} | "
+            f"{fmt(1e3 * cell.error_p95_m, 4)} |", ""]
+    lines += ["### Wind envelope", "", f"![envelope]({figure})", "",
+              f"Boundary: the highest U10 whose flights meet the spec (error <= {fmt(1e3 * rule['spec_error_m'], 4)} "
+              f"mm, completeness >= {fmt(rule['spec_completeness'], 2)}) with P >= {rule['threshold']:g}, per wind "
+              "direction relative to the bow; beyond it, what ended the flights that missed the spec.", "",
+              "| wind from | boundary U10 | beyond it |", "|---|---|---|"]
+    lines += [f"| {b.direction} | {boundary_text(b)} | {b.limit or '-'} |" for b in env.boundaries]
+    lines += ["", f"{len(env.cells)} cells, {env.flights_total} flights ({rule['test']}; looks of "
+                  f"{rule['look_flights']} up to {rule['max_flights']} flights); `envelope/envelope.json`, "
+                  "`envelope.csv`, entities `envelope/*` in run.rrd.", ""]
+    if risk_figure:
+        lines += [f"Where the error's spread comes from: ![per-view risk]({risk_figure}) (section Per-view risk).", ""]
+    return lines + [EARTH_FRAME_WARNING, ""]
+
+
+def write_report(ctx: ExperimentContext, path, summary: dict, trials: TrialData, risk: ViewRisk | None = None,
+                 envelope: Envelope | None = None) -> Path:
     """Figures under ``<run>/figures`` and ``<run>/report.md``; returns the report's path. path: the planned
     Path; summary: the run summary so far; trials: the campaign's trials (as the surrogate was trained on);
-    risk: the per-view risk map (:mod:`wrp_eval.wrp.risk`), None: no risk section."""
+    risk: the per-view risk map (:mod:`wrp_eval.wrp.risk`), None: no risk section; envelope: the run's wind
+    envelope (the first page), None: the forecast flights of the evaluation open the report instead."""
     config, ship, out = ctx.config, ctx.ship, ctx.folders.root
     figures = out / "figures"
     ship_path_figure(ship.mesh, path, figures / "ship_path.png")
@@ -177,7 +223,10 @@ def write_report(ctx: ExperimentContext, path, summary: dict, trials: TrialData,
         f"waterline, no-fly margin {ship.proxy.no_fly_margin_m:g} m). The paper's figures are anchors from "
         "another system (Unity scene, ContextCapture, Xeon + RTX 3090), not targets.",
         "",
-        *operator_section(ev),
+        *(envelope_section(envelope, summary["envelope"]["path"],
+                           os.path.relpath(ctx.folders.envelope / "envelope.png", out),
+                           "figures/view_risk.png" if risk is not None else None)
+          if envelope is not None else operator_section(ev)),
         "## Ship and path (paper Sec. 3)",
         "",
         "![ship and path](figures/ship_path.png)",
