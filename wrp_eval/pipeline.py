@@ -99,7 +99,7 @@ def run_pipeline(ctx: ExperimentContext, *, quiet: bool = True, smallest: bool =
     with Step(timings, "wrp", "ISWRP and SWRP, then the three paths flown under the same winds"):
         summary["evaluate"] = evaluate_job(ctx, folders.evaluate, checkpoint=folders.surrogate / CHECKPOINT_NAME,
                                            campaign=campaign_dir, quiet=quiet, surrogate=trained.surrogate,
-                                           trials=trials)
+                                           trials=trials, forecast=config.envelope.run_grid is None)
         if camp.stress_note and summary["evaluate"].get("forecast"):
             summary["evaluate"]["forecast"]["stress_notes"] = [f"**Stress test**: {camp.stress_note}.", ""]
 

@@ -29,9 +29,11 @@ def envelope_context(tmp_path) -> ExperimentContext:
         "wind": {"speed_10m_mps": 6.0, "direction_deg": 270.0}}))
 
 
-def fly(tmp_path, out: str = "env", grid: EnvelopeGrid = GRID, **options):
+def fly(tmp_path, out: str = "env", grid: EnvelopeGrid = GRID, backend: str | None = None, workers: int | None = None,
+        **options):
     return envelope_job(envelope_context(tmp_path), grid, out_dir=tmp_path / out, evaluator=ANALYTIC_EVALUATOR,
-                        evaluator_options={"fail_speed_m_s": FAIL_SPEED, **options})
+                        evaluator_options={"fail_speed_m_s": FAIL_SPEED, **options}, backend=backend,
+                        workers=workers)
 
 
 def cells_without_folders(envelope) -> str:

@@ -84,3 +84,12 @@ def test_a_stricter_spec_moves_the_boundary_down(tmp_path):
     bounds = [b.boundary_m_s for b in job.envelope.boundaries]
     assert all(b is not None and b < 9.0 for b in bounds)
     assert np.all(["completeness below spec" in b.limit for b in job.envelope.boundaries])
+
+
+def test_ray_flies_the_same_envelope_as_local_processes(flown):
+    """The cells on Ray (a local instance, 2 CPUs) give the same envelope as the in-process run."""
+    import ray
+    tmp, job = flown
+    on_ray = fly(tmp, out="ray", backend="ray", workers=2)
+    assert not ray.is_initialized()
+    assert cells_without_folders(on_ray.envelope) == cells_without_folders(job.envelope)

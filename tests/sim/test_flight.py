@@ -9,6 +9,7 @@ import numpy as np
 import pytest
 
 from wrp_eval.sim.aero import drag_force
+from wrp_eval.sim.flight import FlightSimulator
 from wrp_eval.sim.simple_wind import ConstantWind
 from wrp_eval.sim.vehicle import PHANTOM4
 from wrp_eval.wind.config import TurbulenceSection, WindSection
@@ -41,14 +42,13 @@ def test_hover_in_constant_wind_matches_the_analytic_balance(controller_simulato
     assert not res.failed.any()
 
 
-def test_without_integral_action_a_steady_offset_remains(controller_simulator):
+def test_without_integral_action_a_steady_offset_remains(controller_section, controller_simulator):
     wind = np.array([8.0, 0.0, 0.0])
     saved = controller_simulator.gains
-    controller_simulator.gains = dataclasses.replace(saved, ki=0.0)
-    try:
-        res = controller_simulator.hover(ConstantWind(wind), [0.0, 0.0, 30.0], 0.0, 15.0, batch=1)
-    finally:
-        controller_simulator.gains = saved
+    with FlightSimulator(controller_section) as own:      # its own simulator: the session's stays untouched
+        own.gains = dataclasses.replace(saved, ki=0.0)
+        res = own.hover(ConstantWind(wind), [0.0, 0.0, 30.0], 0.0, 15.0, batch=1)
+    assert controller_simulator.gains == saved
     tr, s = _steady(res)
     f = drag_force(wind[None], np.zeros(1), PHANTOM4, controller_simulator.section.drag_coefficient,
                    controller_simulator.section.air_density_kg_m3)[0, 0]

@@ -53,7 +53,8 @@ def test_attach_to_a_caller_scene():
     root = mjcf.RootElement(model="ship_scene")
     root.worldbody.add("geom", name="hull", type="box", size=[70, 10, 5], pos=[0, 0, 5])
     scene = build_scene(2, root=root)
-    assert scene.model.geom("hull").id >= 0
+    hull = scene.model.geom("hull")
+    assert hull.bodyid[0] == 0 and np.allclose(hull.size, [70, 10, 5])   # the caller's geom, on the world body
     # per drone: four motors, three drag-force and three attitude actuators; one mocap attitude target
     assert scene.model.nu == 2 * 10 and scene.model.nmocap == 2
     assert load_quadrotor().find("actuator", "motor_fl") is not None

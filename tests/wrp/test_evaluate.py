@@ -88,9 +88,14 @@ def test_evaluate_flies_all_paths_with_the_same_winds(tmp_path, acceptance):
 
 
 def test_summarise_is_seeded():
+    """The same seed gives the same bootstrap intervals; another seed other intervals around the same point
+    estimates."""
     p = [PathTrials(n, np.arange(30), np.random.default_rng(k).normal(1, 0.1, 30), np.zeros(30, bool))
          for k, n in enumerate(("initial", "iswrp"))]
-    assert summarise(p, 1, 200, 0.95) == summarise(p, 1, 200, 0.95)
+    first, again, other = summarise(p, 1, 200, 0.95), summarise(p, 1, 200, 0.95), summarise(p, 2, 200, 0.95)
+    assert first == again
+    assert [r["mean_error_m"] for r in first["paths"]] == [r["mean_error_m"] for r in other["paths"]]
+    assert first["paths"][0]["mean_error_m_ci"] != other["paths"][0]["mean_error_m_ci"]
 
 
 def test_robustness_gain_is_the_wind_loss_saved_against_the_same_winds():

@@ -39,10 +39,11 @@ class EnvelopeGrid(StrictModel):
         return self
 
 
-# The coarser grid of `wrp-eval run` (issue 29 item 5: the operator's first page within the run's time):
-# bow, starboard beam, stern, port beam at 4 m/s steps, the boundary bracketed to 2 m/s.
+# The coarser grid of `wrp-eval run` (issue 29 item 5: the operator's first page, with `make run` within 5
+# minutes on the 2-core machine): bow, starboard beam, stern, port beam at 4 m/s steps, no bisection (the
+# boundary bracketed to the 4 m/s grid step); `wrp-eval envelope` refines it.
 RUN_GRID = EnvelopeGrid(speeds_m_s=(0.0, 4.0, 8.0, 12.0, 16.0), directions=4, max_flights=32, look_flights=8,
-                        resolution_m_s=2.0)
+                        resolution_m_s=4.0)
 
 
 class EnvelopeSection(StrictModel):

@@ -87,14 +87,16 @@ def polar_plot(envelope: Envelope, file: Path, ship_length_m: float, ship_breadt
                edgecolors=colormaps[COLOUR_MAP](norm(p[~decided])), s=60, linewidths=1.5, zorder=3)
     line_theta, line_r = _boundary_line(envelope, top)
     ax.plot(line_theta, line_r, "k-", lw=1.5, label=f"boundary: P(meets spec) >= {envelope.rule['threshold']:g}")
-    outline = _ship_outline(ship_length_m, ship_breadth_m, 0.18 * top)
+    outline = _ship_outline(ship_length_m, ship_breadth_m, 0.3 * top)
     ax.fill(outline[:, 0], outline[:, 1], color="0.6", zorder=2)
     if envelope.forecast is not None:
         f = envelope.forecast
         ax.plot(np.radians(f.relative_deg), f.speed_m_s, marker="*", ms=16, color="tab:blue", mec="k", ls="none",
                 zorder=4, label=f"forecast {f.speed_m_s:.1f} m/s" + (
                     "" if envelope.go is None else (": GO" if envelope.go else ": NO-GO")))
+    ax.scatter([], [], facecolors="none", edgecolors="0.3", s=60, label="undecided after the last look")
     ax.set_rlim(0, top * 1.05)
+    ax.set_rlabel_position(22.5)
     ax.set_xticks(np.radians(np.arange(0, 360, 45)))
     ax.set_xticklabels(["bow", "stbd bow", "stbd beam", "stbd qtr", "stern", "port qtr", "port beam", "port bow"])
     ax.set_title("Mission envelope: U10 (m/s) by wind direction relative to the bow", fontsize=10)

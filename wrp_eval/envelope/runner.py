@@ -49,7 +49,7 @@ from wrp_eval.envelope.search import BoundarySearch
 from wrp_eval.envelope.sequential import MEETS, clopper_pearson, repeated_interval
 from wrp_eval.experiment import ExperimentContext
 from wrp_eval.planning.path import Path as FlightPath
-from wrp_eval.wrp.evaluate import PathTrials, path_summary
+from wrp_eval.wrp.evaluate import PathTrials
 from wrp_eval.wrp.jobs import SPEC_ERROR_FACTOR, windfree_error
 
 log = logging.getLogger(__name__)
@@ -146,26 +146,33 @@ def _first_flights(trials: PathTrials, flights: int) -> PathTrials:
                                           if isinstance(getattr(trials, f.name), np.ndarray)})
 
 
-def cell_result(cell: Cell, rule: TestRule, heading_deg: float, rng: np.random.Generator, resamples: int,
-                forecast: bool = False) -> CellResult:
-    """What a finished cell says (result.py's :class:`CellResult`)."""
+def _mean(values: np.ndarray | None) -> float:
+    finite = values[np.isfinite(values)] if values is not None else np.zeros(0)
+    return float(finite.mean()) if finite.size else float("nan")
+
+
+def cell_result(cell: Cell, rule: TestRule, heading_deg: float, forecast: bool = False) -> CellResult:
+    """What a finished cell says (result.py's :class:`CellResult`): error mean and p95 over the flights that
+    did not fail; sorties and mission time over the completed missions (a mission that ended early says nothing
+    of what the mission needs, as in :func:`wrp_eval.wrp.evaluate.mission_summary`)."""
     trials = _first_flights(stored_trials(cell), cell.flights)
-    row = path_summary(trials, rng, resamples, rule.confidence, rule.spec)
+    errors = trials.error_m[~trials.failed & np.isfinite(trials.error_m)]
+    done = trials.completed if trials.completed is not None else np.zeros(trials.trial_id.size, bool)
     endings = ending_counts(cell.folder, cell.flights)
     low, high = clopper_pearson(cell.successes, cell.flights, rule.confidence)
-    comp = trials.completeness[np.isfinite(trials.completeness)] if trials.completeness is not None else None
     return CellResult(
         relative_deg=cell.key.relative_deg, compass_from_deg=cell.key.compass_from_deg(heading_deg),
         speed_m_s=cell.key.speed_m_s, direction=direction_name(cell.key.relative_deg), flights=cell.flights,
         decision=cell.decision, meets=rule.meets(cell), p_meets_spec=cell.p_hat,
         p_meets_spec_ci=(float(low), float(high)),
         repeated_ci=repeated_interval(cell.successes, cell.flights, rule.confidence, rule.looks),
-        p_completed=row.get("p_completed", float("nan")),
-        completeness_mean=float(comp.mean()) if comp is not None and comp.size else float("nan"),
-        error_mean_m=row["mean_error_m"], error_p95_m=row["p95_error_m"],
-        expected_sorties=row.get("expected_sorties", float("nan")),
-        mission_time_s=row.get("mean_mission_time_s", float("nan")),
-        views_lost=row.get("mean_views_not_taken", float("nan")), endings=endings,
+        p_completed=float(done.mean()) if trials.completed is not None else float("nan"),
+        completeness_mean=_mean(trials.completeness),
+        error_mean_m=float(errors.mean()) if errors.size else float("nan"),
+        error_p95_m=float(np.percentile(errors, 95)) if errors.size else float("nan"),
+        expected_sorties=_mean(trials.sorties[done]) if trials.sorties is not None else float("nan"),
+        mission_time_s=_mean(trials.mission_time_s[done]) if trials.mission_time_s is not None else float("nan"),
+        views_lost=_mean(trials.views_not_taken), endings=endings,
         limit=limiting_cause(trials, endings, rule.spec), folder=str(cell.folder), forecast=forecast)
 
 
@@ -200,8 +207,7 @@ def run_envelope(ctx: ExperimentContext, out: str | Path, grid: EnvelopeGrid, *,
         while cells := _wanted(flying, searches, forecast_key):
             _fly_look(flying, pool, cells)
     heading = ctx.particulars.heading_deg
-    rng = np.random.default_rng(np.random.SeedSequence(ctx.campaign_seed, spawn_key=(29,)))
-    results = {key: cell_result(cell, rule, heading, rng, ev.bootstrap, forecast=key == forecast_key)
+    results = {key: cell_result(cell, rule, heading, forecast=key == forecast_key)
                for key, cell in sorted(flying.cells.items()) if cell.flights}
     go = None if forecast_key is None else flying.cells[forecast_key].decision == MEETS
     return Envelope(

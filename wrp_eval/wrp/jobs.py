@@ -268,11 +268,12 @@ def optimize_job(ctx: ExperimentContext, *, kind: str | None = None, threshold_m
 def evaluate_job(ctx: ExperimentContext, out: Path | None = None, *, n_trials: int | None = None, checkpoint=None,
                  campaign=None, e_original: float | None = None, quiet: bool = False,
                  evaluator: str | None = None, surrogate: Surrogate | None = None,
-                 trials: TrialData | None = None) -> dict:
+                 trials: TrialData | None = None, forecast: bool = True) -> dict:
     """``wrp-eval evaluate``: ISWRP and SWRP optimised from one set of inputs, then the initial path and both
     WRPs flown as campaigns with the same seed (common random numbers); returns the evaluate.json document.
     ``evaluator``: the campaign's trial evaluator ("module:function"; default the MuJoCo flight + oracle);
-    ``surrogate`` / ``trials``: already loaded by the caller (the checkpoint and campaign are then not read)."""
+    ``surrogate`` / ``trials``: already loaded by the caller (the checkpoint and campaign are then not read);
+    ``forecast`` False: no forecast flights (``wrp-eval run`` reads the go / no-go off its envelope instead)."""
     section, ev = ctx.config.wrp, ctx.config.wrp.evaluate
     out = Path(out) if out is not None else ctx.folders.evaluate
     if ev.thresholds_m is not None and len(ev.thresholds_m) != 2:
@@ -319,7 +320,7 @@ def evaluate_job(ctx: ExperimentContext, out: Path | None = None, *, n_trials: i
                           "moves_without_a_flyable_direction": infeasible,
                           "how": "as many viewpoints as the WRP moved, chosen at random, moved by the WRP's move "
                                  "magnitudes in random directions with its yaw offsets (wrp/placebo.py)"}
-    if ev.forecast_trials > 0:
+    if forecast and ev.forecast_trials > 0:
         chosen = result["recommended_path"]
         forecast = forecast_config(flown, ctx.config.wind, ev.forecast_trials)
         folder = evaluated_campaign_dir(out, "forecast")
