@@ -10,7 +10,7 @@ import pytest
 from wrp_eval.cli import main
 from wrp_eval.config import ExperimentConfig, load_experiment
 from wrp_eval.errors import InputError
-from wrp_eval.planning.path import Path as FlightPath
+from wrp_eval.planning.path import FlightPath
 from wrp_eval.study.runner import deep_merge, random_offsets, variant_configs
 from wrp_eval.wrp.optimize import apply_offsets, offset_totals
 from wrp_eval.validation import parse_model

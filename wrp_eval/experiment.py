@@ -23,7 +23,7 @@ from pathlib import Path
 import numpy as np
 
 from wrp_eval.config import ExperimentConfig, TrialConfig, load_experiment
-from wrp_eval.planning.path import Path as FlightPath
+from wrp_eval.planning.path import FlightPath
 from wrp_eval.planning.planner import PlanResult, plan, planning_rng
 from wrp_eval.recon.scene import ScoredShip, make_oracle
 from wrp_eval.ship.particulars import ShipParticulars

@@ -21,7 +21,7 @@ from wrp_eval.errors import InputError
 from wrp_eval.experiment import ExperimentContext
 from wrp_eval.export.formats import FORMATS, export_path
 from wrp_eval.export.mission import FlightStyle
-from wrp_eval.planning.path import Path as FlightPath
+from wrp_eval.planning.path import FlightPath
 from wrp_eval.planning.rerun_log import save_plan_recording
 from wrp_eval.recording import merge_recordings
 from wrp_eval.report import write_report

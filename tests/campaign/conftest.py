@@ -14,7 +14,7 @@ from wrp_eval.campaign.jobs import campaign_job
 from wrp_eval.campaign.records import TIMING_COLUMNS
 from wrp_eval.config import ExperimentConfig
 from wrp_eval.experiment import ExperimentContext
-from wrp_eval.planning.path import Path as FlightPath
+from wrp_eval.planning.path import FlightPath
 
 
 def tiny_path(n_views: int = 6) -> FlightPath:

@@ -35,7 +35,7 @@ def test_the_capture_realism_of_a_trial_is_in_the_recording(tmp_path):
     from rerun.chunk import RrdReader
 
     from wrp_eval.campaign.rerun_log import CampaignRecorder
-    from wrp_eval.planning.path import Path as FlightPath
+    from wrp_eval.planning.path import FlightPath
     planned = np.array([[0.0, 30.0, 20.0], [10.0, 30.0, 20.0], [20.0, 30.0, 20.0]])
     path = FlightPath(planned, np.full(3, -np.pi / 2), np.full(3, -0.17), np.zeros(3, int), np.zeros(3, int),
                       np.zeros(3, int))

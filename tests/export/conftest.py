@@ -7,7 +7,7 @@ import pytest
 
 from wrp_eval.camera import Camera
 from wrp_eval.export.config import ExportSection
-from wrp_eval.planning.path import KIND_SURFACE, Path
+from wrp_eval.planning.path import KIND_SURFACE, FlightPath
 from wrp_eval.ship.config import ShipSection
 from wrp_eval.ship.proxy import build_proxy
 from wrp_eval.ship.resolve import resolve_particulars
@@ -23,7 +23,7 @@ def ship():
     return particulars, build_proxy(particulars)
 
 
-def ring_path(proxy, n: int = 24, sorties: int = 2, stand_off_m: float = 30.0) -> Path:
+def ring_path(proxy, n: int = 24, sorties: int = 2, stand_off_m: float = 30.0) -> FlightPath:
     """n views on an ellipse outside the no-fly box, looking at the ship centre, split into sorties."""
     t = np.linspace(0.0, 2 * np.pi, n, endpoint=False)
     a = proxy.length_m / 2 + stand_off_m
@@ -35,7 +35,7 @@ def ring_path(proxy, n: int = 24, sorties: int = 2, stand_off_m: float = 30.0) -
     yaw = np.arctan2(d[:, 1], d[:, 0])
     pitch = np.arctan2(d[:, 2], np.hypot(d[:, 0], d[:, 1]))
     sortie = (np.arange(n) * sorties) // n
-    return Path(positions, yaw, pitch, np.zeros(n, int), np.full(n, KIND_SURFACE), sortie, Camera(),
+    return FlightPath(positions, yaw, pitch, np.zeros(n, int), np.full(n, KIND_SURFACE), sortie, Camera(),
                 speed_m_s=5.0, dwell_s=2.0)
 
 

@@ -7,7 +7,7 @@ import pytest
 from wrp_eval.atomic import temporaries
 from wrp_eval.cli import main
 from wrp_eval.errors import InputError
-from wrp_eval.planning.path import Path
+from wrp_eval.planning.path import FlightPath
 from wrp_eval.validation import parse_model
 from wrp_eval.config import ExperimentConfig
 from wrp_eval.planning.config import PlanningSection
@@ -16,7 +16,7 @@ from wrp_eval.planning.config import PlanningSection
 def test_path_json_round_trip(plans, tmp_path):
     path = plans[("stylized", "ours")].path
     path.save(tmp_path / "path.json")
-    back = Path.load(tmp_path / "path.json")
+    back = FlightPath.load(tmp_path / "path.json")
     np.testing.assert_allclose(back.positions, path.positions)
     np.testing.assert_allclose(back.yaw, path.yaw, atol=1e-12)
     np.testing.assert_allclose(back.pitch, path.pitch, atol=1e-12)
@@ -31,7 +31,7 @@ def test_bad_path_file_is_an_input_error(tmp_path, text):
     f = tmp_path / "path.json"
     f.write_text(text)
     with pytest.raises(InputError) as err:
-        Path.load(f)
+        FlightPath.load(f)
     assert str(f) in str(err.value) and "\n" not in str(err.value)
 
 
@@ -60,7 +60,7 @@ def test_cli_plan_writes_path_and_metrics(tmp_path, capsys):
         assert key in metrics
     for key in ("sampling_s", "visibility_s", "min_s", "max_s", "tsp_s", "transitions_s", "total_s"):
         assert key in metrics["timings"]
-    path = Path.load(out / "path.json")
+    path = FlightPath.load(out / "path.json")
     assert path.method == "zhou2020" and len(path) == metrics["n_path_views"]
     assert temporaries(out) == []
 

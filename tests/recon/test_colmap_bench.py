@@ -5,7 +5,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from wrp_eval.planning.path import Path
+from wrp_eval.planning.path import FlightPath
 from wrp_eval.recon.colmap_bench import project, validation_set_count
 from wrp_eval.recon.scenarios import reference_capture_set
 
@@ -22,7 +22,7 @@ def test_each_stage_of_the_full_set_scales_with_its_own_width_ratio():
 def test_validation_set_count_follows_the_set_list():
     cs = reference_capture_set(30)
     n = len(cs)
-    path = Path(cs.positions, cs.yaw, cs.pitch, np.zeros(n, int), np.zeros(n, int), np.zeros(n, int))
+    path = FlightPath(cs.positions, cs.yaw, cs.pitch, np.zeros(n, int), np.zeros(n, int), np.zeros(n, int))
     # 27 sets of the path + 2 modes x 3 winds x 2 flights + 2 other presets x 2 + 2 winds >= 8 x 2 recorded
     # blurs + 2 repeats of the reference
     assert validation_set_count(path, own_preset="consumer") == 27 + 12 + 4 + 4 + 2

@@ -11,7 +11,7 @@ import pytest
 
 from wrp_eval.cli import main
 from wrp_eval.errors import InputError
-from wrp_eval.planning.path import Path
+from wrp_eval.planning.path import FlightPath
 from wrp_eval.recon.capture_io import captures_from_parquet
 from wrp_eval.recon.scenarios import reference_capture_set
 
@@ -20,7 +20,7 @@ from wrp_eval.recon.scenarios import reference_capture_set
 def path_file(tmp_path):
     cs = reference_capture_set(50)
     n = len(cs)
-    path = Path(cs.positions, cs.yaw, cs.pitch, np.zeros(n, int), np.zeros(n, int), np.zeros(n, int))
+    path = FlightPath(cs.positions, cs.yaw, cs.pitch, np.zeros(n, int), np.zeros(n, int), np.zeros(n, int))
     file = tmp_path / "path.json"
     path.save(file)
     return file
@@ -33,7 +33,7 @@ def config_file(tmp_path):
     return file
 
 
-def _captures_table(file, path: Path, taken_trial1: np.ndarray):
+def _captures_table(file, path: FlightPath, taken_trial1: np.ndarray):
     n = len(path)
     rows = {"trial": np.repeat([0, 1], n), "view": np.tile(np.arange(n), 2),
             "taken": np.concatenate([np.ones(n, bool), taken_trial1]),
@@ -51,7 +51,7 @@ def test_reconstruct_planned_path_json(path_file, config_file, capsys):
 
 
 def test_reconstruct_one_trial_of_captures(path_file, config_file, tmp_path, capsys):
-    path = Path.load(path_file)
+    path = FlightPath.load(path_file)
     taken = np.zeros(len(path), bool)
     taken[:4] = True  # trial 1 lost all but four views
     table = tmp_path / "captures.parquet"

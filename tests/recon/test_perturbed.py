@@ -6,13 +6,14 @@ from __future__ import annotations
 import dataclasses
 import json
 from collections import Counter
+from pathlib import Path
 
 import numpy as np
 import pytest
 
 from wrp_eval.cli import main
 from wrp_eval.experiment import ExperimentContext
-from wrp_eval.planning.path import Path
+from wrp_eval.planning.path import FlightPath
 from wrp_eval.recon.capture_io import captures_from_path
 from wrp_eval.recon.perturbed import (BLUR_PX, BLUR_SHARES, HEADING_BIAS_DEG, NAV_DRIFT_RMS_M, drift_shape,
                                       flight_capture_sets, flown_capture_sets, perturbed_capture_sets,
@@ -21,13 +22,13 @@ from wrp_eval.recon.scenarios import reference_capture_set
 
 
 @pytest.fixture(scope="module")
-def path() -> Path:
+def path() -> FlightPath:
     cs = reference_capture_set(30)
     n = len(cs)
-    return Path(cs.positions, cs.yaw, cs.pitch, np.zeros(n, int), np.zeros(n, int), np.zeros(n, int))
+    return FlightPath(cs.positions, cs.yaw, cs.pitch, np.zeros(n, int), np.zeros(n, int), np.zeros(n, int))
 
 
-def _fake_flights(path: Path, count: int = 8):
+def _fake_flights(path: FlightPath, count: int = 8):
     return [(f"flight_fake_{k}", "flight", captures_from_path(path)) for k in range(count)]
 
 
@@ -129,7 +130,7 @@ def test_recorded_blur_puts_a_fly_through_flights_blur_on_the_planned_poses(path
 
 
 def test_flight_sets_carry_the_flight_errors():
-    ctx = ExperimentContext.load(__import__("pathlib").Path(__file__).resolve().parents[2]
+    ctx = ExperimentContext.load(Path(__file__).resolve().parents[2]
                                  / "experiments" / "quickstart.yaml")
     full = ctx.plan_with("ours").path
     keep = slice(0, 5)

@@ -22,7 +22,7 @@ import pytest
 
 from wrp_eval.camera import Camera
 from wrp_eval.errors import InputError
-from wrp_eval.planning.path import Path
+from wrp_eval.planning.path import FlightPath
 from wrp_eval.recon import colmap as colmap_module
 from wrp_eval.recon.capture_io import captures_from_parquet, captures_from_path
 from wrp_eval.recon.colmap import database_fingerprint, write_position_priors
@@ -208,10 +208,10 @@ def test_colmap_fingerprint_follows_roll_not_priors():
                                 0) == level
 
 
-def _line_path(n: int) -> Path:
+def _line_path(n: int) -> FlightPath:
     """n viewpoints 1 m apart along x at 10 m, looking along +x, 0.3 rad down."""
     zeros = np.zeros(n, int)
-    return Path(np.column_stack([np.arange(float(n)), np.zeros(n), np.full(n, 10.0)]), np.zeros(n),
+    return FlightPath(np.column_stack([np.arange(float(n)), np.zeros(n), np.full(n, 10.0)]), np.zeros(n),
                 np.full(n, -0.3), zeros, zeros, zeros)
 
 

@@ -5,7 +5,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from wrp_eval.planning.path import Path
+from wrp_eval.planning.path import FlightPath
 from wrp_eval.sim.config import SimSection
 from wrp_eval.sim.flight import FlightSimulator
 
@@ -40,15 +40,15 @@ def simulator(section):
     sim.close()
 
 
-def make_path(n: int = 4, spacing_m: float = 8.0, dwell_s: float = 1.0) -> Path:
+def make_path(n: int = 4, spacing_m: float = 8.0, dwell_s: float = 1.0) -> FlightPath:
     """n viewpoints along a line at 20 m with alternating yaw and a climb, gimbal pitch -20 deg."""
     x = spacing_m * np.arange(n)
     pos = np.stack([x, 2.0 * (np.arange(n) % 2), 20.0 + 0.5 * np.arange(n)], axis=1)
     yaw = np.radians(90.0 + 30.0 * (np.arange(n) % 2))
-    return Path(pos, yaw, np.full(n, np.radians(-20.0)), np.zeros(n, int), np.zeros(n, int), np.zeros(n, int),
+    return FlightPath(pos, yaw, np.full(n, np.radians(-20.0)), np.zeros(n, int), np.zeros(n, int), np.zeros(n, int),
                 speed_m_s=5.0, dwell_s=dwell_s)
 
 
 @pytest.fixture
-def short_path() -> Path:
+def short_path() -> FlightPath:
     return make_path()

@@ -182,7 +182,7 @@ RATE_TOLERANCE_DEG_S = 12.0
 
 
 def test_no_fly_through_photo_turns_faster_than_the_mission_commands():
-    from pathlib import Path as FsPath
+    from pathlib import Path
 
     from wrp_eval.config import ExperimentConfig
     from wrp_eval.experiment import ExperimentContext
@@ -195,7 +195,7 @@ def test_no_fly_through_photo_turns_faster_than_the_mission_commands():
 
     # the planner's close-range path (30 m from the paper's ship, 145 views) flown once in calm air with a perfect
     # navigation (the heading noise of a real one, ~10 deg/s even hovering, is not what this checks)
-    ctx = ExperimentContext(ExperimentConfig.model_validate({"planning": {"distance_m": 30.0}}), FsPath("."), "test")
+    ctx = ExperimentContext(ExperimentConfig.model_validate({"planning": {"distance_m": 30.0}}), Path("."), "test")
     path = ctx.planned.path
     sec = SimSection(drones_per_model=1, threads=1, capture={"mode": "fly-through"}, navigation={"preset": "ideal"},
                      record_interval_s=SimSection().timestep_s * SimSection().chunk_steps)

@@ -7,7 +7,7 @@ import numpy as np
 import pytest
 
 from wrp_eval.camera import Camera
-from wrp_eval.planning.path import Path
+from wrp_eval.planning.path import FlightPath
 from wrp_eval.ship.motion import ShipMotionSection
 from wrp_eval.sim.config import SimSection
 from wrp_eval.sim.flight import FlightSimulator
@@ -61,7 +61,7 @@ def test_view_depths_run_along_the_optical_axes_to_the_hull():
     assert depth == pytest.approx(expected)
     assert np.isnan(view_depths(path, None)).all()
     # an axis that misses the box (looking away from it): the distance to its nearest point
-    away = Path(path.positions[:1], path.yaw[:1] + np.pi, path.pitch[:1], np.zeros(1, int), np.zeros(1, int),
+    away = FlightPath(path.positions[:1], path.yaw[:1] + np.pi, path.pitch[:1], np.zeros(1, int), np.zeros(1, int),
                 np.zeros(1, int), speed_m_s=5.0)
     assert view_depths(away, BOX) == pytest.approx([20.0])
 

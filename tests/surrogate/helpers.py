@@ -8,7 +8,7 @@ import numpy as np
 
 def make_path(n_views: int):
     """A simple planned path: a ring of viewpoints around the origin looking inwards."""
-    from wrp_eval.planning.path import Path as FlightPath
+    from wrp_eval.planning.path import FlightPath
     s = np.linspace(0, 2 * np.pi, n_views, endpoint=False)
     positions = np.column_stack([60 * np.cos(s), 25 * np.sin(s), np.full(n_views, 15.0)])
     return FlightPath(positions, s + np.pi, np.full(n_views, -0.3), np.zeros(n_views, int),

@@ -4,7 +4,7 @@ import numpy as np
 import pytest
 
 from wrp_eval.cli import main
-from wrp_eval.planning.path import Path as FlightPath
+from wrp_eval.planning.path import FlightPath
 
 from .conftest import helpers
 

@@ -1,7 +1,7 @@
 import numpy as np
 import pytest
 
-from wrp_eval.planning.path import Path as FlightPath
+from wrp_eval.planning.path import FlightPath
 from wrp_eval.wrp.optimize import (WrpParams, apply_offsets, interval_optimise, iteration_draws,
                                    neighbourhood_statistic, sample_radii)
 

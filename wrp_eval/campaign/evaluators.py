@@ -24,7 +24,7 @@ from wrp_eval.campaign.records import TrialOutcome
 from wrp_eval.campaign.sampling import TrialInputs
 from wrp_eval.errors import InputError
 from wrp_eval.frames import wind_velocity
-from wrp_eval.planning.path import Path as FlightPath
+from wrp_eval.planning.path import FlightPath
 from wrp_eval.ship.resolve import resolve_particulars
 
 DEFAULT_EVALUATOR = "wrp_eval.campaign.flight:make_flight_evaluator"

@@ -13,7 +13,7 @@ from wrp_eval.campaign.evaluators import DEFAULT_EVALUATOR
 from wrp_eval.campaign.runner import CampaignSummary, run_campaign, with_overrides
 from wrp_eval.campaign.turbulence import turbulence_ratios, turbulence_stress_note
 from wrp_eval.experiment import ExperimentContext
-from wrp_eval.planning.path import Path as FlightPath
+from wrp_eval.planning.path import FlightPath
 
 
 def campaign_job(ctx: ExperimentContext, *, out_dir: str | Path | None = None, n_trials: int | None = None,

@@ -22,7 +22,7 @@ from wrp_eval.envelope.config import EnvelopeGrid
 from wrp_eval.envelope.jobs import envelope_job, envelope_lines, job_forecast
 from wrp_eval.errors import InputError
 from wrp_eval.experiment import ExperimentContext
-from wrp_eval.planning.path import Path as FlightPath
+from wrp_eval.planning.path import FlightPath
 from wrp_eval.validation import parse_model
 
 

@@ -9,7 +9,7 @@ from wrp_eval.config import ExperimentConfig
 from wrp_eval.experiment import ExperimentContext
 from wrp_eval.export.formats import FORMATS, export_path
 from wrp_eval.export.mission import FlightStyle
-from wrp_eval.planning.path import Path as FlightPath
+from wrp_eval.planning.path import FlightPath
 
 POSITION_FIELDS = ("lat_deg", "lon_deg", "heading_deg")
 

@@ -19,14 +19,14 @@ from __future__ import annotations
 
 import argparse
 import json
-from pathlib import Path as FsPath
+from pathlib import Path
 
 import numpy as np
 
 from wrp_eval.config import ExperimentConfig
 from wrp_eval.errors import InputError
 from wrp_eval.experiment import ExperimentContext
-from wrp_eval.planning.path import Path
+from wrp_eval.planning.path import FlightPath
 from wrp_eval.sim.flight import FlightSimulator
 from wrp_eval.sim.hover import airframe_only, analytic_hover_balance, hover_statistics
 from wrp_eval.sim.outputs import write_flight_tables, write_rerun
@@ -77,7 +77,7 @@ def _fly(args: argparse.Namespace) -> int:
         raise InputError("fly", "--path and --out are required unless --hover is given")
     if args.trials < 1:
         raise InputError("--trials", "must be >= 1")
-    path = Path.load(args.path)
+    path = FlightPath.load(args.path)
     section = _wind_section(args, config)
     dt = config.sim.timestep_s * config.sim.chunk_steps          # the wind is stepped at the controller rate
     wind_seed, flight_seed = np.random.SeedSequence(seed).spawn(2)
@@ -85,10 +85,10 @@ def _fly(args: argparse.Namespace) -> int:
     ship = ShipInScene.of(ctx.ship.mesh, config.ship.motion, ctx.particulars, wind.speed_10m_at_ship(args.trials))
     with FlightSimulator(config.sim) as sim:
         result = sim.fly(path, wind, args.trials, ship=ship, flight_rngs=flight_seed)
-    out = FsPath(args.out)
+    out = Path(args.out)
     a, b = write_flight_tables(result, path, out, seed)
     if args.rerun:
-        write_rerun(result, path, FsPath(args.rerun))
+        write_rerun(result, path, Path(args.rerun))
     print(f"flew {result.batch} trial(s) of {len(path)} views: {int(result.failed.sum())} failed; "
           f"median |offset| {np.nanmedian(np.linalg.norm(result.offsets[..., :3], axis=-1)):.3f} m; "
           f"wrote {a} and {b}")

@@ -7,7 +7,7 @@ import json
 
 from wrp_eval.errors import InputError
 from wrp_eval.experiment import ExperimentContext
-from wrp_eval.planning.path import Path as FlightPath
+from wrp_eval.planning.path import FlightPath
 from wrp_eval.recon.capture_io import captures_from_parquet, captures_from_path
 
 

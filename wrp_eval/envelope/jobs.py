@@ -14,7 +14,7 @@ from wrp_eval.envelope.outputs import write_envelope
 from wrp_eval.envelope.result import Envelope, ForecastWind
 from wrp_eval.envelope.runner import run_envelope
 from wrp_eval.experiment import ExperimentContext
-from wrp_eval.planning.path import Path as FlightPath
+from wrp_eval.planning.path import FlightPath
 
 
 @dataclass(frozen=True)

@@ -48,7 +48,7 @@ from wrp_eval.envelope.result import CellResult, DirectionBoundary, Envelope, Fo
 from wrp_eval.envelope.search import BoundarySearch
 from wrp_eval.envelope.sequential import MEETS, clopper_pearson, repeated_interval
 from wrp_eval.experiment import ExperimentContext
-from wrp_eval.planning.path import Path as FlightPath
+from wrp_eval.planning.path import FlightPath
 from wrp_eval.wrp.evaluate import PathTrials
 from wrp_eval.wrp.jobs import SPEC_ERROR_FACTOR, windfree_error
 

@@ -1,4 +1,4 @@
-"""Mission export: a :class:`~wrp_eval.planning.path.Path` in the ship frame -> flyable waypoint missions.
+"""Mission export: a :class:`~wrp_eval.planning.path.FlightPath` in the ship frame -> flyable waypoint missions.
 
 Ship frame (x bow, y port, z up above the sea) -> geographic coordinates through the ship's position and
 true heading (:mod:`wrp_eval.frames`), then one mission per battery sortie (:mod:`.mission`) written as a

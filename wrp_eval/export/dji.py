@@ -22,7 +22,7 @@ from __future__ import annotations
 import io
 import xml.etree.ElementTree as ET
 import zipfile
-from pathlib import Path as FsPath
+from pathlib import Path
 
 import numpy as np
 
@@ -175,7 +175,7 @@ def dji_kmz_bytes(m: GeoMission, firmware: str = "px4") -> bytes:
     return buf.getvalue()
 
 
-def read_dji_kmz(file: str | FsPath) -> ReadMission:
+def read_dji_kmz(file: str | Path) -> ReadMission:
     """Parse the executable ``waylines.wpml`` of a KMZ (zipfile + xml.etree)."""
     try:
         with zipfile.ZipFile(file) as kmz:

@@ -10,7 +10,7 @@ from __future__ import annotations
 
 from contextlib import ExitStack
 from dataclasses import dataclass
-from pathlib import Path as FsPath
+from pathlib import Path
 from typing import Callable
 
 from wrp_eval.atomic import atomic_path
@@ -25,7 +25,7 @@ from wrp_eval.export.qgc import (
     read_qgc_plan,
     read_qgc_wpl,
 )
-from wrp_eval.planning.path import Path
+from wrp_eval.planning.path import FlightPath
 from wrp_eval.ship.particulars import ShipParticulars
 from wrp_eval.ship.proxy import Proxy
 
@@ -35,7 +35,7 @@ class MissionFormat:
     """render(mission, firmware) -> file bytes; read(file) -> ReadMission; suffix: the usual extension."""
 
     render: Callable[[GeoMission, str], bytes]
-    read: Callable[[str | FsPath], ReadMission]
+    read: Callable[[str | Path], ReadMission]
     suffix: str
 
 
@@ -47,30 +47,30 @@ FORMATS: dict[str, MissionFormat] = {
 }
 
 
-def sortie_files(out: FsPath, sorties: list[int]) -> list[FsPath]:
+def sortie_files(out: Path, sorties: list[int]) -> list[Path]:
     """Output file of each sortie: ``out`` alone, or ``<stem>_sortie<k><suffix>`` when there are several."""
-    out = FsPath(out)
+    out = Path(out)
     if len(sorties) == 1:
         return [out]
     return [out.with_name(f"{out.stem}_sortie{k}{out.suffix}") for k in sorties]
 
 
-def export_path(path: Path, particulars: ShipParticulars, proxy: Proxy, fmt: str, out: str | FsPath,
+def export_path(path: FlightPath, particulars: ShipParticulars, proxy: Proxy, fmt: str, out: str | Path,
                 section: ExportSection = ExportSection(), source: str = "path",
-                style: FlightStyle | None = None) -> list[tuple[FsPath, GeoMission]]:
+                style: FlightStyle | None = None) -> list[tuple[Path, GeoMission]]:
     """Write ``path`` as ``fmt`` missions; returns (file, mission) per sortie. InputError for bad input.
     ``style``: how the aircraft flies and shoots, the simulator's (``FlightStyle.of(path, sim.capture,
     sim.dwell_s)``); None: the simulator's defaults."""
     if fmt not in FORMATS:
         raise InputError(fmt, f"unknown export format; choose one of {', '.join(FORMATS)}")
     missions = build_missions(path, particulars, proxy, section, source, style)
-    files = sortie_files(FsPath(out), [m.sortie for m in missions])
+    files = sortie_files(Path(out), [m.sortie for m in missions])
     blobs = [FORMATS[fmt].render(m, section.firmware) for m in missions]
     write_all_atomic(list(zip(files, blobs)))
     return list(zip(files, missions))
 
 
-def write_all_atomic(outputs: list[tuple[FsPath, bytes]]) -> None:
+def write_all_atomic(outputs: list[tuple[Path, bytes]]) -> None:
     """Write every file to its temporary (:func:`wrp_eval.atomic.atomic_path`) first and rename them only
     when all are written, so a failure on any file replaces none; the temporaries are removed on a failure."""
     try:

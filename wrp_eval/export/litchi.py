@@ -17,7 +17,7 @@ from __future__ import annotations
 
 import csv
 import io
-from pathlib import Path as FsPath
+from pathlib import Path
 
 import numpy as np
 
@@ -52,7 +52,7 @@ def litchi_csv_bytes(m: GeoMission, firmware: str = "px4") -> bytes:
     return out.getvalue().encode("ascii")
 
 
-def read_litchi_csv(file: str | FsPath) -> ReadMission:
+def read_litchi_csv(file: str | Path) -> ReadMission:
     """Parse a Litchi CSV (``csv.DictReader``)."""
     lat, lon, alt, heading, pitch, hold, curve, speed = [], [], [], [], [], [], [], []
     photos = 0

@@ -1,4 +1,4 @@
-"""Per-sortie geographic missions built from a ship-frame :class:`Path`, with the safety checks.
+"""Per-sortie geographic missions built from a ship-frame :class:`FlightPath`, with the safety checks.
 
 Altitude reference (every format): metres above the take-off/home point on the ship,
 ``alt_rel = z - home_z`` (z is the height above the sea surface). QGroundControl's plannedHomePosition and
@@ -15,7 +15,7 @@ import numpy as np
 from wrp_eval.errors import InputError
 from wrp_eval.export.config import ExportSection
 from wrp_eval.frames import ship_pose, ship_to_geographic, yaw_to_compass_deg
-from wrp_eval.planning.path import Path
+from wrp_eval.planning.path import FlightPath
 from wrp_eval.ship.nofly import above_min_altitude, inside_no_fly_box, leg_flyable
 from wrp_eval.ship.particulars import ShipParticulars
 from wrp_eval.ship.proxy import Proxy
@@ -39,7 +39,7 @@ class FlightStyle:
     pass_radius_m: float = 0.0
 
     @classmethod
-    def of(cls, path: Path, capture: CaptureSection = CaptureSection(), dwell_s: float | None = None) -> FlightStyle:
+    def of(cls, path: FlightPath, capture: CaptureSection = CaptureSection(), dwell_s: float | None = None) -> FlightStyle:
         """The style the simulator flies ``path`` with under ``sim.capture`` and ``sim.dwell_s`` (None: the
         path's dwell), at the path's cruise speed (wrp_eval/sim/flight.py: the same choices)."""
         through = capture.mode == FLY_THROUGH
@@ -119,7 +119,7 @@ def home_point(particulars: ShipParticulars, section: ExportSection) -> np.ndarr
     return np.array([0.0, 0.0, particulars.freeboard_m])
 
 
-def check_exportable(path: Path, proxy: Proxy, section: ExportSection, source: str) -> None:
+def check_exportable(path: FlightPath, proxy: Proxy, section: ExportSection, source: str) -> None:
     """Refuse (InputError) a path with a waypoint below the minimum altitude, inside the no-fly zone, a
     straight leg between two waypoints of a sortie through the no-fly zone, or a pitch beyond the gimbal's
     range. Altitude and no-fly box are the ship stage's one geometry (:mod:`wrp_eval.ship.nofly`), the
@@ -155,7 +155,7 @@ def check_exportable(path: Path, proxy: Proxy, section: ExportSection, source: s
                                  f"(export.gimbal_pitch_range_deg), first #{i} at {pitch[i]:.2f} deg")
 
 
-def build_missions(path: Path, particulars: ShipParticulars, proxy: Proxy, section: ExportSection,
+def build_missions(path: FlightPath, particulars: ShipParticulars, proxy: Proxy, section: ExportSection,
                    source: str = "path", style: FlightStyle | None = None) -> list[GeoMission]:
     """One :class:`GeoMission` per sortie, in sortie order (raises InputError for an unsafe path). ``style``:
     how it is flown (None: the simulator's defaults, :meth:`FlightStyle.of`)."""

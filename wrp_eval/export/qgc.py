@@ -25,7 +25,7 @@ from __future__ import annotations
 import io
 import json
 import math
-from pathlib import Path as FsPath
+from pathlib import Path
 
 import numpy as np
 from pymavlink import mavwp
@@ -144,10 +144,10 @@ def _read_items(items: list[tuple[int, int, list[float]]], home: tuple[float, fl
                        float(np.max(accept)) if through else 0.0)
 
 
-def read_qgc_plan(file: str | FsPath) -> ReadMission:
+def read_qgc_plan(file: str | Path) -> ReadMission:
     """Parse a .plan written by :func:`qgc_plan_bytes` (plain ``json``)."""
     try:
-        doc = json.loads(FsPath(file).read_text(encoding="utf-8"))
+        doc = json.loads(Path(file).read_text(encoding="utf-8"))
         if doc.get("fileType") != "Plan":
             raise ValueError("fileType is not 'Plan'")
         mission = doc["mission"]
@@ -159,7 +159,7 @@ def read_qgc_plan(file: str | FsPath) -> ReadMission:
     return _read_items(items, (float(home[0]), float(home[1])) if home else None)
 
 
-def read_qgc_wpl(file: str | FsPath) -> ReadMission:
+def read_qgc_wpl(file: str | Path) -> ReadMission:
     """Parse a ``QGC WPL 110`` file with pymavlink's own loader (``mavwp.MAVWPLoader``)."""
 
     loader = mavwp.MAVWPLoader()

@@ -8,7 +8,7 @@ from __future__ import annotations
 import hashlib
 import json
 from dataclasses import dataclass, field
-from pathlib import Path as FsPath
+from pathlib import Path
 
 import numpy as np
 
@@ -23,7 +23,7 @@ PATH_FORMAT_VERSION = 1
 
 
 @dataclass(frozen=True)
-class Path:
+class FlightPath:
     """Ordered viewpoints of one tour.
 
     positions (n, 3) m in the ship frame; yaw (n,) rad; pitch (n,) rad (gimbal, negative looks down);
@@ -83,7 +83,7 @@ class Path:
             ],
         }
 
-    def save(self, file: str | FsPath) -> None:
+    def save(self, file: str | Path) -> None:
         """Write path.json atomically (:func:`wrp_eval.atomic.write_text_atomic`)."""
         write_text_atomic(file, json.dumps(self.to_json_dict(), indent=1))
 
@@ -93,9 +93,9 @@ class Path:
         return digest_of_document(self.to_json_dict())
 
     @classmethod
-    def load(cls, file: str | FsPath) -> "Path":
+    def load(cls, file: str | Path) -> "FlightPath":
         """Read a path.json; anything malformed is an :class:`InputError` naming the file."""
-        file = FsPath(file)
+        file = Path(file)
         try:
             doc = json.loads(file.read_text(encoding="utf-8"))
         except FileNotFoundError:
@@ -105,7 +105,7 @@ class Path:
         return cls.from_json_dict(doc, source=file)
 
     @classmethod
-    def from_json_dict(cls, doc: dict, source: str | FsPath = "path") -> "Path":
+    def from_json_dict(cls, doc: dict, source: str | Path = "path") -> "FlightPath":
         """The path of a path.json document (as :meth:`to_json_dict` writes it); anything malformed is an
         :class:`InputError` naming ``source``."""
         try:
@@ -140,6 +140,6 @@ class Path:
 def digest_of_document(doc: dict) -> str:
     """16-hex content hash of a path.json document's flight-relevant fields (viewpoints, camera, speed,
     dwell). A stored file's own document may differ in the last float digit from a reloaded path's
-    :meth:`Path.to_json_dict` after a round trip through degrees, so callers matching a file hash both."""
+    :meth:`FlightPath.to_json_dict` after a round trip through degrees, so callers matching a file hash both."""
     key = {k: doc[k] for k in ("viewpoints", "camera", "speed_m_s", "dwell_s")}
     return hashlib.sha256(json.dumps(key, sort_keys=True).encode()).hexdigest()[:16]

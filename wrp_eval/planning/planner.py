@@ -1,4 +1,4 @@
-"""The planning pipeline (paper Sec. 3) from a proxy and its face complexities to a :class:`Path`.
+"""The planning pipeline (paper Sec. 3) from a proxy and its face complexities to a :class:`FlightPath`.
 
 ours:     complexity-scaled radii and thresholds, Min-Max, tour, transition viewpoints (Alg. 2).
 zhou2020: one radius, one threshold (the most complex face's), Min-Max, tour, no transition viewpoints.
@@ -17,7 +17,7 @@ from wrp_eval.camera import Camera, yaw_pitch_towards
 from wrp_eval.planning.config import PlanningSection
 from wrp_eval.planning.minmax import maximise, minimise, set_metrics
 from wrp_eval.planning.oblique import oblique_views
-from wrp_eval.planning.path import KIND_SURFACE, KIND_TRANSITION, Path
+from wrp_eval.planning.path import KIND_SURFACE, KIND_TRANSITION, FlightPath
 from wrp_eval.planning.reconstructability import SlotTable
 from wrp_eval.planning.sampling import Samples, base_radius_m, poisson_samples
 from wrp_eval.planning.tour import (
@@ -52,7 +52,7 @@ class PlanResult:
     flight order; visible (n_candidates, n_samples) bool; chosen_obs rows of the chosen views;
     thresholds (n_s,) the effective per-sample thresholds; h (n_s,) the final reconstructability."""
 
-    path: Path
+    path: FlightPath
     metrics: dict
     samples: Samples | None = None
     candidates: ViewSet | None = None
@@ -102,7 +102,7 @@ def _replacement_pool(samples: Samples, candidates: ViewSet, radii: np.ndarray):
 
 
 def finish_path(positions, yaw, pitch, face, kind, proxy: Proxy, section: PlanningSection, camera: Camera,
-                 method: str, metadata: dict) -> tuple[Path, int]:
+                 method: str, metadata: dict) -> tuple[FlightPath, int]:
     """Insert over-the-top detour waypoints where a leg would cross the no-fly box; split into sorties."""
     box = proxy.no_fly_bounds()
     blocked = segments_intrude(positions[:-1], positions[1:], box) if len(positions) > 1 else np.zeros(0, bool)
@@ -117,12 +117,12 @@ def finish_path(positions, yaw, pitch, face, kind, proxy: Proxy, section: Planni
         face, kind = np.insert(face, at, -1), np.insert(kind, at, KIND_TRANSITION)
     n_detour = 2 * int(legs.size)
     sortie = assign_sorties(positions, section.speed_m_s, section.dwell_s, section.endurance_s)
-    path = Path(positions, yaw, pitch, face.astype(int), kind.astype(int), sortie, camera, section.speed_m_s,
+    path = FlightPath(positions, yaw, pitch, face.astype(int), kind.astype(int), sortie, camera, section.speed_m_s,
                 section.dwell_s, method, metadata)
     return path, n_detour
 
 
-def _path_metrics(path: Path) -> dict:
+def _path_metrics(path: FlightPath) -> dict:
     return {"length_m": path.length_m, "flight_time_s": path.flight_time_s,
             "sorties": int(path.sortie.max()) + 1 if len(path) else 0,
             "n_path_views": len(path), "n_transition_views": int(np.sum(path.kind == KIND_TRANSITION))}

@@ -3,12 +3,12 @@
 
 from __future__ import annotations
 
-from pathlib import Path as FsPath
+from pathlib import Path
 
 import rerun as rr
 
 from wrp_eval.camera import camera_rotations
-from wrp_eval.planning.path import KIND_TRANSITION, Path
+from wrp_eval.planning.path import KIND_TRANSITION, FlightPath
 from wrp_eval.planning.planner import PlanResult
 from wrp_eval.recording import APPLICATION_ID, recording
 from wrp_eval.ship.proxy import Proxy
@@ -16,7 +16,7 @@ from wrp_eval.ship.proxy import Proxy
 _FRUSTUM_DEPTH_M = 4.0  # drawn image-plane distance
 
 
-def _log_views(rec: rr.RecordingStream, prefix: str, path: Path, colours: list[list[int]],
+def _log_views(rec: rr.RecordingStream, prefix: str, path: FlightPath, colours: list[list[int]],
                tour_colour: list[int]) -> None:
     """One frustum entity per view of ``path`` under ``prefix``/views/<i> and its tour as ``prefix``/tour."""
     cam = path.camera
@@ -32,19 +32,19 @@ def _log_views(rec: rr.RecordingStream, prefix: str, path: Path, colours: list[l
     rec.log(f"{prefix}/tour", rr.LineStrips3D([path.positions], colors=[tour_colour]), static=True)
 
 
-def save_plan_recording(result: PlanResult, proxy: Proxy, file: str | FsPath,
+def save_plan_recording(result: PlanResult, proxy: Proxy, file: str | Path,
                         application_id: str = APPLICATION_ID,
-                        recording_id: str | None = None, other_paths: dict[str, Path] | None = None) -> FsPath:
+                        recording_id: str | None = None, other_paths: dict[str, FlightPath] | None = None) -> Path:
     """Write ``file`` atomically (:func:`wrp_eval.recording.recording`) with entities plan/proxy,
     plan/no_fly, plan/samples, plan/candidates, plan/views/<i> (frusta), plan/tour; and each of
     ``other_paths`` (e.g. the WRP moved from this plan) as paths/<name>/views/<i> and paths/<name>/tour."""
-    file = FsPath(file)
+    file = Path(file)
     with recording(file, recording_id=recording_id, application_id=application_id) as rec:
         _log_plan(rec, result, proxy, other_paths or {})
     return file
 
 
-def _log_plan(rec: rr.RecordingStream, result: PlanResult, proxy: Proxy, other_paths: dict[str, Path]) -> None:
+def _log_plan(rec: rr.RecordingStream, result: PlanResult, proxy: Proxy, other_paths: dict[str, FlightPath]) -> None:
     """The plan's entities and ``other_paths`` (all static; ship frame, metres) into ``rec``."""
     rec.log("plan", rr.ViewCoordinates.RIGHT_HAND_Z_UP, static=True)
     lo, hi = proxy.bounds

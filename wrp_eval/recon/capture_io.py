@@ -2,13 +2,13 @@
 
 from __future__ import annotations
 
-from pathlib import Path as FsPath
+from pathlib import Path
 
 import numpy as np
 import pyarrow.parquet as pq
 
 from wrp_eval.errors import InputError
-from wrp_eval.planning.path import Path
+from wrp_eval.planning.path import FlightPath
 from wrp_eval.sim.captures import BLUR_COLUMN, PRIOR_COLUMNS, ROLL_COLUMN, CaptureSet
 
 CAPTURE_COLUMNS = ("trial", "view", "taken", "x_m", "y_m", "z_m", "yaw_deg", "pitch_deg")
@@ -16,7 +16,7 @@ CAPTURE_COLUMNS = ("trial", "view", "taken", "x_m", "y_m", "z_m", "yaw_deg", "pi
 OPTIONAL_COLUMNS = (ROLL_COLUMN, *PRIOR_COLUMNS, BLUR_COLUMN)
 
 
-def captures_from_path(path: Path, offsets: np.ndarray | None = None, pitch: np.ndarray | None = None,
+def captures_from_path(path: FlightPath, offsets: np.ndarray | None = None, pitch: np.ndarray | None = None,
                        roll: np.ndarray | None = None, prior_positions: np.ndarray | None = None,
                        blur_px: np.ndarray | None = None) -> CaptureSet:
     """Every view of a path as a capture set: the planned poses (a windless, perfectly flown trial), moved by
@@ -42,7 +42,7 @@ def captures_from_path(path: Path, offsets: np.ndarray | None = None, pitch: np.
                       prior_positions, blur_px)
 
 
-def _read_columns(file: FsPath) -> dict[str, np.ndarray]:
+def _read_columns(file: Path) -> dict[str, np.ndarray]:
     """The required capture columns and whichever optional ones the file has, as numpy arrays."""
     try:
         names = set(pq.read_schema(file).names)
@@ -58,13 +58,13 @@ def _read_columns(file: FsPath) -> dict[str, np.ndarray]:
     return {c: table.column(c).to_numpy(zero_copy_only=False) for c in wanted}
 
 
-def captures_from_parquet(file: str | FsPath, trial: int, path: Path) -> CaptureSet:
+def captures_from_parquet(file: str | Path, trial: int, path: FlightPath) -> CaptureSet:
     """The views actually taken in ``trial`` of a ``captures.parquet`` (the simulator's table; one row per
     trial x view, degrees at the edge); the camera comes from ``path``. The optional ``roll_deg`` and
     ``prior_x_m`` / ``prior_y_m`` / ``prior_z_m`` columns (:func:`wrp_eval.sim.captures.pose_columns`) become
     the capture set's roll and position priors, ``blur_px`` its motion blur; a file without them gives None
     (level camera, exact priors, sharp images: a record from before these columns is still scored)."""
-    file = FsPath(file)
+    file = Path(file)
     cols = _read_columns(file)
     rows = (cols["trial"] == trial) & cols["taken"].astype(bool)
     if not np.any(cols["trial"] == trial):

@@ -41,7 +41,7 @@ import numpy as np
 from scipy.signal import lfilter
 
 from wrp_eval.errors import InputError
-from wrp_eval.planning.path import Path
+from wrp_eval.planning.path import FlightPath
 from wrp_eval.recon.capture_io import captures_from_path
 from wrp_eval.sim.captures import CaptureSet
 
@@ -72,7 +72,7 @@ def _stream(seed: int, kind: str) -> np.random.Generator:
     return np.random.default_rng([int(seed), _STREAMS.index(kind)])
 
 
-def _above_sea(offsets: np.ndarray, path: Path) -> np.ndarray:
+def _above_sea(offsets: np.ndarray, path: FlightPath) -> np.ndarray:
     """Offsets whose moved views would fly below ``MIN_ALTITUDE_M`` get their dz mirrored (then clipped)."""
     z = np.asarray(path.positions, dtype=float)[:, 2]
     low = z + offsets[:, 2] < MIN_ALTITUDE_M
@@ -80,7 +80,7 @@ def _above_sea(offsets: np.ndarray, path: Path) -> np.ndarray:
     return offsets
 
 
-def jitter_sets(path: Path, seed: int, count: int = JITTER_SETS) -> list[tuple[str, str, CaptureSet]]:
+def jitter_sets(path: FlightPath, seed: int, count: int = JITTER_SETS) -> list[tuple[str, str, CaptureSet]]:
     """``count`` copies of the reference with every view jittered by 2 cm per axis and 0.1 deg of yaw (the
     response yardstick's jitter, :mod:`wrp_eval.recon.response`): not perturbations but the noise floor of
     each oracle against which the perturbations' changes are read (a seed repeat of COLMAP re-maps the same
@@ -91,7 +91,7 @@ def jitter_sets(path: Path, seed: int, count: int = JITTER_SETS) -> list[tuple[s
     return [(f"jitter_{k + 1}", "jitter", captures_from_path(path, jitter(len(path), rng))) for k in range(count)]
 
 
-def single_view_sets(path: Path, seed: int) -> list[tuple[str, str, CaptureSet]]:
+def single_view_sets(path: FlightPath, seed: int) -> list[tuple[str, str, CaptureSet]]:
     """``SINGLE_VIEW_SETS`` sets, each with ONE view moved (one view drawn from each sixth of the path)."""
     rng = _stream(seed, "single_view")
     n = len(path)
@@ -122,7 +122,7 @@ def drift_shape(n: int, rng: np.random.Generator, correlation_views: float = NAV
     return walk * [1.0, 1.0, vertical_scale]
 
 
-def nav_drift_sets(path: Path, seed: int) -> list[tuple[str, str, CaptureSet]]:
+def nav_drift_sets(path: FlightPath, seed: int) -> list[tuple[str, str, CaptureSet]]:
     """The true positions = plan + one drift shape scaled to each RMS of ``NAV_DRIFT_RMS_M``; priors = plan."""
     n = len(path)
     shape = drift_shape(n, _stream(seed, "nav_drift"))
@@ -137,7 +137,7 @@ def nav_drift_sets(path: Path, seed: int) -> list[tuple[str, str, CaptureSet]]:
     return sets
 
 
-def heading_bias_sets(path: Path) -> list[tuple[str, str, CaptureSet]]:
+def heading_bias_sets(path: FlightPath) -> list[tuple[str, str, CaptureSet]]:
     """A constant yaw bias on every view, one set per ``HEADING_BIAS_DEG``."""
     sets = []
     for bias in HEADING_BIAS_DEG:
@@ -147,7 +147,7 @@ def heading_bias_sets(path: Path) -> list[tuple[str, str, CaptureSet]]:
     return sets
 
 
-def blur_sets(path: Path, seed: int) -> list[tuple[str, str, CaptureSet]]:
+def blur_sets(path: FlightPath, seed: int) -> list[tuple[str, str, CaptureSet]]:
     """Synthetic motion blur: each length of ``BLUR_PX`` on each share of ``BLUR_SHARES`` of the views (at least
     one view); per share ONE random choice of views, shared by its lengths."""
     rng = _stream(seed, "blur")
@@ -162,7 +162,7 @@ def blur_sets(path: Path, seed: int) -> list[tuple[str, str, CaptureSet]]:
     return sets
 
 
-def drop_sets(path: Path, seed: int) -> list[tuple[str, str, CaptureSet]]:
+def drop_sets(path: FlightPath, seed: int) -> list[tuple[str, str, CaptureSet]]:
     """``DROP_SETS`` sets, each without ONE view (one drawn from each sixth of the view order)."""
     rng = _stream(seed, "drop")
     n = len(path)
@@ -174,7 +174,7 @@ def drop_sets(path: Path, seed: int) -> list[tuple[str, str, CaptureSet]]:
     return [(f"drop_{view:03d}", "drop", full.subset(np.arange(n) != view)) for view in views]
 
 
-def flight_capture_sets(ctx, path: Path, seed: int, speeds=FLIGHT_SPEEDS_M_S, per_speed: int = FLIGHTS_PER_SPEED,
+def flight_capture_sets(ctx, path: FlightPath, seed: int, speeds=FLIGHT_SPEEDS_M_S, per_speed: int = FLIGHTS_PER_SPEED,
                         mode: str | None = None, preset: str | None = None, kind: str = "flight",
                         prefix: str = "flight") -> list[tuple[str, str, CaptureSet]]:
     """Fly ``path`` ``per_speed`` times at each U10 of ``speeds`` (m/s), in ONE batch of the simulator, and
@@ -229,7 +229,7 @@ def _flight_sim_section(sim, mode: str | None, preset: str | None):
     return sim.model_copy(update=update)
 
 
-def flown_capture_sets(ctx, path: Path, seed: int, per_speed: int = FLIGHTS_PER_SPEED
+def flown_capture_sets(ctx, path: FlightPath, seed: int, per_speed: int = FLIGHTS_PER_SPEED
                        ) -> list[tuple[str, str, CaptureSet]]:
     """Every flown set of the validation, all under the same random numbers (the module docstring): the
     ``flight`` sets in each capture mode of ``FLIGHT_MODES`` (``flight_<mode>_u<U>_<k>``), the ``navigation``
@@ -247,7 +247,7 @@ def flown_capture_sets(ctx, path: Path, seed: int, per_speed: int = FLIGHTS_PER_
     return sets + recorded_blur_sets(path, sets)
 
 
-def recorded_blur_sets(path: Path, flights: list[tuple[str, str, CaptureSet]]) -> list[tuple[str, str, CaptureSet]]:
+def recorded_blur_sets(path: FlightPath, flights: list[tuple[str, str, CaptureSet]]) -> list[tuple[str, str, CaptureSet]]:
     """The planned poses with the per-view blur of each fly-through ``flight`` set flown at U10 >=
     ``RECORDED_BLUR_MIN_SPEED_M_S`` (views the flight did not take: sharp)."""
     sets = []
@@ -261,7 +261,7 @@ def recorded_blur_sets(path: Path, flights: list[tuple[str, str, CaptureSet]]) -
     return sets
 
 
-def perturbed_capture_sets(path: Path, seed: int = 0, flights=None) -> list[tuple[str, str, CaptureSet]]:
+def perturbed_capture_sets(path: FlightPath, seed: int = 0, flights=None) -> list[tuple[str, str, CaptureSet]]:
     """(name, kind, capture set) triples: the unperturbed reference (name ``unperturbed``, kind ``reference``)
     first, then its jitter copies (each oracle's noise floor), then the single_view, drop, nav_drift,
     heading_bias and blur sets of ``path`` (deterministic from ``seed``), then ``flights``: the flown sets

@@ -27,7 +27,7 @@ from scipy.stats import spearmanr
 from wrp_eval.atomic import atomic_path, write_text_atomic
 from wrp_eval.camera import Camera, yaw_pitch_towards
 from wrp_eval.errors import InputError
-from wrp_eval.planning.path import Path as FlightPath
+from wrp_eval.planning.path import FlightPath
 from wrp_eval.recon.base import ReconResult
 from wrp_eval.recon.calibration import colmap_equivalent
 from wrp_eval.recon.capture_io import captures_from_path

@@ -27,7 +27,7 @@ import numpy as np
 from mujoco import rollout as mj_rollout
 
 from wrp_eval.bench_record import BenchRecord
-from wrp_eval.planning.path import Path
+from wrp_eval.planning.path import FlightPath
 from wrp_eval.ship.config import ShipSection
 from wrp_eval.ship.motion import ShipMotionSection
 from wrp_eval.ship.proxy import build_proxy
@@ -40,7 +40,7 @@ from wrp_eval.wind.config import TurbulenceSection, WindSection
 from wrp_eval.wind.field import build_wind_field
 
 
-def bench_path(n_views: int = 50, length_m: float = 700.0) -> Path:
+def bench_path(n_views: int = 50, length_m: float = 700.0) -> FlightPath:
     """A ~``length_m`` loop of ``n_views`` viewpoints around a 140 m x 20 m ship footprint, facing it."""
     ang = np.linspace(0.0, 2 * np.pi, n_views, endpoint=False)
     a, b = 100.0, 20.0
@@ -50,7 +50,7 @@ def bench_path(n_views: int = 50, length_m: float = 700.0) -> Path:
     pos = np.stack([s * a * np.cos(ang), s * b * np.sin(ang), 20 + 5 * np.sin(3 * ang)], axis=1)
     yaw = np.arctan2(-pos[:, 1], -pos[:, 0])
     n = n_views
-    return Path(pos, yaw, np.full(n, -0.3), np.zeros(n, int), np.zeros(n, int), np.zeros(n, int),
+    return FlightPath(pos, yaw, np.full(n, -0.3), np.zeros(n, int), np.zeros(n, int), np.zeros(n, int),
                 speed_m_s=5.0, dwell_s=1.0)
 
 

@@ -1,4 +1,4 @@
-"""Batched closed-loop flights of a :class:`Path` in MuJoCo.
+"""Batched closed-loop flights of a :class:`FlightPath` in MuJoCo.
 
 Design (measured, see README.md and bench.py): the batch of flights is packed ``drones_per_model``
 quadrotors to a MuJoCo model (independent free bodies, no contacts), the models run in parallel in
@@ -42,7 +42,7 @@ from mujoco import rollout as mj_rollout
 from scipy.spatial.transform import Rotation
 
 from wrp_eval.compiled import kernel
-from wrp_eval.planning.path import Path
+from wrp_eval.planning.path import FlightPath
 from wrp_eval.sim.aero import drag_force
 from wrp_eval.sim.capture_mode import shutter_offset, trigger_planes, vertex_speeds
 from wrp_eval.sim.config import SimSection
@@ -372,7 +372,7 @@ class FlightSimulator:
         return motors, quat_d, drag
 
     # -- flights --------------------------------------------------------------------------------------
-    def fly(self, path: Path, wind, batch: int, view_offsets: np.ndarray | None = None,
+    def fly(self, path: FlightPath, wind, batch: int, view_offsets: np.ndarray | None = None,
             start_time_s: float = 0.0, *, ship: ShipInScene | None = None, flight_rngs=None) -> FlightResult:
         """Fly ``path`` ``batch`` times through ``wind`` (anything with ``velocity(points (n,3), t)``,
         row i = flight i). ``view_offsets`` (batch, n_views, 4): commanded (dx, dy, dz m, dyaw rad) added to
@@ -541,7 +541,7 @@ class FlightSimulator:
         """Hold a hover at ``position`` (3,) m (camera position) with heading ``yaw`` rad for ``duration_s``:
         a one-view path whose dwell is the duration (the settle phase is skipped by a zero timeout; photo in
         stop mode). ``flight_rngs``: as :meth:`fly`'s (the navigation errors)."""
-        path = Path(np.asarray(position, dtype=float)[None, :], np.array([yaw]), np.array([0.0]),
+        path = FlightPath(np.asarray(position, dtype=float)[None, :], np.array([yaw]), np.array([0.0]),
                     np.array([-1]), np.array([1]), np.array([0]), speed_m_s=5.0, dwell_s=duration_s)
         sec = self.section.model_copy(update={"settle_timeout_s": 1e-9, "dwell_s": duration_s,
                                               "capture": self.section.capture.model_copy(update={"mode": "stop"})})

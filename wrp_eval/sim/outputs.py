@@ -4,7 +4,7 @@ fsync'ed and renamed)."""
 
 from __future__ import annotations
 
-from pathlib import Path as FsPath
+from pathlib import Path
 
 import numpy as np
 import pyarrow as pa
@@ -13,18 +13,18 @@ import rerun as rr
 
 from wrp_eval.atomic import atomic_path
 from wrp_eval.camera import camera_rotations
-from wrp_eval.planning.path import Path
+from wrp_eval.planning.path import FlightPath
 from wrp_eval.recording import recording
 from wrp_eval.sim.flight_state import OUTCOME_NAMES
 from wrp_eval.sim.results import FlightResult
 
 
-def _atomic_parquet(table: pa.Table, target: FsPath) -> None:
+def _atomic_parquet(table: pa.Table, target: Path) -> None:
     with atomic_path(target) as tmp:
         pq.write_table(table, tmp)
 
 
-def write_flight_tables(result: FlightResult, path: Path, out_dir: FsPath, seed: int) -> tuple[FsPath, FsPath]:
+def write_flight_tables(result: FlightResult, path: FlightPath, out_dir: Path, seed: int) -> tuple[Path, Path]:
     """captures.parquet (one row per trial x view) and trials.parquet (one row per trial), atomically."""
     b, n = result.batch, result.n_views
     trial = np.repeat(np.arange(b), n)
@@ -65,13 +65,13 @@ def write_flight_tables(result: FlightResult, path: Path, out_dir: FsPath, seed:
     return a, c
 
 
-def write_rerun(result: FlightResult, path: Path, file: FsPath, max_trials: int = 8) -> None:
+def write_rerun(result: FlightResult, path: FlightPath, file: Path, max_trials: int = 8) -> None:
     """Trajectories, capture frusta (first trial) and wind arrows into a .rrd recording (atomic)."""
     with recording(file, application_id="wrp-eval-fly") as rec:
         _log_flights(rec, result, path, max_trials)
 
 
-def _log_flights(rec: rr.RecordingStream, result: FlightResult, path: Path, max_trials: int) -> None:
+def _log_flights(rec: rr.RecordingStream, result: FlightResult, path: FlightPath, max_trials: int) -> None:
     traj = result.trajectory
     shown = min(result.batch, max_trials)
     rec.log("plan/viewpoints", rr.Points3D(path.positions, radii=0.3, colors=[[40, 160, 255]]), static=True)

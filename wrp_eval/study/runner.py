@@ -30,7 +30,7 @@ from wrp_eval.campaign.runner import run_campaign
 from wrp_eval.config import ExperimentConfig
 from wrp_eval.experiment import ExperimentContext
 from wrp_eval.planning.path import KIND_TRANSITION
-from wrp_eval.planning.path import Path as FlightPath
+from wrp_eval.planning.path import FlightPath
 from wrp_eval.planning.rerun_log import save_plan_recording
 from wrp_eval.recording import merge_recordings
 from wrp_eval.ship.rerun_log import save_ship_recording

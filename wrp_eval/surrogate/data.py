@@ -16,7 +16,7 @@ from wrp_eval.campaign.config import TrialConfig
 from wrp_eval.campaign.records import column_array
 from wrp_eval.campaign.store import TrialStore
 from wrp_eval.errors import InputError
-from wrp_eval.planning.path import Path as FlightPath
+from wrp_eval.planning.path import FlightPath
 from wrp_eval.recon.scene import scored_ship
 from wrp_eval.surrogate.features import CONDITION_NAMES, ViewContext, campaign_view_context, reference_conditions
 
@@ -104,7 +104,7 @@ def planned_pose_features(positions: np.ndarray, yaw: np.ndarray, pitch: np.ndar
 
 
 def path_pose_features(path) -> np.ndarray:
-    """Pose features of a :class:`wrp_eval.planning.path.Path`."""
+    """Pose features of a :class:`wrp_eval.planning.path.FlightPath`."""
     return planned_pose_features(np.asarray(path.positions, float), np.asarray(path.yaw, float),
                                  np.asarray(path.pitch, float))
 

@@ -43,7 +43,7 @@ from wrp_eval.campaign.config import TrialConfig
 from wrp_eval.campaign.records import column_array
 from wrp_eval.campaign.store import TrialStore
 from wrp_eval.errors import InputError
-from wrp_eval.planning.path import Path as FlightPath
+from wrp_eval.planning.path import FlightPath
 from wrp_eval.recon.capture_io import captures_from_path
 from wrp_eval.recon.scene import scored_ship
 from wrp_eval.surrogate.metrics import regression_metrics

@@ -26,7 +26,7 @@ from wrp_eval.atomic import write_json_atomic
 from wrp_eval.campaign.records import column_array
 from wrp_eval.errors import InputError
 from wrp_eval.experiment import evaluated_campaign_dir
-from wrp_eval.planning.path import Path as FlightPath
+from wrp_eval.planning.path import FlightPath
 from wrp_eval.recon.colmap import ColmapOracle
 from wrp_eval.recon.synthetic import SyntheticOracle
 from wrp_eval.recon.validate import capture_sha

@@ -25,7 +25,7 @@ from wrp_eval.campaign.evaluators import DEFAULT_EVALUATOR
 from wrp_eval.campaign.runner import run_campaign
 from wrp_eval.errors import InputError
 from wrp_eval.experiment import ExperimentContext, evaluated_campaign_dir, evaluated_wrp_dir
-from wrp_eval.planning.path import Path as FlightPath
+from wrp_eval.planning.path import FlightPath
 from wrp_eval.planning.path import digest_of_document
 from wrp_eval.recon.capture_io import captures_from_path
 from wrp_eval.recon.scene import ScoredShip

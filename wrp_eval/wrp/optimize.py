@@ -316,7 +316,7 @@ def offset_totals(offsets: np.ndarray) -> tuple[float, float]:
 
 
 def apply_offsets(path, offsets: np.ndarray, note: dict | None = None):
-    """The WRP: ``path`` (a :class:`wrp_eval.planning.path.Path`) with positions + offsets[:, :3] and
+    """The WRP: ``path`` (a :class:`wrp_eval.planning.path.FlightPath`) with positions + offsets[:, :3] and
     yaw + offsets[:, 3] (wrapped to (-pi, pi])."""
     yaw = np.angle(np.exp(1j * (np.asarray(path.yaw) + offsets[:, 3])))
     meta = {**path.metadata, **(note or {})}
