@@ -3,13 +3,13 @@
 import numpy as np
 import pytest
 
-from wrp_eval.recon.response import oracle_response, shifted, single_view_moves
+from wrp_eval.recon.response import oracle_response, shifted, box_single_view_moves
 from wrp_eval.recon.scenarios import reference_capture_set, ship_like_mesh
 from wrp_eval.recon.synthetic import SyntheticOracle
 
 
 def test_moves_touch_one_view_each_within_the_box():
-    offsets = single_view_moves(10, 50, np.random.default_rng(1))
+    offsets = box_single_view_moves(10, 50, np.random.default_rng(1))
     moved = np.count_nonzero(np.any(offsets != 0.0, axis=2), axis=1)
     assert moved.tolist() == [1] * 50
     assert np.abs(offsets[..., :3]).max() <= 2.0 and np.abs(offsets[..., 3]).max() <= np.radians(20.0)

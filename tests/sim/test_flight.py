@@ -196,7 +196,7 @@ def test_flights_in_the_ship_stage_scene(controller_section):
 
 @pytest.mark.parametrize("length", [30.0, 3.0])
 def test_jerk_limited_reference_is_consistent_and_ends_at_rest(length):
-    from wrp_eval.sim.flight import _reference_profile
+    from wrp_eval.sim.phases import reference_profile as _reference_profile
     dt = 1e-3
     t = np.arange(-0.5, 15.0, dt)
     s, v, a, duration = _reference_profile(np.full_like(t, length), t, 5.0, 2.5, 0.625)

@@ -82,7 +82,7 @@ def test_ceiling_needs_two_repeats(campaign_dir):
 
 @pytest.mark.slow
 def test_single_view_agreement_scores_one_viewpoint_moves_with_both(campaign_dir):
-    from wrp_eval.surrogate.diagnostics import campaign_oracle, single_view_agreement, single_view_moves
+    from wrp_eval.surrogate.diagnostics import campaign_oracle, single_view_agreement, targeted_single_view_moves
     from .conftest import random_surrogate
     scorer, _ = campaign_oracle(campaign_dir)
     n = len(scorer.planned)
@@ -91,7 +91,7 @@ def test_single_view_agreement_scores_one_viewpoint_moves_with_both(campaign_dir
     assert doc["n_moves"] == 10 and -1.0 <= doc["spearman"] <= 1.0 and doc["jitters"] == 2
     assert doc["surrogate_change_std_m"] > 0.0 and doc["oracle_change_std_m"] >= 0.0
     # the moves at the campaign's targeted scale, and the oracle's jitter-averaged changes recomputed by hand
-    views, moves = single_view_moves(campaign_dir, n, 10, 2, np.asarray(surrogate.meta.offset_low),
+    views, moves = targeted_single_view_moves(campaign_dir, n, 10, 2, np.asarray(surrogate.meta.offset_low),
                                      np.asarray(surrogate.meta.offset_high))
     assert np.all(moves >= surrogate.meta.offset_low) and np.all(moves <= surrogate.meta.offset_high)
     rng = np.random.default_rng(np.random.SeedSequence(2, spawn_key=(1,)))

@@ -48,6 +48,10 @@ class CampaignContext:
 
 
 class TrialEvaluator(Protocol):
+    """The one-method plug-in interface of a campaign's trials: a factory ``"module:function"`` builds it from
+    the :class:`CampaignContext` (once per worker process) and ``evaluate`` returns one outcome per input, in
+    order (the MuJoCo flight + oracle, :class:`AnalyticEvaluator`, the tests' killing evaluators)."""
+
     def evaluate(self, batch: list[TrialInputs]) -> list[TrialOutcome]: ...
 
 

@@ -16,7 +16,7 @@ from collections.abc import Sequence
 
 import torch
 
-from wrp_eval.campaign.evaluators import resolve_factory
+from wrp_eval.campaign.evaluators import TrialEvaluator, resolve_factory
 from wrp_eval.campaign.records import make_record
 from wrp_eval.campaign.sampling import TrialInputs, trial_inputs
 from wrp_eval.errors import InputError
@@ -48,7 +48,8 @@ def init_worker(spec: dict) -> None:
     _limit_threads(context.threads)
     factory = resolve_factory(spec["evaluator"])
     _STATE.clear()
-    _STATE.update(key=spec["key"], evaluator=factory(context, **spec["evaluator_options"]),
+    evaluator: TrialEvaluator = factory(context, **spec["evaluator_options"])
+    _STATE.update(key=spec["key"], evaluator=evaluator,
                   worker=f"{socket.gethostname()}:{os.getpid()}")
 
 

@@ -55,7 +55,7 @@ def jitter(n_views: int, rng: np.random.Generator, position_m: float = JITTER_PO
     return np.concatenate([rng.normal(0.0, position_m, (n_views, 3)), rng.normal(0.0, yaw_rad, (n_views, 1))], 1)
 
 
-def single_view_moves(n_views: int, moves: int, rng: np.random.Generator) -> np.ndarray:
+def box_single_view_moves(n_views: int, moves: int, rng: np.random.Generator) -> np.ndarray:
     """(moves, n_views, 4) offsets moving one uniformly chosen view each, within the move box, the rest at 0."""
     out = np.zeros((moves, n_views, 4))
     views = rng.integers(0, n_views, moves)
@@ -80,7 +80,7 @@ def oracle_response(oracle, mesh, capture_set: CaptureSet, *, draws: int = 30, m
 
     base = error(np.zeros((n, 4)))
     jittered = np.array([error(noise()) for _ in range(draws)])
-    offsets = single_view_moves(n, moves, rng)
+    offsets = box_single_view_moves(n, moves, rng)
     effect = np.array([error(o) for o in offsets]) - base
     first = np.array([error(o + noise()) for o in offsets]) - base
     second = np.array([error(o + noise()) for o in offsets]) - base

@@ -12,7 +12,6 @@ import numpy as np
 import trimesh
 from dm_control import mjcf
 
-SEA_COLOUR = (0.10, 0.25, 0.40, 1.0)
 HULL_COLOUR = (0.55, 0.55, 0.58, 1.0)
 
 

@@ -81,7 +81,6 @@ from wrp_eval.sim.phases import (
     parked_pose,
     passing_views,
     reference,
-    reference_profile,
     setpoints,
     take_photos,
     tick,
@@ -90,8 +89,6 @@ from wrp_eval.sim.phases import (
 from wrp_eval.sim.results import FlightResult
 from wrp_eval.sim.vehicle import PHANTOM4, QuadrotorParams, Scene, build_scene
 
-# the profile's old home: tests/sim/test_flight.py imports it from here
-_reference_profile = reference_profile
 
 
 def _mocap_id(model: mujoco.MjModel, name: str) -> int | None:

@@ -1,7 +1,8 @@
 """The flight loop's phase functions, once per chunk, for a whole batch of flights at once.
 
-In loop order: :func:`reference` (where each flight's setpoint is, with the leash), :func:`check_failures`
-/ :func:`apply_failures`, :func:`transitions` (TRANSIT -> SETTLE -> DWELL -> trigger) /
+In loop order: :func:`reference` (where each flight's setpoint is, with the leash), :func:`check_failures`,
+:func:`no_headway` and :func:`check_returns` / :func:`apply_endings` (with :func:`swap_batteries` and
+:func:`resume` for a battery swap), :func:`transitions` (TRANSIT -> SETTLE -> DWELL -> trigger) /
 :func:`take_photos` / :func:`apply_transitions`, :func:`setpoints` + :func:`control` (position loop ->
 motor thrusts and attitude targets), :func:`tick` (the phase clock). Shapes: ``batch`` flights; the
 control functions work on the ``padded`` batch of the MuJoCo models (the flights plus parked fillers).

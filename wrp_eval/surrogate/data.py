@@ -20,7 +20,6 @@ from wrp_eval.planning.path import FlightPath
 from wrp_eval.recon.scene import scored_ship
 from wrp_eval.surrogate.features import CONDITION_NAMES, ViewContext, campaign_view_context, reference_conditions
 
-OFFSET_NAMES = ("dx_m", "dy_m", "dz_m", "dyaw_rad")
 POSE_NAMES = ("x_m", "y_m", "z_m", "cos_yaw", "sin_yaw", "pitch_rad", "index")
 
 

@@ -141,7 +141,7 @@ def oracle_roughness(campaign_dir: str | Path, *, n_trials: int = 60, repeats: i
             "yaw_jitter_rad": yaw_jitter_rad, "seed": seed}
 
 
-def single_view_moves(campaign_dir: str | Path, n_views: int, n_moves: int, seed: int,
+def targeted_single_view_moves(campaign_dir: str | Path, n_views: int, n_moves: int, seed: int,
                       low: np.ndarray, high: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """(views (n_moves,), moves (n_moves, 4)): single-viewpoint moves drawn as the campaign's targeted trials
     draw theirs (Gaussian, ``targeted_position_sigma_m`` per axis and ``targeted_yaw_sigma_deg``: the realistic
@@ -162,7 +162,7 @@ def single_view_agreement(surrogate, campaign_dir: str | Path, *, n_moves: int =
     """Surrogate vs a jitter-averaged oracle on single-viewpoint moves from the planned path (the optimiser's
     queries; issue 18 item 2).
 
-    Moves: :func:`single_view_moves`; the other viewpoints at zero offset. The oracle's change of a move is
+    Moves: :func:`targeted_single_view_moves`; the other viewpoints at zero offset. The oracle's change of a move is
     averaged over ``jitters`` small pose jitters of every view (``position_jitter_m`` / ``yaw_jitter_rad``,
     below the UAV's tracking precision; the same jitter for the moved and the unmoved path, oracle seed 0): the
     smooth trend, not the oracle's roughness at one point. Both sides see the forecast's per-view blur (the
@@ -212,7 +212,7 @@ def single_view_oracle(surrogate, campaign_dir: str | Path, *, n_moves: int, jit
         raise InputError("single_view_agreement", f"jitters must be >= 1, got {jitters}")
     low = np.asarray(surrogate.meta.offset_low if surrogate.meta.offset_low is not None else [-2, -2, -2, -0.35])
     high = np.asarray(surrogate.meta.offset_high if surrogate.meta.offset_high is not None else [2, 2, 2, 0.35])
-    views, moves = single_view_moves(campaign_dir, n, n_moves, seed, low, high)
+    views, moves = targeted_single_view_moves(campaign_dir, n, n_moves, seed, low, high)
     offsets = np.zeros((n_moves, n, 4))
     offsets[np.arange(n_moves), views] = moves
     blur = surrogate.views.condition_reference[:, 0] if surrogate.views is not None else None

@@ -250,10 +250,6 @@ class ShipAirWake:
         the wake."""
         return self.factors(points, mean_wind)[0]
 
-    def turbulence_gain(self, points: np.ndarray, mean_wind: np.ndarray) -> np.ndarray:
-        """(n,) multiplier of the turbulence at points (n, 3): ``turbulence_ratio`` in the cavity, 1 outside."""
-        return self.factors(points, mean_wind)[1]
-
     def reference_point(self, mean_wind: np.ndarray) -> np.ndarray:
         """(3,) the lee-side reference point for one mean wind (3,): on the wind line through the box centre,
         half a cavity length behind the lee face, at half the block height; there the deficit is exactly
