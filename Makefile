@@ -27,6 +27,7 @@ run: setup
 
 test: setup
 	$(BIN)/lint-imports --no-cache
+	$(BIN)/ruff check wrp_eval tests scripts
 	$(BIN)/python -m pytest -q -p no:cacheprovider
 
 bench: setup

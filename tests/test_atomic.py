@@ -8,8 +8,14 @@ import json
 import numpy as np
 import pytest
 
-from wrp_eval.atomic import (TMP_PREFIX, atomic_path, temporaries, write_bytes_atomic, write_json_atomic,
-                             write_text_atomic)
+from wrp_eval.atomic import (
+    TMP_PREFIX,
+    atomic_path,
+    temporaries,
+    write_bytes_atomic,
+    write_json_atomic,
+    write_text_atomic,
+)
 
 
 def test_writes_create_the_folder_and_leave_no_temporary(tmp_path):

@@ -45,7 +45,8 @@ def test_wind_kernels_give_each_row_what_it_gets_alone():
     points = np.column_stack([rng.uniform(-100, 150, n), rng.uniform(-50, 120, n), rng.uniform(0, 450, n)])
     for method in ("idw", "trilinear"):
         batch = interpolate(grid, points, method, clamp=True)
-        np.testing.assert_array_equal(batch, _rows_alone(lambda p: interpolate(grid, p, method, clamp=True), points))
+        alone = _rows_alone(lambda p, m=method: interpolate(grid, p, m, clamp=True), points)
+        np.testing.assert_array_equal(batch, alone)
     wake = ShipAirWake(BOX)
     wind = rng.normal(0.0, 6.0, (n, 3))
     wind[0] = 0.0                                                    # calm: no wake
@@ -72,7 +73,7 @@ def test_control_kernels_give_each_row_what_it_gets_alone():
         return thrust, quat_d, controller.integral
 
     batch = loop(*args, integrate)
-    for got, alone in zip(batch, _rows_alone(loop, *args, integrate)):
+    for got, alone in zip(batch, _rows_alone(loop, *args, integrate), strict=True):
         np.testing.assert_array_equal(got, alone)
     rel_air = rng.normal(0, 8, (n, 3))
     np.testing.assert_array_equal(drag_force(rel_air, args[-1], PHANTOM4, 1.0, 1.225),

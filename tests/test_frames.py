@@ -7,9 +7,19 @@ import numpy as np
 import pytest
 
 from wrp_eval.errors import InputError
-from wrp_eval.frames import (ShipPose, compass_to_yaw_rad, enu_to_ship, geographic_to_enu_equirectangular,
-                             geographic_to_ship, ship_pose, ship_to_enu, ship_to_geographic, wind_velocity, wrap_180,
-                             yaw_to_compass_deg)
+from wrp_eval.frames import (
+    ShipPose,
+    compass_to_yaw_rad,
+    enu_to_ship,
+    geographic_to_enu_equirectangular,
+    geographic_to_ship,
+    ship_pose,
+    ship_to_enu,
+    ship_to_geographic,
+    wind_velocity,
+    wrap_180,
+    yaw_to_compass_deg,
+)
 from wrp_eval.ship.particulars import ShipParticulars
 
 WGS84_A = 6378137.0

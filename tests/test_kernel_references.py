@@ -11,9 +11,17 @@ from wrp_eval.sim.gimbal import Gimbal, GimbalParams, GimbalSection
 from wrp_eval.sim.navigation import NavigationEstimator, navigation_params
 from wrp_eval.sim.phases import reference_profile
 from wrp_eval.sim.vehicle import GRAVITY_M_S2, PHANTOM4
-from wrp_eval.wind.air_wake import (CAVITY_TOP_R, DECAY_EXPONENT, FACKRELL_COEF, FACKRELL_LENGTH_EXP,
-                                    FACKRELL_WIDTH_COEF, MIN_LATERAL_TAPER_R, MIN_RAMP_R, WAKE_HEIGHT_COEF,
-                                    ShipAirWake)
+from wrp_eval.wind.air_wake import (
+    CAVITY_TOP_R,
+    DECAY_EXPONENT,
+    FACKRELL_COEF,
+    FACKRELL_LENGTH_EXP,
+    FACKRELL_WIDTH_COEF,
+    MIN_LATERAL_TAPER_R,
+    MIN_RAMP_R,
+    WAKE_HEIGHT_COEF,
+    ShipAirWake,
+)
 from wrp_eval.wind.grid import WindGrid, interpolate
 
 RNG = np.random.default_rng(19)
@@ -132,7 +140,7 @@ def test_air_wake_factors_equal_the_numpy_formulas():
     wind[:4] = 0.0                                       # calm
     wind[4:8, 1] = 0.0                                   # along the ship: no limit across
     wind[8:12, 0] = 0.0                                  # beam on
-    for got, want in zip(wake.factors(points, wind), _factors_reference(wake, points, wind)):
+    for got, want in zip(wake.factors(points, wind), _factors_reference(wake, points, wind), strict=True):
         _same(got, want)
 
 
@@ -205,11 +213,11 @@ def test_speed_profiles_equal_the_numpy_formulas():
     v0, v1 = RNG.uniform(0, 5, n + 4), RNG.uniform(0, 5, n + 4)
     v_max = np.maximum(np.maximum(v0, v1), RNG.uniform(0, 6, n + 4))
     for got, want in zip(through_profile(length, tau, v0, v1, v_max, 2.5),
-                         _through_reference(length, tau, v0, v1, v_max, 2.5)):
+                         _through_reference(length, tau, v0, v1, v_max, 2.5), strict=True):
         _same(got, want)
     for t_jerk in (0.0, 0.625):
         for got, want in zip(reference_profile(length, tau, 5.0, 2.5, t_jerk),
-                             _rest_to_rest_reference(length, tau, 5.0, 2.5, t_jerk)):
+                             _rest_to_rest_reference(length, tau, 5.0, 2.5, t_jerk), strict=True):
             _same(got, want, atol=1e-11)
 
 

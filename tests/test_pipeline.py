@@ -36,7 +36,8 @@ def test_run_writes_report_recording_and_missions_and_is_reproducible(tmp_path, 
     assert "rerun logs/pipeline-test/run.rrd" in printed and "logs/pipeline-test/report.md" in printed
     report = (out / "report.md").read_text()
     assert report.split("\n## ")[1].startswith("Go / no-go")           # the operator's first page
-    for heading in ("## Go / no-go", "### Wind envelope", "**Earth frame**", "## Ship and path", "## Monte Carlo campaign", "## Surrogate", "## ISWRP and SWRP",
+    for heading in ("## Go / no-go", "### Wind envelope", "**Earth frame**", "## Ship and path",
+                    "## Monte Carlo campaign", "## Surrogate", "## ISWRP and SWRP",
                     "## Robustness", "## Per-view risk", "## Missions"):
         assert heading in report
     for png in ("figures/ship_path.png", "figures/wind_field.png", "figures/offsets.png", "figures/view_risk.png",

@@ -10,14 +10,15 @@ def test_children_are_the_spawned_ones_and_leave_the_source_untouched():
     seq = np.random.SeedSequence(5)
     ours = [g.standard_normal(4) for g in children(seq, 3)]
     spawned = [np.random.default_rng(s).standard_normal(4) for s in np.random.SeedSequence(5).spawn(3)]
-    assert all(np.array_equal(a, b) for a, b in zip(ours, spawned))
+    assert all(np.array_equal(a, b) for a, b in zip(ours, spawned, strict=True))
     assert seq.n_children_spawned == 0
     again = [g.standard_normal(4) for g in flight_generators(seq, 3)]     # the same object twice: same numbers
-    assert all(np.array_equal(a, b) for a, b in zip(ours, again))
+    assert all(np.array_equal(a, b) for a, b in zip(ours, again, strict=True))
     gen = np.random.default_rng(7)
     first = [g.standard_normal(2) for g in children(gen, 2)]
-    assert all(np.array_equal(a, b.standard_normal(2)) for a, b in zip(first, np.random.default_rng(7).spawn(2)))
-    assert all(np.array_equal(a, b.standard_normal(2)) for a, b in zip(first, children(gen, 2)))
+    assert all(np.array_equal(a, b.standard_normal(2))
+               for a, b in zip(first, np.random.default_rng(7).spawn(2), strict=True))
+    assert all(np.array_equal(a, b.standard_normal(2)) for a, b in zip(first, children(gen, 2), strict=True))
 
 
 def test_block_normals_do_not_depend_on_the_chunking():

@@ -12,8 +12,8 @@ from wrp_eval.config import ExperimentConfig, load_experiment
 from wrp_eval.errors import InputError
 from wrp_eval.planning.path import FlightPath
 from wrp_eval.study.runner import deep_merge, random_offsets, variant_configs
-from wrp_eval.wrp.optimize import apply_offsets, offset_totals
 from wrp_eval.validation import parse_model
+from wrp_eval.wrp.optimize import apply_offsets, offset_totals
 
 PAPER = Path(__file__).resolve().parents[1] / "experiments" / "paper"
 STUDY = {"columns": ["views", "error_m"], "variants": [{"name": "a"}]}
@@ -95,8 +95,7 @@ def test_offset_rows_move_positions_and_wrap_yaw(stylized_path):
 
 @pytest.fixture(scope="module")
 def stylized_path():
-    from wrp_eval.planning.planner import planning_rng
-    from wrp_eval.planning.planner import plan
+    from wrp_eval.planning.planner import plan, planning_rng
     from wrp_eval.ship.config import ShipSection
     from wrp_eval.ship.resolve import resolve_ship_full
     ship = resolve_ship_full(ShipSection())
@@ -206,7 +205,7 @@ def test_table3_smallest_shares_one_surrogate_across_the_eight_wrps(tmp_path, mo
     assert doc["rows"][0]["ours"]["error_m"] == pytest.approx(e0)      # the initial path's error is E_original
     variants = load_experiment(PAPER / "table3.yaml").study.variants[1:]
     assert [r["variant"] for r in doc["rows"][1:]] == [v.name for v in variants]
-    for ours, variant in zip(wrp, variants):   # each variant's threshold fraction reached its optimisation
+    for ours, variant in zip(wrp, variants, strict=True):   # each variant's threshold fraction reached its optimisation
         assert ours["threshold_m"] == pytest.approx(variant.overrides["wrp"]["threshold_fraction"] * e0)
         assert 0 <= ours["offset_rate_pct"] <= 100 and ours["wrp_time_s"] > 0
     assert [r["path"] for r in doc["rows"]] == ["plan"] + ["iswrp"] * 3 + ["swrp"] * 3 + ["iswrp", "swrp"]

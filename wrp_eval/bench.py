@@ -52,9 +52,6 @@ def run_groups(groups: list[str], out_dir: Path) -> list[dict]:
         doc = {"group": group, "created_unix": time.time(), "wall_s": time.perf_counter() - start,
                "environment": environment(), "records": [asdict(r) for r in records]}
         write_text_atomic(out_dir / f"{group}.json", json.dumps(doc, indent=1))
-        for r in records:
-            anchor = f"  (anchor {r.anchor}: {r.anchor_value})" if r.anchor is not None else ""
-            print(f"{r.name:34s} {r.value:14.6g} {r.unit}{anchor}")
         all_records.extend(doc["records"])
     return all_records
 

@@ -11,6 +11,7 @@ the same config reuses the stored trials (same config and seed give the same num
 
 from __future__ import annotations
 
+import logging
 import time
 
 from wrp_eval.atomic import write_json_atomic
@@ -31,6 +32,8 @@ from wrp_eval.surrogate.train import CHECKPOINT_NAME, train_from_campaign
 from wrp_eval.wrp.jobs import EVALUATED_PATHS, evaluate_job
 from wrp_eval.wrp.risk import campaign_flown_offsets, save_risk_recording, view_risk
 
+log = logging.getLogger(__name__)
+
 
 class Step:
     """Prints one line per step with its wall time (the job's progress on a terminal and in CI logs)."""
@@ -39,14 +42,14 @@ class Step:
         self.timings, self.name, self.what = timings, name, what
 
     def __enter__(self):
-        print(f"[wrp-eval run] {self.name}: {self.what} ...", flush=True)
+        log.info(f"[wrp-eval run] {self.name}: {self.what} ...")
         self.start = time.perf_counter()
         return self
 
     def __exit__(self, *exc):
         self.timings[self.name] = time.perf_counter() - self.start
         if exc[0] is None:
-            print(f"[wrp-eval run] {self.name}: done in {self.timings[self.name]:.1f} s", flush=True)
+            log.info(f"[wrp-eval run] {self.name}: done in {self.timings[self.name]:.1f} s")
         return False
 
 

@@ -52,7 +52,8 @@ def ship_path_figure(mesh, path, file: Path, risk_m: np.ndarray | None = None) -
     above = mesh.triangles_center[:, 2] > 0
     light = np.array([0.3, -0.5, 0.8]) / np.linalg.norm([0.3, -0.5, 0.8])
     shade = 0.35 + 0.65 * np.clip(mesh.face_normals[above] @ light, 0, 1)
-    ax.add_collection3d(Poly3DCollection(mesh.triangles[above], facecolors=matplotlib.colormaps["gray"](shade), linewidths=0))
+    ax.add_collection3d(Poly3DCollection(mesh.triangles[above], facecolors=matplotlib.colormaps["gray"](shade),
+                                         linewidths=0))
     p = path.positions
     ax.plot(p[:, 0], p[:, 1], p[:, 2], "-", color="0.4", lw=0.8)
     transition = path.kind == 1
@@ -89,7 +90,7 @@ def offsets_figure(offsets: np.ndarray, file: Path) -> Path:
     flat = flat[np.all(np.isfinite(flat), axis=1)]
     fig = Figure(figsize=(14, 3.2))
     axes = fig.subplots(1, 4)
-    for ax, k, name in zip(axes, range(4), ("dx (m)", "dy (m)", "dz (m)", "dyaw (deg)")):
+    for ax, k, name in zip(axes, range(4), ("dx (m)", "dy (m)", "dz (m)", "dyaw (deg)"), strict=True):
         values = np.degrees(flat[:, k]) if k == 3 else flat[:, k]
         ax.hist(values, bins=60, color="tab:blue")
         ax.set_xlabel(name)
@@ -178,7 +179,8 @@ def envelope_section(env: Envelope, path_name: str, figure: str, risk_figure: st
             f"*{cell.decision}* (GO needs its lower bound {_ci(cell.repeated_ci)} >= {rule['threshold']:g}).", "",
             "| at the forecast | P(completed) | expected sorties | mission time (s) | views lost (mean) | "
             "mean error (mm) | p95 error (mm) |", "|---|---|---|---|---|---|---|",
-            f"| {cell.direction} {cell.speed_m_s:g} m/s | {fmt(cell.p_completed, 3)} | {fmt(cell.expected_sorties, 3)} | "
+            f"| {cell.direction} {cell.speed_m_s:g} m/s | {fmt(cell.p_completed, 3)} | "
+            f"{fmt(cell.expected_sorties, 3)} | "
             f"{fmt(cell.mission_time_s, 4)} | {fmt(cell.views_lost, 2)} | {fmt(1e3 * cell.error_mean_m, 4)} | "
             f"{fmt(1e3 * cell.error_p95_m, 4)} |", ""]
     lines += ["### Wind envelope", "", f"![envelope]({figure})", "",

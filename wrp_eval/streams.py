@@ -58,7 +58,7 @@ class BlockNormals:
             if self._cursor >= self._block.shape[1]:
                 if self._block.shape[1] != self.block_steps:
                     self._block = np.empty((len(self.rngs), self.block_steps, self.width))
-                for row, g in zip(self._block, self.rngs):    # per flight: its own stream, into the buffer
+                for row, g in zip(self._block, self.rngs, strict=True):    # per flight: its own stream, into the buffer
                     g.standard_normal(out=row)
                 self._cursor = 0
             take = min(n_steps - filled, self._block.shape[1] - self._cursor)

@@ -5,10 +5,10 @@ from __future__ import annotations
 
 import numpy as np
 
-from wrp_eval.campaign.records import column_array
 from wrp_eval.campaign.jobs import campaign_job
-from wrp_eval.experiment import ExperimentContext
+from wrp_eval.campaign.records import column_array
 from wrp_eval.campaign.store import TrialStore
+from wrp_eval.experiment import ExperimentContext
 
 
 def test_flights_are_batch_independent_and_recorded(tmp_path, tiny_path, make_config, comparable):

@@ -11,8 +11,8 @@ from wrp_eval.campaign.store import TrialStore
 from wrp_eval.errors import InputError
 
 
-
-def test_resume_skips_stored_trials_and_never_duplicates(tmp_path, path_file, make_config, comparable, run_analytic, tiny_path):
+def test_resume_skips_stored_trials_and_never_duplicates(tmp_path, path_file, make_config, comparable, run_analytic,
+                                                         tiny_path):
     first = run_analytic(make_config(path_file, n_trials=6), tmp_path / "c")
     assert (first.done, first.ran) == (6, 6)
     again = run_analytic(make_config(path_file, n_trials=6), tmp_path / "c")
@@ -32,7 +32,8 @@ def test_results_do_not_depend_on_batching(tmp_path, path_file, make_config, com
     assert comparable(TrialStore(a.out_dir).read_table()) == comparable(TrialStore(b.out_dir).read_table())
 
 
-def test_a_raising_trial_is_recorded_failed_with_its_error_and_the_rest_goes_on(tmp_path, path_file, make_config, comparable, run_analytic, tiny_path):
+def test_a_raising_trial_is_recorded_failed_with_its_error_and_the_rest_goes_on(tmp_path, path_file, make_config,
+                                                                                comparable, run_analytic, tiny_path):
     config = make_config(path_file, n_trials=9, batch_size=3, backend={"max_attempts": 3})
     summary = run_analytic(config, tmp_path / "c", fail_trial_ids=[4])
     assert (summary.done, summary.failed, summary.errors) == (9, 1, 1)
@@ -72,6 +73,7 @@ def test_settings_outside_the_flight_do_not_orphan_stored_trials(tmp_path, path_
     """Retuning the surrogate or the optimiser keeps the campaign; so does a folder written before a setting
     with an old-behaviour default was added (its stored config is validated again by today's model)."""
     import json
+
     from wrp_eval.config import ExperimentConfig
     out = tmp_path / "c"
     first = run_analytic(make_config(path_file, n_trials=3), out)

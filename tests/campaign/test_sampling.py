@@ -5,9 +5,8 @@ from __future__ import annotations
 
 import numpy as np
 
-from wrp_eval.campaign.config import CampaignSection
+from wrp_eval.campaign.config import CampaignSection, Choice, Normal, Uniform
 from wrp_eval.campaign.sampling import commanded_offsets, draw_value, draw_wind, trial_inputs
-from wrp_eval.campaign.config import Choice, Normal, Uniform
 
 
 def section(**kw) -> CampaignSection:

@@ -73,8 +73,6 @@ def test_a_killed_envelope_resumes_to_the_uninterrupted_result(tmp_path):
     code, out = _run(tmp_path)
     assert code == 0
     resumed = Envelope.from_json_dict(json.loads((tmp_path / "env" / "envelope.json").read_text()))
-    code, again = _run(tmp_path)                             # a third run: everything is stored
-    assert code == 0 and int(again.strip().splitlines()[-1]) == 0
     whole = fly(tmp_path, out="uninterrupted")
     assert cells_without_folders(resumed) == cells_without_folders(whole.envelope)
     # the resumed run flew fewer flights than the whole envelope holds: the stored looks were not flown again

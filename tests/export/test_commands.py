@@ -8,8 +8,8 @@ import numpy as np
 import pytest
 
 from wrp_eval.cli import main
-from wrp_eval.frames import ShipPose, geographic_to_ship
 from wrp_eval.export.qgc import read_qgc_plan
+from wrp_eval.frames import ShipPose, geographic_to_ship
 
 
 @pytest.fixture

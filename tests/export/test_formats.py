@@ -4,8 +4,8 @@ from __future__ import annotations
 
 import dataclasses
 import json
-import zipfile
 import xml.etree.ElementTree as ET
+import zipfile
 
 import numpy as np
 import pytest
@@ -15,8 +15,8 @@ from wrp_eval.export.config import ExportSection
 from wrp_eval.export.dji import KML_NS, WPML_NS
 from wrp_eval.export.formats import FORMATS, export_path, sortie_files, write_all_atomic
 from wrp_eval.export.mission import FlightStyle, build_missions, home_point
-from wrp_eval.frames import compass_to_yaw_rad, geographic_to_ship, ship_pose, wrap_180
 from wrp_eval.export.qgc import qgc_plan_bytes
+from wrp_eval.frames import compass_to_yaw_rad, geographic_to_ship, ship_pose, wrap_180
 from wrp_eval.ship.nofly import inside_no_fly_box
 
 
@@ -185,7 +185,7 @@ def test_home_point_sets_altitude_reference(ship, path, tmp_path):
 def test_readers_refuse_garbage(tmp_path):
     junk = tmp_path / "junk.bin"
     junk.write_bytes(b"\x00\x01 not a mission")
-    for fmt, spec in FORMATS.items():
+    for spec in FORMATS.values():
         with pytest.raises(InputError):
             spec.read(junk)
 

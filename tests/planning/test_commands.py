@@ -6,11 +6,11 @@ import pytest
 
 from wrp_eval.atomic import temporaries
 from wrp_eval.cli import main
+from wrp_eval.config import ExperimentConfig
 from wrp_eval.errors import InputError
+from wrp_eval.planning.config import PlanningSection
 from wrp_eval.planning.path import FlightPath
 from wrp_eval.validation import parse_model
-from wrp_eval.config import ExperimentConfig
-from wrp_eval.planning.config import PlanningSection
 
 
 def test_path_json_round_trip(plans, tmp_path):
@@ -74,8 +74,9 @@ def test_cli_bad_config_exits_2(tmp_path, capsys):
 
 
 def test_rerun_recording_is_written(plans, proxies, tmp_path):
-    from wrp_eval.planning.rerun_log import save_plan_recording
     from rerun.chunk import RrdReader
+
+    from wrp_eval.planning.rerun_log import save_plan_recording
     result = plans[("stylized", "ours")]
     moved = dataclasses.replace(result.path, positions=result.path.positions + [0.0, 0.0, 1.0])
     out = save_plan_recording(result, proxies["stylized"], tmp_path / "plan.rrd", other_paths={"wrp": moved})

@@ -1,8 +1,7 @@
 import numpy as np
 import pytest
 
-from wrp_eval.planning.reconstructability import (SlotTable, pair_reconstructability_points,
-                                                  set_reconstructability)
+from wrp_eval.planning.reconstructability import SlotTable, pair_reconstructability_points, set_reconstructability
 
 
 def _q_by_hand(alpha, d, d_max, theta_m):

@@ -1,8 +1,16 @@
 import numpy as np
 import pytest
 
-from wrp_eval.planning.tour import (detour_waypoints, flight_costs, local_search, open_at_longest_edge,
-                                    solve_genetic, solve_multistart, solve_ortools, tour_length)
+from wrp_eval.planning.tour import (
+    detour_waypoints,
+    flight_costs,
+    local_search,
+    open_at_longest_edge,
+    solve_genetic,
+    solve_multistart,
+    solve_ortools,
+    tour_length,
+)
 from wrp_eval.ship.nofly import segments_intrude
 
 BOX = np.array([[-10.0, -5.0, 0.0], [10.0, 5.0, 20.0]])

@@ -49,6 +49,6 @@ def test_views_inside_the_no_fly_box_are_pushed_out_along_their_ray(stylized_pro
 
 
 def test_every_candidate_is_safe(plans, proxies):
-    for (ship, method), result in plans.items():
+    for (ship, _method), result in plans.items():
         if result.candidates is not None:
             assert flyable(result.candidates.positions, proxies[ship].no_fly_bounds(), 5.0).all()

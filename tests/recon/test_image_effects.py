@@ -5,9 +5,17 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from wrp_eval.recon.image_effects import (SIFT_BASE_SCALE_PX, blur_keypoint_fraction, border_weight,
-                                          incidence_weight, keypoint_fraction, parallax_weights,
-                                          patch_match_probability, pixel_noise_px, texture_keypoint_fraction)
+from wrp_eval.recon.image_effects import (
+    SIFT_BASE_SCALE_PX,
+    blur_keypoint_fraction,
+    border_weight,
+    incidence_weight,
+    keypoint_fraction,
+    parallax_weights,
+    patch_match_probability,
+    pixel_noise_px,
+    texture_keypoint_fraction,
+)
 
 
 def test_sharp_image_keeps_everything_and_half_a_pixel_changes_almost_nothing():

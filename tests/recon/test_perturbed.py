@@ -5,6 +5,7 @@ from __future__ import annotations
 
 import dataclasses
 import json
+import logging
 from collections import Counter
 from pathlib import Path
 
@@ -15,9 +16,16 @@ from wrp_eval.cli import main
 from wrp_eval.experiment import ExperimentContext
 from wrp_eval.planning.path import FlightPath
 from wrp_eval.recon.capture_io import captures_from_path
-from wrp_eval.recon.perturbed import (BLUR_PX, BLUR_SHARES, HEADING_BIAS_DEG, NAV_DRIFT_RMS_M, drift_shape,
-                                      flight_capture_sets, flown_capture_sets, perturbed_capture_sets,
-                                      recorded_blur_sets)
+from wrp_eval.recon.perturbed import (
+    BLUR_PX,
+    BLUR_SHARES,
+    HEADING_BIAS_DEG,
+    NAV_DRIFT_RMS_M,
+    drift_shape,
+    flight_capture_sets,
+    perturbed_capture_sets,
+    recorded_blur_sets,
+)
 from wrp_eval.recon.scenarios import reference_capture_set
 
 
@@ -49,13 +57,13 @@ def _arrays(cs):
 
 def test_deterministic_from_the_seed(path):
     a, b, c = (perturbed_capture_sets(path, seed=s) for s in (4, 4, 5))
-    for (na, _, ca), (nb, _, cb) in zip(a, b):
+    for (na, _, ca), (nb, _, cb) in zip(a, b, strict=True):
         assert na == nb
-        for x, y in zip(_arrays(ca), _arrays(cb)):
+        for x, y in zip(_arrays(ca), _arrays(cb), strict=True):
             np.testing.assert_array_equal(x, y)
     moved_a = [cs.positions for _, kind, cs in a if kind in ("single_view", "nav_drift")]
     moved_c = [cs.positions for _, kind, cs in c if kind in ("single_view", "nav_drift")]
-    assert not all(np.array_equal(x, y) for x, y in zip(moved_a, moved_c))
+    assert not all(np.array_equal(x, y) for x, y in zip(moved_a, moved_c, strict=True))
 
 
 def test_single_view_sets_move_exactly_one_view(path):
@@ -80,7 +88,7 @@ def test_nav_drift_flies_off_the_plan_and_records_the_plan(path):
     drift = [(name, cs) for name, kind, cs in perturbed_capture_sets(path, seed=2) if kind == "nav_drift"]
     assert len(drift) == len(NAV_DRIFT_RMS_M)
     shapes = []
-    for (name, cs), rms in zip(drift, NAV_DRIFT_RMS_M):
+    for (_name, cs), rms in zip(drift, NAV_DRIFT_RMS_M, strict=True):
         np.testing.assert_array_equal(cs.prior_positions, path.positions)  # what the GNSS believed: the plan
         d = cs.positions - path.positions
         assert np.all(np.linalg.norm(d, axis=1) > 0)
@@ -104,7 +112,7 @@ def test_heading_bias_and_blur_sets(path):
         blurred = [sets[f"blur_{px:g}px_{100 * share:g}pct"][1] for px in BLUR_PX]
         chosen = blurred[0].blur() > 0
         assert chosen.sum() == round(share * len(path))  # the share of the views, the same views at every length
-        for px, cs in zip(BLUR_PX, blurred):
+        for px, cs in zip(BLUR_PX, blurred, strict=True):
             np.testing.assert_array_equal(cs.blur(), np.where(chosen, px, 0.0))
             np.testing.assert_array_equal(cs.positions, path.positions)
 
@@ -113,7 +121,7 @@ def test_drop_sets_leave_out_exactly_one_view_each(path):
     drops = [cs for _, kind, cs in perturbed_capture_sets(path, seed=0) if kind == "drop"]
     missing = [sorted(set(range(len(path))) - set(cs.planned_index.tolist())) for cs in drops]
     assert all(len(m) == 1 for m in missing) and len({m[0] for m in missing}) == len(drops) == 6
-    for cs, (view,) in zip(drops, missing):
+    for cs, (view,) in zip(drops, missing, strict=True):
         keep = np.arange(len(path)) != view
         np.testing.assert_array_equal(cs.positions, path.positions[keep])
 
@@ -217,7 +225,7 @@ def test_perturbed_bad_input_exits_2(config_file, tmp_path, capsys):
     assert "--flights" in capsys.readouterr().err
 
 
-def test_an_oracle_that_raises_leaves_a_row_without_figures(capsys):
+def test_an_oracle_that_raises_leaves_a_row_without_figures(caplog):
     from wrp_eval.recon.validate import _evaluate_or_error, perturbed_row
 
     class Broken:
@@ -226,12 +234,13 @@ def test_an_oracle_that_raises_leaves_a_row_without_figures(capsys):
 
     errors = []
     cs = reference_capture_set(6)
-    res = _evaluate_or_error(Broken(), cs, None, 0, "x: synthetic", errors)
+    with caplog.at_level(logging.INFO, logger="wrp_eval"):
+        res = _evaluate_or_error(Broken(), cs, None, 0, "x: synthetic", errors)
     row = perturbed_row("x", "blur", cs, res, None)
     assert row["synthetic_error_m"] is None and row["synthetic_hole_part_m"] is None
     assert row["synthetic_reason"] == "oracle error: ValueError: no keypoints"
     assert errors == ["x: synthetic: oracle error: ValueError: no keypoints"]
-    assert "no keypoints" in capsys.readouterr().out
+    assert "no keypoints" in caplog.text
 
 
 def test_jitter_rows_set_the_noise_floor_not_the_agreement():

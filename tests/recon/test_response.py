@@ -3,7 +3,7 @@
 import numpy as np
 import pytest
 
-from wrp_eval.recon.response import oracle_response, shifted, box_single_view_moves
+from wrp_eval.recon.response import box_single_view_moves, oracle_response, shifted
 from wrp_eval.recon.scenarios import reference_capture_set, ship_like_mesh
 from wrp_eval.recon.synthetic import SyntheticOracle
 

@@ -81,7 +81,7 @@ def test_disconnected_view_groups_fail(registration, detail):
     long_box = make_box((90.0, 6.0, 6.0), (0.0, 0.0, 1.0))
     # three groups of three views 15 m off the port side, each group photographing its own 10 m patch
     positions = [[x + dx, 15.0, h] for x in (-40.0, 0.0, 40.0) for dx, h in ((-4, 3.0), (0, 6.0), (4, 3.0))]
-    targets = [[p[0] - dx, 3.0, 1.5] for p, dx in zip(positions, [-4, 0, 4] * 3)]
+    targets = [[p[0] - dx, 3.0, 1.5] for p, dx in zip(positions, [-4, 0, 4] * 3, strict=True)]
     section = OracleSection(synthetic=SyntheticOracleSection(rays_x=40, rays_y=27, registration=registration))
     result = SyntheticOracle(section).evaluate(_views_at(positions, targets), long_box, seed=0)
     assert result.failed

@@ -5,8 +5,14 @@ from __future__ import annotations
 import numpy as np
 
 from wrp_eval.planning.tour import flight_costs
-from wrp_eval.ship.nofly import (EDGE_TOLERANCE_M, above_min_altitude, flyable, inside_no_fly_box, leg_flyable,
-                                 segments_intrude)
+from wrp_eval.ship.nofly import (
+    EDGE_TOLERANCE_M,
+    above_min_altitude,
+    flyable,
+    inside_no_fly_box,
+    leg_flyable,
+    segments_intrude,
+)
 from wrp_eval.ship.particulars import ShipParticulars, ShipType
 from wrp_eval.ship.proxy import build_proxy
 
@@ -42,7 +48,8 @@ def test_segment_slab_test_cases():
     ]
     starts, ends, want = (np.array([c[k] for c in cases], dtype=float) for k in range(3))
     np.testing.assert_array_equal(segments_intrude(starts, ends, BOX), want.astype(bool))
-    assert segments_intrude(np.broadcast_to(starts, (3, 12, 3)), np.broadcast_to(ends, (3, 12, 3)), BOX).shape == (3, 12)
+    intrude = segments_intrude(np.broadcast_to(starts, (3, 12, 3)), np.broadcast_to(ends, (3, 12, 3)), BOX)
+    assert intrude.shape == (3, 12)
 
 
 def test_random_segments_agree_with_dense_sampling():

@@ -19,10 +19,10 @@ from wrp_eval.sim.navigation import (
     K95_2D,
     NavigationEstimator,
     NavigationSection,
-    hover_p95_spec_m,
-    navigation_params,
     fusion_gain,
+    hover_p95_spec_m,
     inertial_error_step,
+    navigation_params,
     near_hull_taper,
     px4_plugin_gm,
 )
@@ -141,7 +141,7 @@ def test_row_of_a_batch_equals_the_flight_alone(estimator):
         pos, vel, yaw, d = rng.normal(size=(3, 3)), rng.normal(size=(3, 3)), rng.normal(size=3), 30 * rng.random(3)
         a = batch.estimate(k * DT, pos, vel, yaw, d)
         b = alone.estimate(k * DT, pos[1:2], vel[1:2], yaw[1:2], d[1:2])
-        for x, y in zip(a, b):
+        for x, y in zip(a, b, strict=True):
             np.testing.assert_array_equal(x[1:2], y)
 
 
@@ -220,7 +220,7 @@ def test_fused_estimate_is_smooth_where_raw_fixes_step_and_keeps_the_gm_offset()
 def test_same_seed_same_numbers_other_seed_other_numbers():
     params = navigation_params(NavigationSection(preset="consumer"))
     a, b, c = (run(NavigationEstimator(params, s, 3, DT, block_steps=b), 30) for s, b in ((5, 8), (5, 64), (6, 8)))
-    for x, y in zip(a, b):
+    for x, y in zip(a, b, strict=True):
         np.testing.assert_array_equal(x, y)
     assert not np.array_equal(a[0], c[0])
 

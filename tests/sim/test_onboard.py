@@ -184,7 +184,7 @@ def test_consumer_navigation_errors_are_nearly_constant_over_a_flight():
     moved = (res.offsets[..., :2] - ideal.offsets[..., :2])[:, 1:]
     large = np.abs(horizontal[:, 1:]).min(axis=1) > 0.6                # (batch, 2): clearly beyond the noise
     assert large.sum() >= 4
-    for i, axis in zip(*np.nonzero(large)):
+    for i, axis in zip(*np.nonzero(large), strict=True):
         assert np.all(np.sign(moved[i, :, axis]) == -np.sign(horizontal[i, 1:, axis]))
         ratio = moved[i, 1:, axis] / moved[i, :-1, axis]
         assert np.all((ratio > 0.5) & (ratio < 2.0))
@@ -238,10 +238,12 @@ def test_a_battery_return_is_followed_by_a_swap_and_a_sortie_resumed_at_the_brea
     path = make_path(6)
     capacity_wh, swap_s = 0.9, 20.0            # about 16 s of flight above the 15 % reserve per battery
     # capacity sized for fly-through (the mode it was written for; the default is stop since issue 26)
-    with _simulator(navigation={"preset": "ideal"}, battery={"capacity_wh": capacity_wh}, capture={"mode": "fly-through"},
+    with _simulator(navigation={"preset": "ideal"}, battery={"capacity_wh": capacity_wh},
+                    capture={"mode": "fly-through"},
                     mission={"max_sorties": 10, "swap_time_s": swap_s}) as sim:
         swapped = sim.fly(path, CALM, batch=1)
-    with _simulator(navigation={"preset": "ideal"}, battery={"capacity_wh": capacity_wh}, capture={"mode": "fly-through"},
+    with _simulator(navigation={"preset": "ideal"}, battery={"capacity_wh": capacity_wh},
+                    capture={"mode": "fly-through"},
                     mission={"max_sorties": 1}) as sim:
         single = sim.fly(path, CALM, batch=1)
     assert single.outcome.tolist() == [RETURNED_BATTERY] and single.sorties.tolist() == [1]
@@ -319,7 +321,7 @@ def test_a_flight_does_not_depend_on_its_batch():
         alone = [sim.fly(path, wind, batch=1, ship=ship, flight_rngs=[generators()[i]]) for i in (0, 2)]
     assert not batch.failed.any() and batch.taken.all()
     assert not np.allclose(batch.offsets[0], batch.offsets[2])          # the flights differ ...
-    for i, res in zip((0, 2), alone):                                   # ... each as it would alone
+    for i, res in zip((0, 2), alone, strict=True):                                   # ... each as it would alone
         for name in ("offsets", "estimated_offsets", "capture_time_s", "blur_px", "ship_motion", "camera_roll",
                      "battery_charge"):
             assert np.array_equal(getattr(res, name)[0], getattr(batch, name)[i], equal_nan=True), name

@@ -19,9 +19,9 @@ def make_campaign(folder, n_trials: int, n_views: int, seed: int = 0, nan_trials
     """A campaign folder written through the campaign stage's own store: commanded offsets in a box, a
     wind-induced deviation of known spread (0.3 m per axis, normal), error from the known function; the
     default trial config (its ship gives the per-view coverage)."""
-    from wrp_eval.planning.path import digest_of_document as path_digest
     from wrp_eval.campaign.config import TrialConfig
     from wrp_eval.campaign.store import TrialStore
+    from wrp_eval.planning.path import digest_of_document as path_digest
     from wrp_eval.surrogate.data import known_function, known_function_trials
     rng = np.random.default_rng(seed)
     path = make_path(n_views)

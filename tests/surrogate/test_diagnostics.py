@@ -83,6 +83,7 @@ def test_ceiling_needs_two_repeats(campaign_dir):
 @pytest.mark.slow
 def test_single_view_agreement_scores_one_viewpoint_moves_with_both(campaign_dir):
     from wrp_eval.surrogate.diagnostics import campaign_oracle, single_view_agreement, targeted_single_view_moves
+
     from .conftest import random_surrogate
     scorer, _ = campaign_oracle(campaign_dir)
     n = len(scorer.planned)
@@ -97,7 +98,7 @@ def test_single_view_agreement_scores_one_viewpoint_moves_with_both(campaign_dir
     rng = np.random.default_rng(np.random.SeedSequence(2, spawn_key=(1,)))
     jit = np.concatenate([rng.normal(0, 0.02, (2, n, 3)), rng.normal(0, 0.002, (2, n, 1))], axis=2)
     changes, predicted = [], []
-    for view, move in zip(views, moves):
+    for view, move in zip(views, moves, strict=True):
         offsets = np.zeros((n, 4))
         offsets[view] = move
         changes.append(np.mean([scorer.error(offsets + j, 0) - scorer.error(j, 0) for j in jit]))

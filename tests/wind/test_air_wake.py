@@ -115,7 +115,7 @@ def test_the_wake_turns_with_the_wind():
     pts = np.column_stack([rng.uniform(-150, 150, (500, 2)), rng.uniform(0.5, 40, 500)])
     turn = np.array([[0.0, -1.0, 0.0], [1.0, 0.0, 0.0], [0.0, 0.0, 1.0]])
     wind = _wind(200.0)
-    for a, b in zip(square.factors(pts, wind), square.factors(pts @ turn.T, turn @ wind)):
+    for a, b in zip(square.factors(pts, wind), square.factors(pts @ turn.T, turn @ wind), strict=True):
         np.testing.assert_allclose(a, b, atol=1e-12)
     assert np.count_nonzero(square.deficit(pts, wind)) > 20
     ship = ShipAirWake(BOX)
@@ -218,7 +218,8 @@ def test_each_flight_in_the_wake_flies_the_wind_it_would_fly_alone():
         {"direction_deg": 135.0, "turbulence": {"severity": "severe"}, "gusts": {"enabled": True}},
     )]
     batch = build_wind_field(sections, SHIP, np.random.default_rng(5).spawn(3), 0.05)
-    alone = [build_wind_field([s], SHIP, [g], 0.05) for s, g in zip(sections, np.random.default_rng(5).spawn(3))]
+    alone = [build_wind_field([s], SHIP, [g], 0.05)
+             for s, g in zip(sections, np.random.default_rng(5).spawn(3), strict=True)]
     rng = np.random.default_rng(1)
     sheltered = 0
     for k in range(60):

@@ -5,8 +5,13 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from wrp_eval.wind.boundary_layer import (GRAVITY_MPS2, VON_KARMAN, charnock_roughness, log_law_factor,
-                                          synthetic_marine_grid)
+from wrp_eval.wind.boundary_layer import (
+    GRAVITY_MPS2,
+    VON_KARMAN,
+    charnock_roughness,
+    log_law_factor,
+    synthetic_marine_grid,
+)
 from wrp_eval.wind.grid import interpolate
 
 

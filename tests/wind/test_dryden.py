@@ -7,8 +7,16 @@ import pytest
 from scipy.integrate import quad
 from scipy.signal import cont2discrete, welch
 
-from wrp_eval.wind.dryden import (FT_M, DrydenTurbulence, _zoh, continuous_filters, dryden_parameters,
-                                  dryden_psd, rotate_to_world, severity_w20_mps)
+from wrp_eval.wind.dryden import (
+    FT_M,
+    DrydenTurbulence,
+    _zoh,
+    continuous_filters,
+    dryden_parameters,
+    dryden_psd,
+    rotate_to_world,
+    severity_w20_mps,
+)
 
 
 def test_parameters_hand_computed_at_100_ft():
@@ -25,7 +33,7 @@ def test_parameters_hand_computed_at_100_ft():
 def test_psd_integrates_to_sigma_squared_and_matches_filters():
     sigma, length, V = np.array([1.3, 1.3, 0.8]), np.array([150.0, 150.0, 30.0]), 7.0
     for axis in range(3):
-        total, _ = quad(lambda w: dryden_psd(np.array([w]), sigma, length, V)[0, axis], 0, np.inf, limit=400)
+        total, _ = quad(lambda w, a=axis: dryden_psd(np.array([w]), sigma, length, V)[0, a], 0, np.inf, limit=400)
         assert total == pytest.approx(sigma[axis] ** 2, rel=1e-6)
     w = np.logspace(-3, 2, 50)
     for axis, (A, B, C, D) in enumerate(continuous_filters(sigma, length, V)):

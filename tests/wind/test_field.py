@@ -77,7 +77,7 @@ def test_each_flight_flies_the_field_it_would_fly_alone_across_sources_and_times
     )]
     batch = build_wind_field(sections, SHIP, np.random.default_rng(5).spawn(5), 0.05, wrf_path.parent)
     alone = [build_wind_field([s], SHIP, [g], 0.05, wrf_path.parent)
-             for s, g in zip(sections, np.random.default_rng(5).spawn(5))]
+             for s, g in zip(sections, np.random.default_rng(5).spawn(5), strict=True)]
     assert len(batch.mean.grids) == 4          # flights 1 and 4 share one WRF field, built once
     rng = np.random.default_rng(1)
     for k in range(40):

@@ -5,9 +5,9 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
+from wrp_eval.errors import InputError
 from wrp_eval.wind.base import WindModel
 from wrp_eval.wind.grid import GriddedMeanWind, OutsideWindGridError, WindGrid, interpolate
-from wrp_eval.errors import InputError
 
 
 @pytest.mark.parametrize("method", ["idw", "trilinear"])
@@ -21,7 +21,8 @@ def test_trilinear_reproduces_a_linear_field():
     x, y, z = np.linspace(-50, 50, 6), np.linspace(-30, 30, 4), np.array([0.0, 5.0, 15.0, 40.0])
     heights = np.broadcast_to(z, (6, 4, 4)).copy()
     gx, gy, gz = np.meshgrid(x, y, z, indexing="ij")
-    lin = lambda X, Y, Z: np.stack([1 + 0.1 * X - 0.2 * Y + 0.05 * Z, 2 * np.ones_like(X), 0.01 * Z], -1)
+    def lin(X, Y, Z):
+        return np.stack([1 + 0.1 * X - 0.2 * Y + 0.05 * Z, 2 * np.ones_like(X), 0.01 * Z], -1)
     grid = WindGrid(x, y, heights, lin(gx, gy, gz))
     pts = np.random.default_rng(0).uniform([-50, -30, 0], [50, 30, 40], (200, 3))
     np.testing.assert_allclose(interpolate(grid, pts, "trilinear"), lin(*pts.T), atol=1e-12)

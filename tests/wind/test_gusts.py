@@ -30,7 +30,7 @@ def test_drawn_gusts_sum_and_determinism():
     for t in np.linspace(0, 600, 97):
         expect = np.zeros((4, 3))
         for i in range(4):
-            for s, a in zip(g.start_s[i], g.azimuth_rad[i]):
+            for s, a in zip(g.start_s[i], g.azimuth_rad[i], strict=True):
                 if s <= t <= s + 5.0:
                     m = 2.0 * (1 - np.cos(2 * np.pi * (t - s) / 5.0))
                     expect[i, :2] += m * np.array([np.cos(a), np.sin(a)])

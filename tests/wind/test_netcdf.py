@@ -6,11 +6,12 @@ import numpy as np
 import pytest
 import xarray as xr
 
-SHIP_LAT, SHIP_LON = 23.7, -89.5          # inside the sample domain, at sea
 from wrp_eval.errors import InputError
 from wrp_eval.wind.boundary_layer import charnock_roughness, log_law_factor
 from wrp_eval.wind.grid import interpolate
 from wrp_eval.wind.netcdf import DEFAULT_FILL_HEIGHTS_M, MM5_LAYOUT, read_mean_wind
+
+SHIP_LAT, SHIP_LON = 23.7, -89.5          # inside the sample domain, at sea
 
 
 def destaggered(ds, t):

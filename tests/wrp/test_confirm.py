@@ -68,6 +68,7 @@ def test_oracle_verdicts_need_a_gain_beyond_the_oracles_noise_and_count_failures
 def test_revert_puts_rejected_views_back_and_keeps_the_rest():
     from wrp_eval.wrp.jobs import revert
     from wrp_eval.wrp.optimize import WrpResult
+
     from .conftest import small_surrogate
     s = small_surrogate(4, seed=0, error_std=1.0, gain=20.0)
     offsets = np.array([[0.5, 0, 0, 0.1], [0, 0, 0, 0], [0, 1.0, 0, 0], [0, 0, -1.0, 0]])

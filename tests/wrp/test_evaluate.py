@@ -4,8 +4,14 @@ import numpy as np
 import pytest
 
 from wrp_eval.config import ExperimentConfig
-from wrp_eval.wrp.evaluate import (PathTrials, paired_difference, path_summary, robustness_gains, robustness_verdict,
-                                   summarise)
+from wrp_eval.wrp.evaluate import (
+    PathTrials,
+    paired_difference,
+    path_summary,
+    robustness_gains,
+    robustness_verdict,
+    summarise,
+)
 
 from .conftest import helpers
 
@@ -39,10 +45,10 @@ def test_evaluate_flies_all_paths_with_the_same_winds(tmp_path, acceptance):
     the WRPs are not recommended for that reason."""
     from wrp_eval.campaign.evaluators import ANALYTIC_EVALUATOR
     from wrp_eval.campaign.store import TrialStore
-    from wrp_eval.surrogate.data import load_campaign_trials
-    from wrp_eval.surrogate.config import SurrogateSection
-    from wrp_eval.surrogate.train import train_surrogate
     from wrp_eval.experiment import ExperimentContext
+    from wrp_eval.surrogate.config import SurrogateSection
+    from wrp_eval.surrogate.data import load_campaign_trials
+    from wrp_eval.surrogate.train import train_surrogate
     from wrp_eval.wrp.jobs import evaluate_job
     camp = tmp_path / "campaign"
     helpers.make_campaign(camp, 40, 5, seed=3)
@@ -54,7 +60,8 @@ def test_evaluate_flies_all_paths_with_the_same_winds(tmp_path, acceptance):
         "wrp": {"iterations": 16, "attitude_samples": 3, "neighbourhood_samples": 3, "block_iterations": 8,
                 "oracle_error": False, "threshold_m": 0.2, "acceptance": acceptance,
                 "evaluate": {"n_trials": 6, "bootstrap": 200, "placebos": 2, "forecast_trials": 4}}})
-    doc = evaluate_job(ExperimentContext(config, tmp_path), tmp_path / "ev", checkpoint=str(tmp_path / "s.pt"), campaign=str(camp),
+    doc = evaluate_job(ExperimentContext(config, tmp_path), tmp_path / "ev", checkpoint=str(tmp_path / "s.pt"),
+                       campaign=str(camp),
                        e_original=1.45, quiet=True, evaluator=ANALYTIC_EVALUATOR)   # the known function's scale
     assert [p["path"] for p in doc["paths"]] == ["initial", "iswrp", "swrp"]
     assert all(p["trials"] == 6 for p in doc["paths"])
@@ -193,8 +200,7 @@ def test_five_perfect_forecast_flights_are_not_enough_to_go():
     from types import SimpleNamespace
 
     from wrp_eval.wrp.config import EvaluateSection
-    from wrp_eval.wrp.evaluate import proportion_ci
-    from wrp_eval.wrp.evaluate import forecast_verdict
+    from wrp_eval.wrp.evaluate import forecast_verdict, proportion_ci
     assert proportion_ci(5, 5, 0.95)[0] == pytest.approx(0.025 ** (1 / 5), abs=1e-9)   # the exact bound
     five = PathTrials("initial", np.arange(5), np.full(5, 0.02), np.zeros(5, bool), np.full(5, 0.99),
                       np.zeros(5), 40)

@@ -2,8 +2,14 @@ import numpy as np
 import pytest
 
 from wrp_eval.planning.path import FlightPath
-from wrp_eval.wrp.optimize import (WrpParams, apply_offsets, interval_optimise, iteration_draws,
-                                   neighbourhood_statistic, sample_radii)
+from wrp_eval.wrp.optimize import (
+    WrpParams,
+    apply_offsets,
+    interval_optimise,
+    iteration_draws,
+    neighbourhood_statistic,
+    sample_radii,
+)
 
 from .conftest import params_for, small_surrogate
 
@@ -162,7 +168,7 @@ def test_apply_offsets_moves_positions_and_wraps_yaw():
 
 @pytest.mark.parametrize("kind, threshold, margin", [("iswrp", 0.5, 0.1), ("swrp", 0.05, 0.0)])
 def test_improve_acceptance_moves_only_to_a_better_neighbourhood(kind, threshold, margin):
-    from wrp_eval.wrp.optimize import ViewQuery, iteration_draws, neighbourhood_score, best_attitude
+    from wrp_eval.wrp.optimize import ViewQuery, best_attitude, iteration_draws, neighbourhood_score
     surrogate = small_surrogate(6, seed=0, error_std=1.0, gain=20.0)
     p = params_for(surrogate, kind, threshold, acceptance="improve", min_improvement_fraction=margin)
     r = interval_optimise(surrogate, p, seed=2)

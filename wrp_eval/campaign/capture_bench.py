@@ -130,8 +130,9 @@ def _speed_records(speed: int, summary, table) -> tuple[list[BenchRecord], np.nd
     mission_s = table.column("mission_time_s").to_numpy(zero_copy_only=False).astype(float)
     complete = error_mm[np.isfinite(error_mm) & (np.array(endings) == "completed")]
     note = (f"quickstart path, physical design, U10 {speed} m/s, turbulence from the mean wind, {len(table)} "
-            f"flights, {summary.trials_per_min:.0f} trials/min; endings {dict(zip(kinds.tolist(), counts.tolist()))}; "
-            f"sorties {dict(zip(*(v.tolist() for v in np.unique(sorties, return_counts=True))))}; "
+            f"flights, {summary.trials_per_min:.0f} trials/min; endings "
+            f"{dict(zip(kinds.tolist(), counts.tolist(), strict=True))}; "
+            f"sorties {dict(zip(*(v.tolist() for v in np.unique(sorties, return_counts=True)), strict=True))}; "
             f"completed flights only: error {complete.mean() if complete.size else float('nan'):.2f} mm "
             f"(std {complete.std(ddof=1) if complete.size > 1 else float('nan'):.2f}, n {complete.size})")
     tag = f"u{speed}"

@@ -5,7 +5,8 @@ Per batch of trials: one wind field for the batch (the wind stage's ``build_wind
 ``FlightSimulator.fly`` call with the commanded offsets, around the ship (its box for the compass and the
 views' depth, its motion), each trial's navigation errors and ship motion drawn from its own ``flight_seed``;
 then per trial the paper's extra disturbance of the wind-induced deviation, the capture set (with the
-gimbal's roll and the navigation's positions as priors) and one oracle call. Offsets are measured from the planned viewpoints:
+gimbal's roll and the navigation's positions as priors) and one oracle call. Offsets are measured from the planned
+viewpoints:
     flown = commanded + disturbance * (sim_offset - commanded)
 (``sim_offset`` = the simulator's actual capture pose minus the plan). With the ``physical`` design (commanded 0,
 no extra disturbance) the capture poses are exactly the simulator's.

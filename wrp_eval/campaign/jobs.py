@@ -6,6 +6,7 @@ campaign section (``evaluate``, the studies) call :func:`wrp_eval.campaign.runne
 
 from __future__ import annotations
 
+import logging
 from dataclasses import replace
 from pathlib import Path
 
@@ -14,6 +15,8 @@ from wrp_eval.campaign.runner import CampaignSummary, run_campaign, with_overrid
 from wrp_eval.campaign.turbulence import turbulence_ratios, turbulence_stress_note
 from wrp_eval.experiment import ExperimentContext
 from wrp_eval.planning.path import FlightPath
+
+log = logging.getLogger(__name__)
 
 
 def campaign_job(ctx: ExperimentContext, *, out_dir: str | Path | None = None, n_trials: int | None = None,
@@ -31,7 +34,7 @@ def campaign_job(ctx: ExperimentContext, *, out_dir: str | Path | None = None, n
     note = turbulence_stress_note(turbulence_ratios(trial.wind, trial.campaign, ctx.campaign_seed,
                                                     trial.campaign.n_trials, ctx.ship.particulars, ctx.config_dir))
     if note:
-        print(f"[wrp-eval campaign] {note}", flush=True)
+        log.info(f"[wrp-eval campaign] {note}")
     summary = run_campaign(trial, path if path is not None else ctx.campaign_path, out, root_seed=ctx.campaign_seed,
                            config_dir=ctx.config_dir, evaluator=evaluator, evaluator_options=evaluator_options,
                            progress=progress, ship_mesh=mesh)

@@ -25,8 +25,7 @@ import rerun.blueprint as rrb
 from rerun.chunk import RrdReader
 
 from wrp_eval.campaign.records import METRIC_NAMES
-from wrp_eval.planning.path import FlightPath
-from wrp_eval.planning.path import digest_of_document
+from wrp_eval.planning.path import FlightPath, digest_of_document
 from wrp_eval.recording import recording
 
 TIMELINE = "trial"

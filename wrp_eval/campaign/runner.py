@@ -28,8 +28,7 @@ from wrp_eval.campaign.progress import CampaignProgress
 from wrp_eval.campaign.rerun_log import CampaignRecorder
 from wrp_eval.campaign.store import TrialStore
 from wrp_eval.errors import InputError
-from wrp_eval.planning.path import FlightPath
-from wrp_eval.planning.path import digest_of_document
+from wrp_eval.planning.path import FlightPath, digest_of_document
 from wrp_eval.ship.resolve import resolve_ship_full
 
 # settings that do not change any trial's result: excluded from the fingerprint

@@ -24,8 +24,8 @@ import numpy as np
 from scipy.stats import qmc
 
 from wrp_eval.campaign.config import CampaignSection, Choice, Normal, Uniform
-from wrp_eval.wind.config import WindSection
 from wrp_eval.streams import flight_generators
+from wrp_eval.wind.config import WindSection
 
 WIND_STREAM, PERTURB_STREAM, DISTURB_STREAM, FLIGHT_STREAM, TARGET_STREAM = 0, 1, 2, 3, 4
 # child index of each wind input within the trial's WIND_STREAM children

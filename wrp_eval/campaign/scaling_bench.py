@@ -133,7 +133,7 @@ def scaling_figure(curves: dict, file: Path) -> None:
     axes = fig.subplots(2, 2).ravel()
     labels = {"planning": ("ship length (m)", "planning wall (s)"), "oracle": ("views", "oracle wall (s)"),
               "flight": ("batch (drones)", "wall s per drone-second"), "campaign": ("trials", "campaign wall (s)")}
-    for ax, (name, (x, y, k)) in zip(axes, curves.items()):
+    for ax, (name, (x, y, k)) in zip(axes, curves.items(), strict=True):
         ax.loglog(x, y, "o-")
         # the measured sizes as the x ticks, in plain numbers (log axes' minor labels overlapped)
         ax.xaxis.set_major_locator(FixedLocator(x))
@@ -171,7 +171,7 @@ def run_bench(out_dir: Path | None = None) -> list[BenchRecord]:
                                f"oracle wall ~ views^k, {views[0]}-{views[-1]} views"))
     flight = flight_curve()
     batches, per_s = [f[0] for f in flight], [f[1] for f in flight]
-    walls = [b * p for b, p in zip(batches, per_s)]
+    walls = [b * p for b, p in zip(batches, per_s, strict=True)]
     curves["flight"] = (batches, per_s, exponent(batches, per_s))
     records += [BenchRecord(f"scaling.flight_wall_per_drone_s.batch{b}", p, "s/s", None, None,
                             f"closed loop, {FLIGHT_SIM_S:g} s simulated, every sim default on") for b, p in flight]

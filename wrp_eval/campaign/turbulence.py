@@ -59,5 +59,6 @@ def turbulence_stress_note(ratios: np.ndarray) -> str | None:
     spread = f"median {np.median(finite):.1f}x, max {finite.max():.1f}x" if finite.size else ""
     spread += ("; " if spread else "") + (f"{calm} over a calm mean wind" if calm else "")
     return (f"turbulence stress test: in {finite.size + calm} of {ratios.size} trials the turbulence preset's W20 "
-            f"is more than {STRESS_RATIO:g}x what the trial's mean wind implies ({spread}); MIL-F-8785C ties sigma_w = 0.1 W20 to "
+            f"is more than {STRESS_RATIO:g}x what the trial's mean wind implies ({spread}); MIL-F-8785C ties "
+            "sigma_w = 0.1 W20 to "
             "the actual wind at 20 ft: `severity: from_mean` flies the turbulence of the wind")

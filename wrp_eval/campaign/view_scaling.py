@@ -60,7 +60,7 @@ def view_count_points(gsds=GSDS_MM, flights: int = FLIGHTS) -> list[dict]:
     trial seconds per trial (medians: a worker's first trial also loads its kernels)."""
     base = quickstart_context()
     warm = _at_gsd(base, gsds[0])
-    warm.planned  # warm-up, untimed: the ship, the compiled kernels and each worker's start load once
+    _ = warm.planned  # warm-up, untimed: the ship, the compiled kernels and each worker's start load once
     with tempfile.TemporaryDirectory() as tmp:
         quickstart_campaign(warm, WIND_M_S, Path(tmp) / "warm", flights=2)
     points = []
@@ -100,7 +100,8 @@ def view_count_records(points: list[dict]) -> list[BenchRecord]:
             BenchRecord(f"scaling.views.campaign_trials_per_min.{tag}", p["trials_per_min"], "trials/min",
                         *(("performance issue target (143 views, 2 workers)", 150.0) if 120 <= p["views"] <= 170
                           else (None, None)),
-                        f"{p['flights']} physical flights at U10 {WIND_M_S:g} m/s, 2 local workers; median trial: flight "
+                        f"{p['flights']} physical flights at U10 {WIND_M_S:g} m/s, 2 local workers; median "
+                        "trial: flight "
                         f"{p['trial_flight_s']:.3f} s + oracle {p['trial_oracle_s']:.3f} s (trial "
                         f"{p['trial_trial_s']:.3f} s); oracle share {p['trial_oracle_s'] / p['trial_trial_s']:.0%}"),
         ]

@@ -96,7 +96,7 @@ def run_batch(spec: dict, trials: Sequence) -> list[dict]:
         outcomes = None
     if outcomes is not None:
         per_trial = (time.perf_counter() - start) / len(inputs)
-        return [record(i, o, 1, per_trial) for i, o in zip(inputs, outcomes)]
+        return [record(i, o, 1, per_trial) for i, o in zip(inputs, outcomes, strict=True)]
     records = []
     for inp in inputs:
         error = None

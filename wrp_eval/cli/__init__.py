@@ -51,7 +51,7 @@ def main(argv: list[str] | None = None) -> int:
     parser = build_parser()
     args = parser.parse_args(argv)
     # the jobs report progress through `logging` (wrp_eval.* loggers); the command line shows it on stderr
-    logging.basicConfig(level=logging.WARNING, format="[wrp-eval] %(message)s", stream=sys.stderr, force=True)
+    logging.basicConfig(level=logging.WARNING, format="%(message)s", stream=sys.stderr, force=True)
     logging.getLogger("wrp_eval").setLevel(logging.INFO)
     try:
         return int(args.func(args) or 0)

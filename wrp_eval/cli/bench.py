@@ -10,7 +10,10 @@ from wrp_eval.bench import __doc__ as BENCH_DOC
 
 
 def _bench(args: argparse.Namespace) -> int:
-    run_groups(select_groups(args.only), Path(args.out))
+    for group in select_groups(args.only):      # a group at a time: its records show as soon as it ends
+        for r in run_groups([group], Path(args.out)):
+            anchor = f"  (anchor {r['anchor']}: {r['anchor_value']})" if r["anchor"] is not None else ""
+            print(f"{r['name']:34s} {r['value']:14.6g} {r['unit']}{anchor}")
     return 0
 
 

@@ -29,10 +29,10 @@ from wrp_eval.experiment import ExperimentContext
 from wrp_eval.planning.path import FlightPath
 from wrp_eval.sim.flight import FlightSimulator
 from wrp_eval.sim.hover import airframe_only, analytic_hover_balance, hover_statistics
+from wrp_eval.sim.onboard import ShipInScene
 from wrp_eval.sim.outputs import write_flight_tables, write_rerun
 from wrp_eval.sim.simple_wind import ConstantWind
 from wrp_eval.wind.config import WindSection
-from wrp_eval.sim.onboard import ShipInScene
 from wrp_eval.wind.field import build_wind_field
 
 

@@ -53,7 +53,8 @@ def _validate(args: argparse.Namespace) -> int:
     if args.perturbed:
         return _perturbed(args, ctx, reuse)
     planned = {method: ctx.plan_with(method).path for method in PLANNED_METHODS}
-    summary = validate_oracle(_oracle_section(args, ctx), ctx.ship.mesh, Path(args.out), seed=ctx.run_seed, planned=planned,
+    summary = validate_oracle(_oracle_section(args, ctx), ctx.ship.mesh, Path(args.out), seed=ctx.run_seed,
+                              planned=planned,
                               reuse_colmap=reuse)
     print(json.dumps(summary, indent=1))
     return 0

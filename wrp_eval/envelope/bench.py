@@ -35,7 +35,8 @@ def run_bench(out_dir: Path | None = None) -> list[BenchRecord]:
         BenchRecord("envelope.wall_s", env.wall_s, "s", "issue 29 target (2-core machine)", TARGET_S, note),
         BenchRecord("envelope.flights", env.flights_flown, "flights", "the fixed grid at max_flights",
                     grid.directions * len(grid.speeds_m_s) * grid.max_flights, note),
-        BenchRecord("envelope.cells", len(env.cells), "cells", "the fixed grid", grid.directions * len(grid.speeds_m_s)),
+        BenchRecord("envelope.cells", len(env.cells), "cells", "the fixed grid",
+                    grid.directions * len(grid.speeds_m_s)),
         BenchRecord("envelope.flights_per_min", 60.0 * env.flights_flown / env.wall_s, "flights/min", note=note),
     ]
     for b in env.boundaries:

@@ -155,8 +155,8 @@ def ending_counts(folder: Path, flights: int) -> dict[str, int]:
     ids = table.column("trial_id").to_numpy()
     endings = table.column("ending").to_pylist()
     errors = table.column("error").to_pylist()
-    names = ["error" if err is not None else (e or "unknown") for e, err in zip(endings, errors)]
-    return dict(Counter(n for n, k in zip(names, ids) if k < flights))
+    names = ["error" if err is not None else (e or "unknown") for e, err in zip(endings, errors, strict=True)]
+    return dict(Counter(n for n, k in zip(names, ids, strict=True) if k < flights))
 
 
 def limiting_cause(trials: PathTrials, endings: dict[str, int], spec: tuple[float, float]) -> str:

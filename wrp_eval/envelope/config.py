@@ -6,6 +6,8 @@ The spec the flights must meet, the probability threshold (``go_probability``, 0
 
 from __future__ import annotations
 
+from itertools import pairwise
+
 from pydantic import Field, field_validator, model_validator
 
 from wrp_eval.validation import StrictModel
@@ -28,7 +30,7 @@ class EnvelopeGrid(StrictModel):
     def _increasing(cls, speeds: tuple[float, ...]) -> tuple[float, ...]:
         if any(s < 0 or s > 60 for s in speeds):
             raise ValueError("speeds must lie in [0, 60] m/s")
-        if any(b <= a for a, b in zip(speeds, speeds[1:])):
+        if any(b <= a for a, b in pairwise(speeds)):
             raise ValueError("speeds must be strictly increasing")
         return speeds
 

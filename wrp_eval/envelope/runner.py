@@ -128,7 +128,7 @@ def _fly_look(flying: _Flying, pool: TrialPool, cells: list[Cell]) -> None:
     chunks = [c.tolist() for c in np.array_split(np.arange(len(jobs)), parts) if c.size]
     for index, records in pool.run([(flying.spec, [jobs[i][1] for i in chunk]) for chunk in chunks]):
         by_cell: dict[CellKey, list[dict]] = {}
-        for i, record in zip(chunks[index], records):
+        for i, record in zip(chunks[index], records, strict=True):
             by_cell.setdefault(jobs[i][0].key, []).append(record)
         for key, rows in by_cell.items():
             with TrialStore(flying.cells[key].folder) as store:
@@ -136,7 +136,7 @@ def _fly_look(flying: _Flying, pool: TrialPool, cells: list[Cell]) -> None:
         flying.flown += len(records)
     for cell in cells:
         replay(cell, flying.rule)
-        log.info("envelope cell %s: %d/%d flights meet the spec -> %s", cell.key.folder_name, cell.successes,
+        log.info("[wrp-eval envelope] cell %s: %d/%d flights meet the spec -> %s", cell.key.folder_name, cell.successes,
                  cell.flights, cell.decision)
 
 

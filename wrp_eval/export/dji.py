@@ -189,7 +189,8 @@ def read_dji_kmz(file: str | Path) -> ReadMission:
         modes = {v: k for k, v in TURN_MODES.items()}
         for pm in root.iter(_k("Placemark")):
             lon_s, lat_s = pm.find(f"{_k('Point')}/{_k('coordinates')}").text.strip().split(",")[:2]
-            lat.append(float(lat_s)); lon.append(float(lon_s))
+            lat.append(float(lat_s))
+            lon.append(float(lon_s))
             alt.append(float(pm.find(_w("executeHeight")).text))
             turn = pm.find(f"{_w('waypointTurnParam')}/{_w('waypointTurnMode')}").text
             if turn not in modes:

@@ -66,8 +66,8 @@ def export_path(path: FlightPath, particulars: ShipParticulars, proxy: Proxy, fm
     missions = build_missions(path, particulars, proxy, section, source, style)
     files = sortie_files(Path(out), [m.sortie for m in missions])
     blobs = [FORMATS[fmt].render(m, section.firmware) for m in missions]
-    write_all_atomic(list(zip(files, blobs)))
-    return list(zip(files, missions))
+    write_all_atomic(list(zip(files, blobs, strict=True)))
+    return list(zip(files, missions, strict=True))
 
 
 def write_all_atomic(outputs: list[tuple[Path, bytes]]) -> None:

@@ -64,8 +64,10 @@ def read_litchi_csv(file: str | Path) -> ReadMission:
             if missing:
                 raise ValueError(f"missing columns {sorted(missing)}")
             for row in reader:
-                lat.append(float(row["latitude"])); lon.append(float(row["longitude"]))
-                alt.append(float(row["altitude(m)"])); heading.append(float(row["heading(deg)"]))
+                lat.append(float(row["latitude"]))
+                lon.append(float(row["longitude"]))
+                alt.append(float(row["altitude(m)"]))
+                heading.append(float(row["heading(deg)"]))
                 pitch.append(float(row["gimbalpitchangle"]))
                 kinds = [(int(row.get(f"actiontype{i}", ACTION_NONE)), float(row.get(f"actionparam{i}", 0)))
                          for i in range(1, N_ACTIONS + 1)]

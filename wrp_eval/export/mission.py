@@ -39,7 +39,8 @@ class FlightStyle:
     pass_radius_m: float = 0.0
 
     @classmethod
-    def of(cls, path: FlightPath, capture: CaptureSection = CaptureSection(), dwell_s: float | None = None) -> FlightStyle:
+    def of(cls, path: FlightPath, capture: CaptureSection = CaptureSection(),
+           dwell_s: float | None = None) -> FlightStyle:
         """The style the simulator flies ``path`` with under ``sim.capture`` and ``sim.dwell_s`` (None: the
         path's dwell), at the path's cruise speed (wrp_eval/sim/flight.py: the same choices)."""
         through = capture.mode == FLY_THROUGH

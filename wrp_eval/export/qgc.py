@@ -130,8 +130,9 @@ def _read_items(items: list[tuple[int, int, list[float]]], home: tuple[float, fl
         if command == MAV_CMD_DO_CHANGE_SPEED and int(p[0]) == SPEED_TYPE_GROUND:
             speed = p[1]
         if command == MAV_CMD_NAV_WAYPOINT and frame == MAV_FRAME_GLOBAL_RELATIVE_ALT:
-            lat.append(p[4]); lon.append(p[5]); alt.append(p[6]); heading.append(p[3]); pitch.append(NAN)
-            hold.append(p[0]); accept.append(p[1])
+            for column, value in ((lat, p[4]), (lon, p[5]), (alt, p[6]), (heading, p[3]), (pitch, NAN),
+                                  (hold, p[0]), (accept, p[1])):
+                column.append(value)
         elif command == MAV_CMD_DO_GIMBAL_MANAGER_PITCHYAW and pitch:
             pitch[-1] = p[0]
         elif command == MAV_CMD_IMAGE_START_CAPTURE:

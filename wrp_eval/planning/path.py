@@ -79,7 +79,7 @@ class FlightPath:
                  "yaw_deg": float(np.degrees(y)), "gimbal_pitch_deg": float(np.degrees(q)),
                  "face_id": int(f), "kind": KIND_NAMES[int(k)], "sortie": int(s)}
                 for i, (p, y, q, f, k, s) in enumerate(zip(self.positions, self.yaw, self.pitch,
-                                                            self.face_id, self.kind, self.sortie))
+                                                            self.face_id, self.kind, self.sortie, strict=True))
             ],
         }
 

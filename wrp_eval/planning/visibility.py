@@ -15,6 +15,7 @@ from wrp_eval.camera import Camera, camera_rotations
 from wrp_eval.compiled import kernel
 from wrp_eval.ship.proxy import Proxy
 
+
 class ProxyRaycaster:
     """The proxy's triangles in an Embree scene (built once per proxy)."""
 

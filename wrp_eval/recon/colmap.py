@@ -119,7 +119,7 @@ def write_position_priors(database_path: Path, names: list[str], capture_set: Ca
     try:
         db.clear_pose_priors()
         by_name = {image.name: image for image in db.read_all_images()}
-        for name, pos in zip(names, positions):
+        for name, pos in zip(names, positions, strict=True):
             prior = pycolmap.PosePrior()
             prior.corr_data_id = by_name[name].data_id
             prior.position = pos
@@ -207,7 +207,7 @@ class ColmapOracle(MeshOracle):
         images, cam = render_views(capture_set, gt, c.image_width_px, SolidTexture(seed=self.section.gt_seed))
         image_dir = work / "images"
         image_dir.mkdir(parents=True, exist_ok=True)
-        for name, img in zip(names, images):  # one file per image: COLMAP reads files
+        for name, img in zip(names, images, strict=True):  # one file per image: COLMAP reads files
             Image.fromarray(img).save(image_dir / name)
         t_render = time.perf_counter() - t0
 

@@ -23,8 +23,14 @@ from wrp_eval.planning.config import PlanningSection
 from wrp_eval.planning.planner import plan, planning_rng
 from wrp_eval.recon.capture_io import captures_from_path
 from wrp_eval.recon.config import OracleSection
-from wrp_eval.recon.perturbed import (FLIGHT_MODES, FLIGHT_SPEEDS_M_S, FLIGHTS_PER_SPEED, NAV_PRESETS,
-                                      RECORDED_BLUR_MIN_SPEED_M_S, perturbed_capture_sets)
+from wrp_eval.recon.perturbed import (
+    FLIGHT_MODES,
+    FLIGHT_SPEEDS_M_S,
+    FLIGHTS_PER_SPEED,
+    NAV_PRESETS,
+    RECORDED_BLUR_MIN_SPEED_M_S,
+    perturbed_capture_sets,
+)
 from wrp_eval.recon.validate import REPEAT_SEED_OFFSETS
 from wrp_eval.ship.config import ShipSection
 from wrp_eval.ship.resolve import resolve_ship_full

@@ -58,8 +58,15 @@ from scipy.spatial import cKDTree
 from wrp_eval.compiled import kernel
 from wrp_eval.recon.base import GroundTruth, Scores, align_to_ground_truth
 from wrp_eval.recon.config import OracleSection
-from wrp_eval.recon.image_effects import (INCIDENCE_RAMP_DEG, border_weight, incidence_weight, keypoint_fraction,
-                                          parallax_weights, patch_match_probability, pixel_noise_px)
+from wrp_eval.recon.image_effects import (
+    INCIDENCE_RAMP_DEG,
+    border_weight,
+    incidence_weight,
+    keypoint_fraction,
+    parallax_weights,
+    patch_match_probability,
+    pixel_noise_px,
+)
 from wrp_eval.sim.captures import CaptureSet
 
 OCCLUSION_OFFSET_M = 0.01    # occlusion rays start this far off the surface (no self-hits on shared edges)

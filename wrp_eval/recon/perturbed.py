@@ -169,7 +169,7 @@ def drop_sets(path: FlightPath, seed: int) -> list[tuple[str, str, CaptureSet]]:
     if n < 2:
         return []
     bounds = np.linspace(0, n, DROP_SETS + 1).round().astype(int)
-    views = sorted({int(rng.integers(lo, max(hi, lo + 1))) % n for lo, hi in zip(bounds[:-1], bounds[1:])})
+    views = sorted({int(rng.integers(lo, max(hi, lo + 1))) % n for lo, hi in zip(bounds[:-1], bounds[1:], strict=True)})
     full = captures_from_path(path)
     return [(f"drop_{view:03d}", "drop", full.subset(np.arange(n) != view)) for view in views]
 
@@ -201,7 +201,7 @@ def flight_capture_sets(ctx, path: FlightPath, seed: int, speeds=FLIGHT_SPEEDS_M
     speed_of = np.repeat(np.asarray(speeds, dtype=float), per_speed)
     directions = rng.uniform(0.0, 360.0, len(speed_of))
     sections = [config.wind.model_copy(update={"speed_10m_mps": float(u), "direction_deg": float(d)})
-                for u, d in zip(speed_of, directions)]
+                for u, d in zip(speed_of, directions, strict=True)]
     sim = _flight_sim_section(config.sim, mode, preset)
     wind_seed, flight_seed = np.random.SeedSequence(int(rng.integers(2 ** 63 - 1))).spawn(2)
     dt = sim.timestep_s * sim.chunk_steps  # the wind is stepped at the controller rate (wrp-eval fly)
@@ -210,7 +210,7 @@ def flight_capture_sets(ctx, path: FlightPath, seed: int, speeds=FLIGHT_SPEEDS_M
     with FlightSimulator(sim) as simulator:
         result = simulator.fly(path, wind, len(sections), ship=ship, flight_rngs=flight_seed)
     sets = []
-    for i, (u, captures) in enumerate(zip(speed_of, result.captures)):
+    for i, (u, captures) in enumerate(zip(speed_of, result.captures, strict=True)):
         name = f"{prefix}_u{u:g}_{i % per_speed + 1}"
         if len(captures) < len(path):
             name += f"_partial{len(captures)}of{len(path)}"
@@ -247,7 +247,8 @@ def flown_capture_sets(ctx, path: FlightPath, seed: int, per_speed: int = FLIGHT
     return sets + recorded_blur_sets(path, sets)
 
 
-def recorded_blur_sets(path: FlightPath, flights: list[tuple[str, str, CaptureSet]]) -> list[tuple[str, str, CaptureSet]]:
+def recorded_blur_sets(path: FlightPath,
+                       flights: list[tuple[str, str, CaptureSet]]) -> list[tuple[str, str, CaptureSet]]:
     """The planned poses with the per-view blur of each fly-through ``flight`` set flown at U10 >=
     ``RECORDED_BLUR_MIN_SPEED_M_S`` (views the flight did not take: sharp)."""
     sets = []

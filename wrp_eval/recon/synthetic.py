@@ -59,10 +59,9 @@ from wrp_eval.recon.base import GroundTruth, MeshOracle
 from wrp_eval.recon.config import OracleSection
 from wrp_eval.recon.fusion import FusedReconstruction, fuse
 from wrp_eval.recon.image_effects import blur_keypoint_fraction
-
-REGISTRATION_CALIBRATION_WIDTH_PX = 800  # the COLMAP renders min_registration_rays was calibrated on (README)
 from wrp_eval.sim.captures import CaptureSet
 
+REGISTRATION_CALIBRATION_WIDTH_PX = 800  # the COLMAP renders min_registration_rays was calibrated on (README)
 
 
 @dataclass(frozen=True)

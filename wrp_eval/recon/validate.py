@@ -16,6 +16,7 @@ from __future__ import annotations
 
 import csv
 import json
+import logging
 import traceback
 from pathlib import Path
 
@@ -36,6 +37,8 @@ from wrp_eval.recon.config import OracleSection
 from wrp_eval.recon.scenarios import orbit_capture_set
 from wrp_eval.recon.synthetic import SyntheticOracle
 from wrp_eval.sim.captures import CaptureSet
+
+log = logging.getLogger(__name__)
 
 
 def _subset(cs: CaptureSet, keep: np.ndarray) -> CaptureSet:
@@ -148,9 +151,9 @@ def summarize(rows: list[dict]) -> dict:
     pairs = [(r["synthetic_error_m"], r["colmap_error_m"]) for r in both
              if r["synthetic_error_m"] is not None and r["colmap_error_m"] is not None
              and np.isfinite(r["synthetic_error_m"]) and np.isfinite(r["colmap_error_m"])]
-    rho = float(spearmanr(*zip(*pairs)).statistic) if len(pairs) >= 3 else float("nan")
+    rho = float(spearmanr(*zip(*pairs, strict=True)).statistic) if len(pairs) >= 3 else float("nan")
     comp = [(r["synthetic_completeness"], r["colmap_completeness"]) for r in both]
-    rho_c = float(spearmanr(*zip(*comp)).statistic) if len(comp) >= 3 else float("nan")
+    rho_c = float(spearmanr(*zip(*comp, strict=True)).statistic) if len(comp) >= 3 else float("nan")
     agree = [r["synthetic_failed"] == r["colmap_failed"] for r in both]
     good = [r for r in both if not r["synthetic_failed"] and not r["colmap_failed"]]
     ratios = {key: [r[key] for r in good if _finite(r.get(key))]
@@ -160,7 +163,7 @@ def summarize(rows: list[dict]) -> dict:
             **{f"median_{key}_not_failed": (float(np.median(v)) if v else None) for key, v in ratios.items()},
             "spearman_rho_completeness": rho_c, "pairs_for_rho": len(pairs),
             "failed_verdict_agreement": float(np.mean(agree)) if agree else float("nan"),
-            "disagreements": [r["name"] for r, a in zip(both, agree) if not a]}
+            "disagreements": [r["name"] for r, a in zip(both, agree, strict=True) if not a]}
 
 
 def write_outputs(rows: list[dict], summary: dict, out: Path) -> None:
@@ -227,10 +230,10 @@ def validate_oracle(oracle: OracleSection, mesh: trimesh.Trimesh, out: Path, see
             row = _row(name, category, cs, syn, col)
         add_calibration(row, synthetic, cs, mesh, seed, oracle.colmap.image_width_px)
         rows.append(row)
-        print(f"{name:22s} synthetic err {syn.error_m:.4f} comp {syn.completeness:.3f} "
+        log.info(f"{name:22s} synthetic err {syn.error_m:.4f} comp {syn.completeness:.3f} "
               f"reg {syn.registered_views}/{len(cs)} failed {syn.failed} | colmap err {row['colmap_error_m']:.4f} "
               f"comp {row['colmap_completeness']:.3f} reg {row['colmap_registered_views']}/{len(cs)} "
-              f"failed {row['colmap_failed']} ({row['colmap_time_s']:.0f} s)", flush=True)
+              f"failed {row['colmap_failed']} ({row['colmap_time_s']:.0f} s)")
         write_outputs(rows, summarize(rows), out)  # partial results survive an interruption
     summary = summarize(rows)
     write_outputs(rows, summary, out)
@@ -442,11 +445,11 @@ def validate_perturbed(oracle: OracleSection, mesh: trimesh.Trimesh, sets: list[
             row["colmap_capture_sha"] = row["capture_sha"]  # the set COLMAP scored (checked when reused)
         rows.append(row)
         add_deltas(rows, reference_name)
-        print(f"{name:30s} {kind:12s} synthetic err {_fmt(row['synthetic_error_m'])} "
+        log.info(f"{name:30s} {kind:12s} synthetic err {_fmt(row['synthetic_error_m'])} "
               f"(d {_fmt(row['synthetic_delta_error_m'], '+.4f')}) "
               f"reg {row['synthetic_registered_views']}/{len(cs)} | colmap err {_fmt(row['colmap_error_m'])} "
               f"(d {_fmt(row['colmap_delta_error_m'], '+.4f')}) reg {row['colmap_registered_views']}/{len(cs)} "
-              f"({_fmt(row['colmap_time_s'], '.0f')} s)", flush=True)
+              f"({_fmt(row['colmap_time_s'], '.0f')} s)")
         summary = {**summarize_perturbed(rows), "reuse_mismatched_sets": mismatched, "oracle_errors": errors}
         write_perturbed_outputs(rows, summary, out)  # partial results survive an interruption
     summary = {**summarize_perturbed(rows), "reuse_mismatched_sets": mismatched, "oracle_errors": errors}
@@ -473,6 +476,6 @@ def _evaluate_or_error(oracle, cs: CaptureSet, mesh: trimesh.Trimesh, seed: int,
     except Exception as err:  # noqa: BLE001  # recorded, reported in the summary and on stdout
         message = f"oracle error: {type(err).__name__}: {err}"
         errors.append(f"{what}: {message}")
-        print(f"{what}: {message}", flush=True)
+        log.info(f"{what}: {message}")
         traceback.print_exc()  # the log keeps where it failed
         return _OracleError(message)

@@ -91,7 +91,7 @@ def _assemble(sentences: Sequence[str], labels: Sequence[str]) -> list[tuple[NME
     """Parse every sentence and join multi-part messages; returns (message, label of its first part)."""
     complete: list[tuple[NMEAMessage, str]] = []
     pending: dict[tuple, tuple[list[NMEAMessage], str]] = {}
-    for line, label in zip(sentences, labels):
+    for line, label in zip(sentences, labels, strict=True):
         msg = _parse_sentence(line, label)
         if msg.frag_cnt == 1:
             complete.append((msg, label))
@@ -155,7 +155,7 @@ def decode_ais(sentences: Sequence[str], source: str = "AIS", labels: Sequence[s
     if isinstance(sentences, (str, bytes)) or not isinstance(sentences, Sequence):
         raise InputError(source, "AIS data must be a list of NMEA sentences")
     labels = list(labels) if labels is not None else [f"{source} sentence {i + 1}" for i in range(len(sentences))]
-    kept = [(s.strip(), lab) for s, lab in zip(sentences, labels)
+    kept = [(s.strip(), lab) for s, lab in zip(sentences, labels, strict=True)
             if not isinstance(s, str) or (s.strip() and not s.strip().startswith("#"))]
     for s, lab in kept:
         if not isinstance(s, str):

@@ -31,9 +31,9 @@ def run_bench() -> list[BenchRecord]:
     for ship_type in ShipType:
         particulars, _ = resolve_particulars(ShipSection(type=ship_type))
         proxy = build_proxy(particulars)
-        build_s, mesh = _best_of(lambda: procedural_mesh(particulars))
-        comp_s, comp = _best_of(lambda: mesh_surface_complexity(mesh, proxy))
-        faces = ", ".join(f"{n}={c:.4g}" for n, c in zip(comp.face_names, comp.complexity))
+        build_s, mesh = _best_of(lambda p=particulars: procedural_mesh(p))
+        comp_s, comp = _best_of(lambda m=mesh, b=proxy: mesh_surface_complexity(m, b))
+        faces = ", ".join(f"{n}={c:.4g}" for n, c in zip(comp.face_names, comp.complexity, strict=True))
         records += [
             BenchRecord(f"ship.{ship_type.value}.mesh_build", build_s * 1e3, "ms",
                         note=f"{len(mesh.faces)} triangles, best of 5"),

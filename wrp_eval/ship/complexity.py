@@ -34,7 +34,7 @@ class SurfaceComplexity:
 
     def as_dict(self) -> dict:
         return {name: {"triangles": int(n), "area_m2": float(a), "complexity_per_m2": float(c)}
-                for name, n, a, c in zip(self.face_names, self.counts, self.areas, self.complexity)}
+                for name, n, a, c in zip(self.face_names, self.counts, self.areas, self.complexity, strict=True)}
 
 
 def assign_triangles(normals: np.ndarray, proxy: Proxy, max_angle_deg: float = MAX_ANGLE_DEG) -> np.ndarray:

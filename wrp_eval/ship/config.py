@@ -84,7 +84,8 @@ class ShipSection(StrictModel):
                                       "fraction of the true height above the waterline (paper Table 1: an unreliable "
                                       "AIS draught); the mesh (the truth) keeps its height", **_METRES)
     motion: ShipMotionSection = Field(ShipMotionSection(), description="heave, roll, pitch, yaw swing for a sea "
-                                     "state; by default the sea each flight's own wind raises (from_wind); 0: a still ship")
+                                     "state; by default the sea each flight's own wind raises (from_wind); 0: a "
+                                     "still ship")
 
     @field_validator("mesh", mode="before")
     @classmethod

@@ -37,7 +37,8 @@ def _log_ship(rec: rr.RecordingStream, ship: ResolvedShip) -> None:
                                       labels=[f"no-fly r={proxy.no_fly_margin_m:g} m"]), static=True)
     top = max(float(comp.complexity.max()), 1e-12)
     colours = (np.stack([comp.complexity / top, 0.2 * np.ones(5), 1 - comp.complexity / top], -1) * 255)
-    labels = [f"{n}: c={c:.4g}/m2 ({k} tris)" for n, c, k in zip(comp.face_names, comp.complexity, comp.counts)]
+    labels = [f"{n}: c={c:.4g}/m2 ({k} tris)"
+              for n, c, k in zip(comp.face_names, comp.complexity, comp.counts, strict=True)]
     rec.log("ship/faces", rr.Arrows3D(origins=proxy.centers, vectors=proxy.normals * max(proxy.height_m, 5.0),
                                       colors=colours.astype(np.uint8), labels=labels), static=True)
     info = {"particulars": {k: ship.provenance.get(k) for k in ship.provenance},

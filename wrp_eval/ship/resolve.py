@@ -43,7 +43,7 @@ class ResolvedShip:
         }
         faces = [{"name": name, "area_m2": float(area), "normal": proxy.normals[i].tolist(),
                   "center": proxy.centers[i].tolist(), "half_extents_m": proxy.half_extents[i].tolist()}
-                 for i, (name, area) in enumerate(zip(proxy.face_names, proxy.areas))]
+                 for i, (name, area) in enumerate(zip(proxy.face_names, proxy.areas, strict=True))]
         mesh = ship.mesh
         return {
             "particulars": particulars,

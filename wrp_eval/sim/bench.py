@@ -183,7 +183,7 @@ def run_bench() -> list[BenchRecord]:
             BenchRecord(f"sim.raw_rollout_steps_per_s{suffix}", raw, "drone-steps/s",
                         note=f"open-loop mujoco.rollout of the flight model, batch {batch}; " + note_common),
             BenchRecord(f"sim.closed_loop_steps_per_s{suffix}", closed, "drone-steps/s",
-                        note=f"the bench path flown (default capture mode) in moderate Dryden turbulence and the ship's "
+                        note="the bench path flown (default capture mode) in moderate Dryden turbulence and the ship's "
                              f"air wake, "
                              f"batch {batch}; " + note_common),
             BenchRecord(f"sim.ratio{suffix}", closed / raw, "ratio", anchor=RATIO_TARGETS[batch][0],

@@ -29,10 +29,9 @@ from __future__ import annotations
 from typing import Literal
 
 import numpy as np
-
-from wrp_eval.compiled import kernel
 from pydantic import Field
 
+from wrp_eval.compiled import kernel
 from wrp_eval.validation import StrictModel
 
 STOP, FLY_THROUGH = "stop", "fly-through"

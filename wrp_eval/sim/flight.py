@@ -73,22 +73,21 @@ from wrp_eval.sim.phases import (
     apply_transitions,
     check_failures,
     check_returns,
-    no_headway,
-    resume,
-    swap_batteries,
     control,
+    no_headway,
     outcome_reasons,
     parked_pose,
     passing_views,
     reference,
+    resume,
     setpoints,
+    swap_batteries,
     take_photos,
     tick,
     transitions,
 )
 from wrp_eval.sim.results import FlightResult
 from wrp_eval.sim.vehicle import PHANTOM4, QuadrotorParams, Scene, build_scene
-
 
 
 def _mocap_id(model: mujoco.MjModel, name: str) -> int | None:

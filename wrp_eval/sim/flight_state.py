@@ -194,7 +194,7 @@ class CaptureLog:
     def record(self, rows: np.ndarray, views: np.ndarray, shot: Shot, targets: FlightTargets) -> None:
         """Store photo ``views`` (m,) int of flights ``rows`` (m,) int; offsets are against the unperturbed
         plan."""
-        for stored, taken in zip(self.shots, shot):
+        for stored, taken in zip(self.shots, shot, strict=True):
             stored[rows, views] = taken
         self.offsets[rows, views, :3] = shot.position - targets.plan_position[views]
         self.offsets[rows, views, 3] = wrap_angle(shot.yaw - targets.plan_yaw[views])

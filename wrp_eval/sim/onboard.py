@@ -12,7 +12,6 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 import numpy as np
-
 from scipy.spatial.transform import Rotation
 
 from wrp_eval.camera import Camera, camera_angles, camera_rotations, optical_axes

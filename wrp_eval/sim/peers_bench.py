@@ -25,6 +25,7 @@ Skipped with one line when RotorPy is not installed (``pip install .[peers]``).
 
 from __future__ import annotations
 
+import logging
 import time
 
 import numpy as np
@@ -35,6 +36,8 @@ from wrp_eval.sim.config import SimSection
 from wrp_eval.sim.flight import FlightSimulator
 from wrp_eval.sim.navigation import NavigationSection
 from wrp_eval.sim.vehicle import GRAVITY_M_S2, PHANTOM4
+
+log = logging.getLogger(__name__)
 
 BATCHES = (1, 64, 1024)
 SIM_S = 10.0
@@ -123,7 +126,7 @@ def run_bench() -> list[BenchRecord]:
     try:
         import rotorpy  # noqa: F401  # the optional [peers] extra
     except ImportError:
-        print("peers: skipped (RotorPy is not installed: pip install '.[peers]')")
+        log.info("peers: skipped (RotorPy is not installed: pip install '.[peers]')")
         return []
     section = SimSection()
     warm_up_kernels()       # ours: compiled kernels loaded (or compiled) before any timing

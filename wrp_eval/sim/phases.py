@@ -366,7 +366,7 @@ def outcome_reason(cause: int, t: float, view: int, sec: SimSection) -> str:
 def outcome_reasons(state: FlightState, sec: SimSection) -> tuple[str, ...]:
     """(batch,) texts of the flights' outcomes ("" for a completed flight)."""
     return tuple(outcome_reason(c, t, v, sec) for c, t, v in
-                 zip(state.outcome.tolist(), state.flight_time.tolist(), state.photo.tolist()))
+                 zip(state.outcome.tolist(), state.flight_time.tolist(), state.photo.tolist(), strict=True))
 
 
 # -- phase transitions and the photo trigger ---------------------------------------------------------------

@@ -88,4 +88,4 @@ class FlightResult:
     @property
     def failure_reason(self) -> tuple[str, ...]:
         """(batch,) the reasons of the failed flights ("" elsewhere)."""
-        return tuple(r if f else "" for r, f in zip(self.outcome_reason, self.failed))
+        return tuple(r if f else "" for r, f in zip(self.outcome_reason, self.failed, strict=True))

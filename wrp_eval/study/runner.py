@@ -18,6 +18,7 @@ import copy
 import dataclasses
 import hashlib
 import json
+import logging
 import re
 import time
 import zlib
@@ -29,8 +30,7 @@ from wrp_eval.atomic import write_json_atomic
 from wrp_eval.campaign.runner import run_campaign
 from wrp_eval.config import ExperimentConfig
 from wrp_eval.experiment import ExperimentContext
-from wrp_eval.planning.path import KIND_TRANSITION
-from wrp_eval.planning.path import FlightPath
+from wrp_eval.planning.path import KIND_TRANSITION, FlightPath
 from wrp_eval.planning.rerun_log import save_plan_recording
 from wrp_eval.recording import merge_recordings
 from wrp_eval.ship.rerun_log import save_ship_recording
@@ -40,6 +40,8 @@ from wrp_eval.validation import parse_model
 from wrp_eval.wrp.config import WrpSection
 from wrp_eval.wrp.jobs import oracle_error, resolve_inputs, run_optimize
 from wrp_eval.wrp.optimize import apply_offsets, offset_totals
+
+log = logging.getLogger(__name__)
 
 # the offsets stream of the study's random viewpoint offsets (SeedSequence([seed, STREAM, crc(name), rep]))
 OFFSETS_STREAM = 9_001
@@ -150,7 +152,7 @@ def run_study(ctx: ExperimentContext, *, smallest: bool = False, quiet: bool = T
     for number, (variant, vctx) in enumerate(built, 1):
         cfg = vctx.config
         start = time.perf_counter()
-        print(f"[wrp-eval run] study {number}/{len(built)}: {variant.name} ...", flush=True)
+        log.info(f"[wrp-eval run] study {number}/{len(built)}: {variant.name} ...")
         folder = vctx.folders.study / slug(variant.name)
         ship, result = vctx.ship, vctx.planned
         path = dataclasses.replace(result.path, metadata={**result.path.metadata, "variant": variant.name})
@@ -214,8 +216,7 @@ def run_study(ctx: ExperimentContext, *, smallest: bool = False, quiet: bool = T
         save_plan_recording(result, ship.proxy, folder / "plan.rrd", recording_id=recording_id, other_paths=shown)
         recordings += [folder / "ship.rrd", folder / "plan.rrd"]
         timings[variant.name] = time.perf_counter() - start
-        print(f"[wrp-eval run] study {number}/{len(built)}: {variant.name}: done in {timings[variant.name]:.1f} s",
-              flush=True)
+        log.info(f"[wrp-eval run] study {number}/{len(built)}: {variant.name}: done in {timings[variant.name]:.1f} s")
     timings["total"] = time.perf_counter() - job_start
     doc = {"config": ctx.source, "run": run_name, "seed": config.run.seed, "smallest": smallest,
            "table": study.table, "title": study.title, "columns": study.columns, "rows": rows,

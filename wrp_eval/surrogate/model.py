@@ -27,8 +27,13 @@ from torch.nn import functional as F
 
 from wrp_eval.atomic import write_bytes_atomic
 from wrp_eval.errors import InputError
-from wrp_eval.surrogate.features import (CONDITION_NAMES, GEOMETRY_NAMES, INPUT_SETS, ViewContext,
-                                         conditions_or_reference)
+from wrp_eval.surrogate.features import (
+    CONDITION_NAMES,
+    GEOMETRY_NAMES,
+    INPUT_SETS,
+    ViewContext,
+    conditions_or_reference,
+)
 
 CHECKPOINT_FORMAT = "wrp-eval-surrogate"
 CHECKPOINT_VERSION = 2    # 2: input sets and per-view inputs (issue 18); version 1 checkpoints are refused

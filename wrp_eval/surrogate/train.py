@@ -9,6 +9,7 @@ deterministic for these layers).
 from __future__ import annotations
 
 import copy
+import logging
 import multiprocessing
 import sys
 import time
@@ -37,6 +38,8 @@ from wrp_eval.surrogate.diagnostics import mean_offset_baseline, single_view_agr
 from wrp_eval.surrogate.features import CONDITION_NAMES, COVERAGE_NAMES, GEOMETRY_NAMES, conditions_or_reference
 from wrp_eval.surrogate.metrics import regression_metrics
 from wrp_eval.surrogate.model import Surrogate, SurrogateMeta, ViewSequenceCNN
+
+log = logging.getLogger(__name__)
 
 CHECKPOINT_NAME = "surrogate.pt"
 METRICS_NAME = "metrics.json"
@@ -77,7 +80,7 @@ class _Progress:
         if self.bar is not None:
             self.bar.update(self.task, completed=epoch, info=info)
         elif self.enabled and (epoch % self.every == 0 or epoch == 1):
-            print(f"train epoch {epoch}/{self.total} {info}", flush=True)
+            log.info(f"train epoch {epoch}/{self.total} {info}")
 
     def close(self) -> None:
         if self.bar is not None:

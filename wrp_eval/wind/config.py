@@ -9,6 +9,7 @@ CLI), else the working directory.
 
 from __future__ import annotations
 
+from itertools import pairwise
 from typing import Literal
 
 from pydantic import Field, model_validator
@@ -32,7 +33,7 @@ class WindGridSection(StrictModel):
             if not hi - lo >= self.spacing_m:
                 raise ValueError(f"wind.grid.{name}: the range must be at least one spacing wide")
         z = self.z_levels_m
-        if any(b <= a for a, b in zip(z, z[1:])) or z[0] < 0:
+        if any(b <= a for a, b in pairwise(z)) or z[0] < 0:
             raise ValueError("wind.grid.z_levels_m must be >= 0 and strictly increasing")
         return self
 

@@ -156,7 +156,7 @@ def flight_w20_mps(sections: Sequence[WindSection], at_20ft: np.ndarray) -> np.n
     if not any(turbulent):
         return None
     w20 = np.zeros(len(sections))
-    for i, (s, on) in enumerate(zip(sections, turbulent)):   # per flight, once at construction
+    for i, (s, on) in enumerate(zip(sections, turbulent, strict=True)):   # per flight, once at construction
         t = s.turbulence
         if not on:
             continue

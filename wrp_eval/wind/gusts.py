@@ -34,14 +34,14 @@ class OneMinusCosineGusts:
         mean_azimuth = np.broadcast_to(np.asarray(mean_azimuth_rad, dtype=float), (n_flights,))
         starts, azimuths = [], []
         spread = np.deg2rad(direction_spread_deg)
-        for g, azimuth in zip(rngs, mean_azimuth):  # once per flight at construction, never per step
+        for g, azimuth in zip(rngs, mean_azimuth, strict=True):  # once per flight at construction, never per step
             count = g.poisson(rate_per_min / 60.0 * horizon_s)
             starts.append(np.sort(g.uniform(0.0, horizon_s, count)))
             azimuths.append(azimuth + g.uniform(-spread, spread, count))
         width = max([len(s) for s in starts] + [1])
         self.start_s = np.full((n_flights, width), np.inf)      # padded with "never"
         self.azimuth_rad = np.zeros((n_flights, width))
-        for i, (s, a) in enumerate(zip(starts, azimuths)):
+        for i, (s, a) in enumerate(zip(starts, azimuths, strict=True)):
             self.start_s[i, :len(s)] = s
             self.azimuth_rad[i, :len(a)] = a
 

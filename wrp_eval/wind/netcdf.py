@@ -168,7 +168,7 @@ def _checked(ds, name: str, dims: tuple[str, ...], sizes: dict[str, int], path: 
     if len(got) != len(dims):
         raise InputError(path, f"variable {name} has dims {got}, expected {dims} (or their _stag twins)")
     values = np.asarray(var.values, dtype=float)
-    for axis, (g, want) in enumerate(zip(got, dims)):
+    for axis, (g, want) in enumerate(zip(got, dims, strict=True)):
         if g == want:
             if want in sizes and values.shape[axis] != sizes[want]:
                 raise InputError(path, f"variable {name}: dimension {g} has size {values.shape[axis]}, "
@@ -181,7 +181,7 @@ def _checked(ds, name: str, dims: tuple[str, ...], sizes: dict[str, int], path: 
                                    f"expected {sizes[want] + 1}")
     if not np.all(np.isfinite(values)):
         raise InputError(path, f"variable {name} contains NaN or Inf")
-    for axis, (g, want) in enumerate(zip(got, dims)):
+    for axis, (g, want) in enumerate(zip(got, dims, strict=True)):
         if g != want:  # destagger: average neighbouring staggered points onto mass points
             lo = np.take(values, np.arange(values.shape[axis] - 1), axis=axis)
             hi = np.take(values, np.arange(1, values.shape[axis]), axis=axis)
@@ -304,7 +304,8 @@ def read_mean_wind(path: str | Path, lat_deg: float, lon_deg: float, heading_deg
         vel = np.stack([vx[0], vy[0], w[index]], axis=-1)                   # (nx, ny, nz, 3)
         hgt = heights[index]
         if fill.size:
-            # neutral log law matched to the 10 m wind (Charnock 1955 roughness): U(z) = U10 ln(z/z0)/ln(10/z0), Charnock z0
+            # neutral log law matched to the 10 m wind (Charnock 1955 roughness): U(z) = U10 ln(z/z0)/ln(10/z0),
+            # Charnock z0
             sx, sy = to_ship(u10[index], v10[index])
             z0, _ = charnock_roughness(np.hypot(sx, sy), charnock_alpha)
             factor = log_law_factor(fill[None, None, :], z0[..., None])      # (nx, ny, nf)
@@ -314,7 +315,7 @@ def read_mean_wind(path: str | Path, lat_deg: float, lon_deg: float, heading_deg
         hgt_list.append(hgt)
         vel_list.append(vel)
         weights.append(weight)
-    heights_out = sum(wt * h for wt, h in zip(weights, hgt_list))
-    velocity_out = sum(wt * v for wt, v in zip(weights, vel_list))
+    heights_out = sum(wt * h for wt, h in zip(weights, hgt_list, strict=True))
+    velocity_out = sum(wt * v for wt, v in zip(weights, vel_list, strict=True))
     return WindGrid(x_axis, y_axis, heights_out, velocity_out, float(grid_yaw),
                     source=f"{path} ({layout.name})")

@@ -34,7 +34,7 @@ def quiver_png(path: Path, x, y, z, velocity, source: str) -> None:
     # the fastest arrow spans ~90 % of the spacing between drawn arrows (readable whatever the speeds)
     spacing = step * (float(np.min(np.diff(x))) if len(x) > 1 else 1.0)
     arrow_scale = max(float(speed.max()), 1e-6) / (0.9 * spacing)
-    for ax, k in zip(axes[0], levels):
+    for ax, k in zip(axes[0], levels, strict=True):
         sl = (slice(None, None, step), slice(None, None, step), k)
         q = ax.quiver(x[::step, None] * np.ones(len(y[::step])), np.ones(len(x[::step]))[:, None] * y[None, ::step],
                       velocity[sl][..., 0], velocity[sl][..., 1], speed[sl], cmap="viridis",

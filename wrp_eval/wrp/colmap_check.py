@@ -18,6 +18,7 @@ for it, so the summary also counts the winds where COLMAP's |d| exceeds ``COLMAP
 
 from __future__ import annotations
 
+import logging
 from pathlib import Path
 
 import numpy as np
@@ -32,6 +33,8 @@ from wrp_eval.recon.synthetic import SyntheticOracle
 from wrp_eval.recon.validate import capture_sha
 from wrp_eval.surrogate.diagnostics import campaign_oracle
 from wrp_eval.wrp.evaluate import read_trials
+
+log = logging.getLogger(__name__)
 
 COLMAP_NOISE_M = 0.0012      # COLMAP's error scatter on unchanged capture content (issue 17's jitter controls)
 PATHS = ("initial", "iswrp", "swrp")
@@ -97,7 +100,7 @@ def colmap_sign_check(evaluate_dir: str | Path, oracle_section, mesh, out: str |
                 colmap.work_dir = out / "colmap" / f"{name}-{trial}"
                 scored[key] = (_error(synthetic.evaluate(cs, mesh, seed=0)), _error(colmap.evaluate(cs, mesh, seed=0)))
             syn, col = scores[name][int(trial)] = scored[key]
-            print(f"wind {trial} {name:8s} synthetic {syn * 1e3:8.2f} mm  colmap {col * 1e3:8.2f} mm", flush=True)
+            log.info(f"wind {trial} {name:8s} synthetic {syn * 1e3:8.2f} mm  colmap {col * 1e3:8.2f} mm")
         doc["rows"] = _rows(scores, moved)
         doc["wrp"] = _summary(doc["rows"], moved)
         write_json_atomic(out / "colmap_check.json", doc)

@@ -14,6 +14,7 @@ shared by both optimisations of ``evaluate``; a caller that holds them already (
 from __future__ import annotations
 
 import json
+import logging
 from dataclasses import dataclass, replace
 from pathlib import Path
 
@@ -25,17 +26,15 @@ from wrp_eval.campaign.evaluators import DEFAULT_EVALUATOR
 from wrp_eval.campaign.runner import run_campaign
 from wrp_eval.errors import InputError
 from wrp_eval.experiment import ExperimentContext, evaluated_campaign_dir, evaluated_wrp_dir
-from wrp_eval.planning.path import FlightPath
-from wrp_eval.planning.path import digest_of_document
+from wrp_eval.planning.path import FlightPath, digest_of_document
 from wrp_eval.recon.capture_io import captures_from_path
 from wrp_eval.recon.scene import ScoredShip
+from wrp_eval.ship.nofly import flyable
 from wrp_eval.surrogate.data import TrialData, load_campaign_trials
 from wrp_eval.surrogate.model import Surrogate
 from wrp_eval.wrp.config import WrpSection
 from wrp_eval.wrp.confirm import CONFIRM_ROUNDS, confirm_moves
-from wrp_eval.ship.nofly import flyable
 from wrp_eval.wrp.evaluate import PathTrials, box_plot, forecast_verdict, read_trials, summarise
-from wrp_eval.wrp.placebo import placebo_offsets
 from wrp_eval.wrp.optimize import (
     WrpParams,
     WrpResult,
@@ -44,6 +43,9 @@ from wrp_eval.wrp.optimize import (
     offset_cholesky,
     sample_radii,
 )
+from wrp_eval.wrp.placebo import placebo_offsets
+
+log = logging.getLogger(__name__)
 
 EVALUATED_PATHS = ("initial", "iswrp", "swrp")
 WRP_KINDS = EVALUATED_PATHS[1:]
@@ -212,7 +214,7 @@ def run_optimize(ctx: ExperimentContext, section: WrpSection, out: Path, inputs:
     write_json_atomic(out / "wrp_metrics.json", doc)
     if not quiet:
         err = table["oracle_error_m"]
-        print(f"{section.kind} t={threshold:.4g} m: {table['offset_rate_pct']:.1f} % viewpoints moved, position "
+        log.info(f"{section.kind} t={threshold:.4g} m: {table['offset_rate_pct']:.1f} % viewpoints moved, position "
               f"offset {table['position_offset_m']:.2f} m, rotation offset {table['rotation_offset_deg']:.1f} deg, "
               f"{table['time_s']:.2f} s; error: oracle "
               + (f"{err:.4f} m" if err is not None else "n/a") + f", surrogate {table['surrogate_error_m']:.4f} m "
@@ -303,7 +305,7 @@ def evaluate_job(ctx: ExperimentContext, out: Path | None = None, *, n_trials: i
         summary = run_campaign(flown, path, folder, root_seed=ctx.campaign_seed, config_dir=ctx.config_dir,
                                progress=not quiet, evaluator=evaluator or DEFAULT_EVALUATOR)
         if not quiet:
-            print(f"{name}: {summary.done} trials in {folder} ({summary.failed} failed)")
+            log.info(f"{name}: {summary.done} trials in {folder} ({summary.failed} failed)")
         return read_trials(name, folder)
 
     flown_trials = [fly(name, path) for name, path in paths.items()]
@@ -336,20 +338,20 @@ def evaluate_job(ctx: ExperimentContext, out: Path | None = None, *, n_trials: i
     box_plot(flown_trials, out / "boxplot.png")
     if not quiet:
         for row in result["paths"]:
-            print(f"{row['path']:8s} mean {row['mean_error_m']:.4f} m  std {row['std_error_m']:.4f}  "
+            log.info(f"{row['path']:8s} mean {row['mean_error_m']:.4f} m  std {row['std_error_m']:.4f}  "
                   f"p95 {row['p95_error_m']:.4f}  failed {100 * row['failure_rate']:.1f} %")
         for row in result["paired"]:
             ci = row["mean_error_diff_ci"]
-            print(f"{row['path']} - initial: mean error {row['mean_error_diff_m']:+.4f} m "
+            log.info(f"{row['path']} - initial: mean error {row['mean_error_diff_m']:+.4f} m "
                   + (f"[{ci[0]:+.4f}, {ci[1]:+.4f}]" if ci else "") + f" over {row['both_succeeded']} pairs, "
                   f"failure rate {100 * row['failure_rate_diff']:+.1f} points")
         for kind, verdict in result["robustness"].items():
-            print(f"{kind}: robustness gain {1e3 * verdict['gain_m']:+.2f} mm, placebo p95 "
+            log.info(f"{kind}: robustness gain {1e3 * verdict['gain_m']:+.2f} mm, placebo p95 "
                   f"{1e3 * verdict['placebo_gain_p95_m']:+.2f} mm: "
                   + ("RECOMMENDED" if verdict["recommended"] else f"not recommended ({verdict['reason']})"))
-        print(f"recommended path: {result['recommended_path']}")
+        log.info(f"recommended path: {result['recommended_path']}")
         if "forecast" in result:
-            print(result["forecast"]["summary"])
+            log.info(result["forecast"]["summary"])
     return result
 
 

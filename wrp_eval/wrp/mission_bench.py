@@ -30,7 +30,7 @@ def _endings(folder: Path) -> dict[str, int]:
     """How the campaign's missions ended: outcome name -> count."""
     names, counts = np.unique([str(e) for e in TrialStore(folder).read_table(["ending"]).column("ending").to_pylist()],
                               return_counts=True)
-    return dict(zip(names.tolist(), counts.tolist()))
+    return dict(zip(names.tolist(), counts.tolist(), strict=True))
 
 
 def _ci(row: dict, key: str) -> str:
@@ -42,7 +42,8 @@ def speed_records(speed: float, row: dict, endings: dict[str, int]) -> list[Benc
     """The mission records of one wind speed from its path summary ``row`` and its ending counts."""
     tag = f"u{speed:g}"
     note = (f"quickstart path, physical design, U10 {speed:g} m/s, turbulence from the mean wind, {row['trials']} "
-            f"flights; endings {endings}; P(meets spec) {_ci(row, 'p_meets_spec')}, sorties {_ci(row, 'expected_sorties')}, "
+            f"flights; endings {endings}; P(meets spec) {_ci(row, 'p_meets_spec')}, sorties "
+            f"{_ci(row, 'expected_sorties')}, "
             f"mission time {_ci(row, 'mean_mission_time_s')} s (completed missions), P(completed) "
             f"{_ci(row, 'p_completed')}, P(one sortie) {_ci(row, 'p_one_sortie')} (95 % CIs); "
             f"spec: error <= {row['spec_error_m'] * 1e3:.2f} mm, completeness >= {row['spec_completeness']:g}")

@@ -239,7 +239,7 @@ def optimise_view_improve(query: ViewQuery, view: int, params: WrpParams,
         scored += len(pos)
         parts.append((lo + survivors, pos[survivors], yaw_best[survivors], e1[survivors],
                       d.neighbour_offset[survivors], d.neighbour_yaw[survivors]))
-    it, pos, yaw, e1, n_off, n_yaw = (np.concatenate(column) for column in zip(*parts))
+    it, pos, yaw, e1, n_off, n_yaw = (np.concatenate(column) for column in zip(*parts, strict=True))
     if it.size == 0:
         return -1, np.zeros(4), float("nan"), float("nan"), scored
     pick = np.lexsort((it, e1))[:params.improve_candidates]        # lowest E first, ties: earlier iteration

@@ -16,7 +16,6 @@ neighbours is more than the sum of each; the map ranks views, it does not add up
 from __future__ import annotations
 
 from dataclasses import dataclass
-
 from pathlib import Path
 
 import numpy as np
@@ -67,7 +66,7 @@ def save_risk_recording(path, risk: ViewRisk, file: str | Path, recording_id: st
     colours = (255 * colormaps["inferno_r"](level)[:, :3]).astype(np.uint8)
     labels = [f"view {i}: risk {1e3 * r:.2f} mm (missed in {100 * q:.0f} % of flights, costs {1e3 * c:+.2f} mm)"
               for i, (r, q, c) in enumerate(zip(np.nan_to_num(risk.risk_m), risk.p_missed,
-                                                np.nan_to_num(risk.loss_m)))]
+                                                np.nan_to_num(risk.loss_m), strict=True))]
     with recording(file, recording_id=recording_id) as rec:
         rec.log("risk", rr.ViewCoordinates.RIGHT_HAND_Z_UP, static=True)
         rec.log("risk/viewpoints", rr.Points3D(np.asarray(path.positions), colors=colours, radii=0.6 + 1.4 * level,
