@@ -65,18 +65,33 @@ def run_pipeline(ctx: ExperimentContext, *, quiet: bool = True, smallest: bool =
         return run_study(ctx, smallest=smallest, quiet=quiet)
     if smallest:
         raise InputError(ctx.source, "--smallest needs a study: section (it applies study.smallest)")
-    folders = ctx.folders
-    out = folders.root
+    out = ctx.folders.root
     out.mkdir(parents=True, exist_ok=True)
     timings: dict[str, float] = {}
     summary: dict = {"config": ctx.source, "seed": ctx.run_seed, "out": str(out)}
     job_start = time.perf_counter()
+    path = _ship_and_plan(ctx, summary, timings)
+    trials, envelope = _flights(ctx, path, summary, timings, quiet)
+    with Step(timings, "export", "missions of the three paths"):
+        summary["missions"] = export_missions(ctx)
+    with Step(timings, "report", "report.md, figures and run.rrd"):
+        risk = _risk_and_recording(ctx, path, summary, envelope is not None)
+        timings["total"] = time.perf_counter() - job_start
+        summary["timings_s"] = timings
+        report = write_report(ctx, path, summary, trials, risk, envelope)
+    timings["total"] = time.perf_counter() - job_start
+    write_json_atomic(out / "run_summary.json", summary)
+    summary["report"] = str(report)
+    return summary
 
+
+def _ship_and_plan(ctx: ExperimentContext, summary: dict, timings: dict) -> FlightPath:
+    """The ship and the planned path, with their files and recordings; returns the path."""
+    out, folders = ctx.folders.root, ctx.folders
     with Step(timings, "ship", "particulars, proxy, mesh, surface complexity"):
         ship = ctx.ship
         write_json_atomic(out / "ship.json", ship.report())
-
-    with Step(timings, "plan", f"{config.planning.method} reconstruction path (paper Sec. 3)"):
+    with Step(timings, "plan", f"{ctx.config.planning.method} reconstruction path (paper Sec. 3)"):
         result = ctx.planned
         path = result.path
         path.save(folders.plan / "path.json")
@@ -86,60 +101,62 @@ def run_pipeline(ctx: ExperimentContext, *, quiet: bool = True, smallest: bool =
         save_ship_recording(ship, out / "ship.rrd", recording_id=recording_id)
         save_plan_recording(result, ship.proxy, out / "plan.rrd", recording_id=recording_id)
         summary["plan"] = result.metrics
+    return path
 
+
+def _flights(ctx: ExperimentContext, path: FlightPath, summary: dict, timings: dict, quiet: bool):
+    """Campaign, surrogate, ISWRP / SWRP with their evaluation, and the envelope of the recommended path;
+    returns (the campaign's trials, the envelope or None)."""
+    config, folders = ctx.config, ctx.folders
     campaign_dir = folders.campaign
     with Step(timings, "campaign", f"{config.campaign.n_trials} perturbed flights scored by the "
                                    f"{config.campaign.oracle} oracle"):
         camp = campaign_job(ctx, out_dir=campaign_dir, progress=not quiet, path=path)
         summary["campaign"] = {"dir": str(campaign_dir), "trials": camp.done, "failed": camp.failed,
                                "trials_per_min": camp.trials_per_min, "turbulence_stress": camp.stress_note}
-
     with Step(timings, "surrogate", "train the CNN surrogate on the campaign"):
         trained, trials, _ = train_from_campaign(ctx, campaign_dir, folders.surrogate, progress=not quiet)
         summary["surrogate"] = {**trained.metrics["test"],
                                 "physical_variance_share": trained.metrics.get("physical_variance_share")}
-
     with Step(timings, "wrp", "ISWRP and SWRP, then the three paths flown under the same winds"):
         summary["evaluate"] = evaluate_job(ctx, folders.evaluate, checkpoint=folders.surrogate / CHECKPOINT_NAME,
                                            campaign=campaign_dir, quiet=quiet, surrogate=trained.surrogate,
                                            trials=trials, forecast=config.envelope.run_grid is None)
         if camp.stress_note and summary["evaluate"].get("forecast"):
             summary["evaluate"]["forecast"]["stress_notes"] = [f"**Stress test**: {camp.stress_note}.", ""]
+    return trials, _envelope(ctx, path, summary, timings)
 
-    envelope = None
-    grid = config.envelope.run_grid
-    if grid is not None:
-        chosen = summary["evaluate"]["recommended_path"]
-        with Step(timings, "envelope", f"wind envelope of the {chosen} path ({grid.directions} directions, "
-                                       f"U10 up to {grid.speeds_m_s[-1]:g} m/s)"):
-            fly = path if chosen == "initial" else FlightPath.load(folders.evaluated_wrp(chosen) / "path.json")
-            job = envelope_job(ctx, grid, path=fly)
-            envelope = job.envelope
-            summary["envelope"] = {"path": chosen, "go": envelope.go, "files": job.files,
-                                   "boundaries_m_s": {b.direction: b.boundary_m_s for b in envelope.boundaries},
-                                   "flights": envelope.flights_total}
 
-    with Step(timings, "export", "missions of the three paths"):
-        summary["missions"] = export_missions(ctx)
+def _envelope(ctx: ExperimentContext, path: FlightPath, summary: dict, timings: dict):
+    """The wind envelope of the recommended path on ``envelope.run_grid`` (None when that is off)."""
+    grid = ctx.config.envelope.run_grid
+    if grid is None:
+        return None
+    chosen = summary["evaluate"]["recommended_path"]
+    with Step(timings, "envelope", f"wind envelope of the {chosen} path ({grid.directions} directions, "
+                                   f"U10 up to {grid.speeds_m_s[-1]:g} m/s)"):
+        fly = path if chosen == "initial" else FlightPath.load(ctx.folders.evaluated_wrp(chosen) / "path.json")
+        job = envelope_job(ctx, grid, path=fly)
+        summary["envelope"] = {"path": chosen, "go": job.envelope.go, "files": job.files,
+                               "boundaries_m_s": {b.direction: b.boundary_m_s for b in job.envelope.boundaries},
+                               "flights": job.envelope.flights_total}
+    return job.envelope
 
-    with Step(timings, "report", "report.md, figures and run.rrd"):
-        risk = view_risk(ctx.scored_ship, path, campaign_flown_offsets(campaign_dir))
-        save_risk_recording(path, risk, out / "risk.rrd", recording_id=campaign_recording_id(path))
-        parts = [out / "ship.rrd", out / "plan.rrd", out / "risk.rrd"]
-        if envelope is not None:
-            parts.append(folders.envelope / "envelope.rrd")
-        if (campaign_dir / "campaign.rrd").is_file():
-            parts.append(campaign_dir / "campaign.rrd")
-        merge_recordings(parts, folders.recording)
-        timings["total"] = time.perf_counter() - job_start
-        summary["timings_s"] = timings
-        summary["view_risk"] = {"risk_m": risk.risk_m.tolist(), "p_missed": risk.p_missed.tolist(),
-                                "loss_m": risk.loss_m.tolist(), "base_error_m": risk.base_error_m}
-        report = write_report(ctx, path, summary, trials, risk, envelope)
-    timings["total"] = time.perf_counter() - job_start
-    write_json_atomic(out / "run_summary.json", summary)
-    summary["report"] = str(report)
-    return summary
+
+def _risk_and_recording(ctx: ExperimentContext, path: FlightPath, summary: dict, with_envelope: bool):
+    """The per-view risk map (risk.rrd and the summary) and the run's merged recording; returns the risk."""
+    out, folders, campaign_dir = ctx.folders.root, ctx.folders, ctx.folders.campaign
+    risk = view_risk(ctx.scored_ship, path, campaign_flown_offsets(campaign_dir))
+    save_risk_recording(path, risk, out / "risk.rrd", recording_id=campaign_recording_id(path))
+    parts = [out / "ship.rrd", out / "plan.rrd", out / "risk.rrd"]
+    if with_envelope:
+        parts.append(folders.envelope / "envelope.rrd")
+    if (campaign_dir / "campaign.rrd").is_file():
+        parts.append(campaign_dir / "campaign.rrd")
+    merge_recordings(parts, folders.recording)
+    summary["view_risk"] = {"risk_m": risk.risk_m.tolist(), "p_missed": risk.p_missed.tolist(),
+                            "loss_m": risk.loss_m.tolist(), "base_error_m": risk.base_error_m}
+    return risk
 
 
 def export_missions(ctx: ExperimentContext) -> dict[str, list[str]]:

@@ -193,30 +193,10 @@ def run_campaign(trial: TrialConfig, path: FlightPath, out_dir: str | Path, *, r
                     recorder.log_trial(row)
 
         bar = CampaignProgress(section.n_trials, int(np.unique(stored).size), enabled=progress)
-        buffer: list[dict] = []
-        last_flush = time.perf_counter()
-        ran = 0
         with backends.TrialPool(section.backend.kind, max(1, workers) if section.backend.kind == "ray" else workers,
                                 section.backend.address) as pool:
-            stream = pool.run([(spec, ids) for ids in batches])
-            try:
-                for _, records in stream:
-                    buffer.extend(records)
-                    ran += len(records)
-                    if recorder is not None:
-                        for row in records:
-                            recorder.log_trial(row)
-                    bar.update(len(records), sum(bool(r["failed"]) for r in records))
-                    if len(buffer) >= section.outputs.chunk_trials or \
-                            time.perf_counter() - last_flush >= section.outputs.flush_s:
-                        store.append(buffer)
-                        buffer = []
-                        last_flush = time.perf_counter()
-                store.append(buffer)
-                buffer = []
-            finally:
-                stream.close()
-                bar.close()
+            ran = _store_as_they_come(pool.run([(spec, ids) for ids in batches]), store, section.outputs, recorder,
+                                      bar)
         rerun_s = 0.0
         if recorder is not None:
             recorder.close()
@@ -229,6 +209,31 @@ def run_campaign(trial: TrialConfig, path: FlightPath, out_dir: str | Path, *, r
                            failed=int(np.sum(table.column("failed").to_numpy(zero_copy_only=False))),
                            errors=errors, ran=ran, wall_s=wall,
                            trials_per_min=60.0 * ran / wall if wall > 0 else 0.0, rerun_s=rerun_s)
+
+
+def _store_as_they_come(stream, store: TrialStore, outputs, recorder, bar: CampaignProgress) -> int:
+    """Append the records of ``stream`` (task index, records) to ``store`` in chunks of ``outputs.chunk_trials``
+    (or after ``outputs.flush_s``), logging each to the recorder and the progress bar; returns how many ran."""
+    buffer: list[dict] = []
+    last_flush = time.perf_counter()
+    ran = 0
+    try:
+        for _, records in stream:
+            buffer.extend(records)
+            ran += len(records)
+            if recorder is not None:
+                for row in records:
+                    recorder.log_trial(row)
+            bar.update(len(records), sum(bool(r["failed"]) for r in records))
+            if len(buffer) >= outputs.chunk_trials or time.perf_counter() - last_flush >= outputs.flush_s:
+                store.append(buffer)
+                buffer = []
+                last_flush = time.perf_counter()
+        store.append(buffer)
+    finally:
+        stream.close()
+        bar.close()
+    return ran
 
 
 def active_seconds(start: np.ndarray, end: np.ndarray) -> float:
