@@ -200,161 +200,172 @@ def envelope_section(env: Envelope, path_name: str, figure: str, risk_figure: st
 def write_report(ctx: ExperimentContext, path, summary: dict, trials: TrialData, risk: ViewRisk | None = None,
                  envelope: Envelope | None = None) -> Path:
     """Figures under ``<run>/figures`` and ``<run>/report.md``; returns the report's path. path: the planned
-    Path; summary: the run summary so far; trials: the campaign's trials (as the surrogate was trained on);
+    FlightPath; summary: the run summary so far; trials: the campaign's trials (as the surrogate was trained on);
     risk: the per-view risk map (:mod:`wrp_eval.wrp.risk`), None: no risk section; envelope: the run's wind
     envelope (the first page), None: the forecast flights of the evaluation open the report instead."""
-    config, ship, out = ctx.config, ctx.ship, ctx.folders.root
-    figures = out / "figures"
+    config, out = ctx.config, ctx.folders.root
+    _figures(ctx, path, trials, risk)
+    ev = summary["evaluate"]
+    first_page = (envelope_section(envelope, summary["envelope"]["path"],
+                                   os.path.relpath(ctx.folders.envelope / "envelope.png", out),
+                                   "figures/view_risk.png" if risk is not None else None)
+                  if envelope is not None else operator_section(ev))
+    lines = [*header_section(config.run.name, summary["config"], config.run.seed, ctx.ship), *first_page,
+             *ship_section(ctx.ship.complexity, path, summary["plan"]), *WIND_SECTION,
+             *campaign_section(summary["campaign"], config.campaign.perturbation.design, summary["surrogate"]),
+             *surrogate_section(summary["surrogate"]), *wrp_section(ev["wrp"]), *robustness_section(ev),
+             *(risk_section(risk) if risk is not None else []),
+             *missions_section(summary["missions"], out), *timings_section(summary["timings_s"], out)]
+    return write_text_atomic(out / "report.md", "\n".join(lines))
+
+
+def _figures(ctx: ExperimentContext, path, trials: TrialData, risk: ViewRisk | None) -> None:
+    """The report's own figures under ``<run>/figures``: ship and path, the risk map, the wind, the offsets."""
+    figures, ship = ctx.folders.root / "figures", ctx.ship
     ship_path_figure(ship.mesh, path, figures / "ship_path.png")
     if risk is not None:
         ship_path_figure(ship.mesh, path, figures / "view_risk.png", risk.risk_m)
-    x, y, z, velocity = sample_mean_field(config.wind, ship.particulars, ctx.config_dir)
+    x, y, z, velocity = sample_mean_field(ctx.config.wind, ship.particulars, ctx.config_dir)
     figures.mkdir(parents=True, exist_ok=True)
-    quiver_png(figures / "wind_field.png", x, y, z, velocity, config.wind.source)
+    quiver_png(figures / "wind_field.png", x, y, z, velocity, ctx.config.wind.source)
     offsets_figure(trials.offsets[trials.complete()], figures / "offsets.png")
 
-    plan_m = summary["plan"]
-    t = plan_m["timings"]
-    ev = summary["evaluate"]
-    sur = summary["surrogate"]
-    lines = [
-        f"# wrp-eval run `{config.run.name}`",
-        "",
-        f"Config `{summary['config']}`, seed {config.run.seed}; ship: {ship.particulars.ship_type.value} "
-        f"({ship.proxy.length_m:.0f} x {ship.proxy.breadth_m:.0f} x {ship.proxy.height_m:.1f} m proxy above the "
-        f"waterline, no-fly margin {ship.proxy.no_fly_margin_m:g} m). The paper's figures are anchors from "
-        "another system (Unity scene, ContextCapture, Xeon + RTX 3090), not targets.",
-        "",
-        *(envelope_section(envelope, summary["envelope"]["path"],
-                           os.path.relpath(ctx.folders.envelope / "envelope.png", out),
-                           "figures/view_risk.png" if risk is not None else None)
-          if envelope is not None else operator_section(ev)),
-        "## Ship and path (paper Sec. 3)",
-        "",
-        "![ship and path](figures/ship_path.png)",
-        "",
-        "| per face | " + " | ".join(ship.complexity.face_names) + " |",
-        "|---|" + "---|" * 5,
-        "| surface complexity (tri/m^2) | " + " | ".join(fmt(c) for c in ship.complexity.complexity) + " |",
-        "",
-        "| figure | ours | paper (Table 7, stylized ship) |",
-        "|---|---|---|",
-        f"| viewpoints | {len(path)} ({plan_m.get('n_transition_views', 0)} transition) | {PAPER['views']} |",
+
+def header_section(run_name: str, config_source: str, seed: int, ship) -> list[str]:
+    """The title and what was run: config, seed, the ship's proxy."""
+    proxy = ship.proxy
+    return [f"# wrp-eval run `{run_name}`", "",
+            f"Config `{config_source}`, seed {seed}; ship: {ship.particulars.ship_type.value} "
+            f"({proxy.length_m:.0f} x {proxy.breadth_m:.0f} x {proxy.height_m:.1f} m proxy above the "
+            f"waterline, no-fly margin {proxy.no_fly_margin_m:g} m). The paper's figures are anchors from "
+            "another system (Unity scene, ContextCapture, Xeon + RTX 3090), not targets.", ""]
+
+
+def ship_section(complexity, path, plan_metrics: dict) -> list[str]:
+    """Per-face surface complexity and the path's figures beside the paper's Table 7."""
+    t = plan_metrics["timings"]
+    return [
+        "## Ship and path (paper Sec. 3)", "", "![ship and path](figures/ship_path.png)", "",
+        "| per face | " + " | ".join(complexity.face_names) + " |",
+        "|---|" + "---|" * len(complexity.face_names),
+        "| surface complexity (tri/m^2) | " + " | ".join(fmt(c) for c in complexity.complexity) + " |", "",
+        "| figure | ours | paper (Table 7, stylized ship) |", "|---|---|---|",
+        f"| viewpoints | {len(path)} ({plan_metrics.get('n_transition_views', 0)} transition) | {PAPER['views']} |",
         f"| length (m) | {path.length_m:.1f} | {PAPER['length_m']} |",
         f"| flight time (s) | {path.flight_time_s:.1f} | {PAPER['flight_time_s']} |",
         f"| Min (s) | {fmt(t.get('min_s'))} | {PAPER['min_s']} |",
         f"| Max (s) | {fmt(t.get('max_s'))} | {PAPER['max_s']} |",
         f"| tour (s) | {fmt(t.get('tsp_s'))} | {PAPER['tsp_s']} (GA) |",
-        f"| planning total (s) | {fmt(t.get('total_s'))} | |",
-        "",
-        "## Wind (mean field; Dryden turbulence on top in every flight)",
-        "",
-        "![wind field](figures/wind_field.png)",
-        "",
-        "## Monte Carlo campaign",
-        "",
-        f"{summary['campaign']['trials']} trials ({summary['campaign']['failed']} failed) in "
-        f"`{summary['campaign']['dir']}`; {_design_text(config.campaign.perturbation.design)}, flown through "
-        "sampled winds in MuJoCo, scored by the synthetic reconstruction oracle.",
-        "",
-        "![flown offsets](figures/offsets.png)",
-        "",
-        *([f"Share of the flown offsets' variance that the flights made (not commanded): position "
-           f"{fmt(share['position'], 3)}, yaw {fmt(share['yaw'], 3)} (issue 18 target >= 0.9).", ""]
-          if (share := sur.get("physical_variance_share")) else []),
-        "## Surrogate (paper Sec. 4.1)",
-        "",
-        "| held-out test trials | ours | paper |",
-        "|---|---|---|",
-        f"| R^2 | {fmt(sur['r2'], 3)} | {PAPER['surrogate_r2']} |",
-        f"| RMSE (m) | {fmt(sur['rmse'], 3)} | {PAPER['surrogate_rmse']} (on errors of ~3 m) |",
-        f"| MAE (m) | {fmt(sur['mae'], 3)} | |",
-        f"| trials | {sur['n']} | 300 experiments in all |",
-        "",
-        "![parity](surrogate/parity.png)",
-        "",
-        "## ISWRP and SWRP (paper Table 3 columns; paper at threshold 0.30)",
-        "",
-        "| path | threshold (m) | offset rate (%) | position offset (m) | rotation offset (deg) | time (s) | "
-        "oracle error, wind-free (m) | paper: rate / pos / rot / time / error |",
-        "|---|---|---|---|---|---|---|---|",
-    ]
+        f"| planning total (s) | {fmt(t.get('total_s'))} | |", ""]
+
+
+WIND_SECTION = ["## Wind (mean field; Dryden turbulence on top in every flight)", "",
+                "![wind field](figures/wind_field.png)", ""]
+
+
+def campaign_section(campaign: dict, design: str, surrogate: dict) -> list[str]:
+    """The campaign's trials, its design, the flown offsets and the share of their variance the flights made."""
+    share = surrogate.get("physical_variance_share")
+    return ["## Monte Carlo campaign", "",
+            f"{campaign['trials']} trials ({campaign['failed']} failed) in `{campaign['dir']}`; "
+            f"{_design_text(design)}, flown through sampled winds in MuJoCo, scored by the synthetic reconstruction "
+            "oracle.", "", "![flown offsets](figures/offsets.png)", "",
+            *([f"Share of the flown offsets' variance that the flights made (not commanded): position "
+               f"{fmt(share['position'], 3)}, yaw {fmt(share['yaw'], 3)} (issue 18 target >= 0.9).", ""]
+              if share else [])]
+
+
+def surrogate_section(sur: dict) -> list[str]:
+    """The surrogate's held-out figures beside the paper's Sec. 4.1."""
+    return ["## Surrogate (paper Sec. 4.1)", "", "| held-out test trials | ours | paper |", "|---|---|---|",
+            f"| R^2 | {fmt(sur['r2'], 3)} | {PAPER['surrogate_r2']} |",
+            f"| RMSE (m) | {fmt(sur['rmse'], 3)} | {PAPER['surrogate_rmse']} (on errors of ~3 m) |",
+            f"| MAE (m) | {fmt(sur['mae'], 3)} | |", f"| trials | {sur['n']} | 300 experiments in all |", "",
+            "![parity](surrogate/parity.png)", ""]
+
+
+def wrp_section(wrp: dict) -> list[str]:
+    """The ISWRP and SWRP rows of the paper's Table 3 (ours, the paper's at threshold 0.30 beside)."""
+    lines = ["## ISWRP and SWRP (paper Table 3 columns; paper at threshold 0.30)", "",
+             "| path | threshold (m) | offset rate (%) | position offset (m) | rotation offset (deg) | time (s) | "
+             "oracle error, wind-free (m) | paper: rate / pos / rot / time / error |",
+             "|---|---|---|---|---|---|---|---|"]
     for kind in ("iswrp", "swrp"):
-        row, p = ev["wrp"][kind], PAPER[f"{kind}_t030"]
+        row, p = wrp[kind], PAPER[f"{kind}_t030"]
         lines.append(f"| {kind.upper()} | {fmt(row['threshold_m'])} | {fmt(row['offset_rate_pct'])} | "
                      f"{fmt(row['position_offset_m'])} | {fmt(row['rotation_offset_deg'])} | "
                      f"{fmt(row['time_s'])} | {fmt(row.get('oracle_error_m'))} | {p['offset_rate_pct']} / "
                      f"{p['position_offset_m']} / {p['rotation_offset_deg']} / {p['time_s']} / {p['error']} |")
-    lines += [
-        "",
-        "## Robustness: the three paths under the same winds (paper Tables 4/5 analogue)",
-        "",
-        f"Common random numbers: {ev.get('common_random_numbers', '')}. Bootstrap {ev['confidence']:.0%} "
-        "intervals.",
-        "",
-        "| path | trials | mean error (m) | CI | std | 95th pct | failure rate |",
-        "|---|---|---|---|---|---|---|",
-    ]
-    for row in ev["paths"]:
-        lines.append(f"| {row['path']} | {row['trials']} | {fmt(row['mean_error_m'], 4)} | "
-                     f"{_ci(row.get('mean_error_m_ci'))} | {fmt(row['std_error_m'])} | {fmt(row['p95_error_m'], 4)} | "
-                     f"{100 * row['failure_rate']:.1f} % |")
+    return lines
+
+
+def robustness_section(ev: dict) -> list[str]:
+    """The three paths under the same winds (paper Tables 4/5 analogue), the paired differences and, with a
+    placebo control, every WRP's verdict and the path to fly."""
+    lines = ["", "## Robustness: the three paths under the same winds (paper Tables 4/5 analogue)", "",
+             f"Common random numbers: {ev.get('common_random_numbers', '')}. Bootstrap {ev['confidence']:.0%} "
+             "intervals.", "", "| path | trials | mean error (m) | CI | std | 95th pct | failure rate |",
+             "|---|---|---|---|---|---|---|"]
+    lines += [f"| {row['path']} | {row['trials']} | {fmt(row['mean_error_m'], 4)} | "
+              f"{_ci(row.get('mean_error_m_ci'))} | {fmt(row['std_error_m'])} | {fmt(row['p95_error_m'], 4)} | "
+              f"{100 * row['failure_rate']:.1f} % |" for row in ev["paths"]]
     lines += ["", "| paired vs initial | mean error difference (m) | CI | pairs | failure-rate difference |",
               "|---|---|---|---|---|"]
-    for row in ev["paired"]:
-        lines.append(f"| {row['path']} | {row['mean_error_diff_m']:+.4f} | {_ci(row.get('mean_error_diff_ci'))} | "
-                     f"{row['both_succeeded']} | {100 * row['failure_rate_diff']:+.1f} points |")
+    lines += [f"| {row['path']} | {row['mean_error_diff_m']:+.4f} | {_ci(row.get('mean_error_diff_ci'))} | "
+              f"{row['both_succeeded']} | {100 * row['failure_rate_diff']:+.1f} points |" for row in ev["paired"]]
     if "robustness" in ev:
-        lines += ["", "| path | wind-free error (m) | P(meets spec) | CI | views not taken (mean) | expected sorties | "
-                      "mission time (s) |",
-                  "|---|---|---|---|---|---|---|"]
-        for row in ev["paths"]:
-            lines.append(f"| {row['path']} | {fmt(ev['windfree_error_m'].get(row['path']), 4)} | "
-                         f"{fmt(row.get('p_meets_spec'), 3)} | {_ci(row.get('p_meets_spec_ci'))} | "
-                         f"{fmt(row.get('mean_views_not_taken'), 2)} | {fmt(row.get('expected_sorties'), 3)} "
-                         f"{_ci(row.get('expected_sorties_ci'))} | {fmt(row.get('mean_mission_time_s'), 4)} |")
-        spec = ev["paths"][0]
-        lines += ["", f"Spec: error <= {fmt(spec.get('spec_error_m'), 4)} m and completeness >= "
-                      f"{fmt(spec.get('spec_completeness'), 2)}.", "",
-                  "| WRP | robustness gain (mm) | CI | placebo 95th pct (mm) | placebos | verdict |",
-                  "|---|---|---|---|---|---|"]
-        for kind, v in ev["robustness"].items():
-            ci = v.get("gain_ci_m")
-            lines.append(f"| {kind} | {1e3 * v['gain_m']:+.2f} | "
-                         + (f"[{1e3 * ci[0]:+.2f}, {1e3 * ci[1]:+.2f}]" if ci else "-")
-                         + f" | {1e3 * v['placebo_gain_p95_m']:+.2f} | {len(v['placebo_gains_m'])} | "
-                         + ("**recommended**" if v["recommended"] else f"not recommended: {v['reason']}") + " |")
-        lines += ["", f"**Path to fly: {ev['recommended_path']}.** Robustness gain = [E_wind - E_windfree](initial) "
-                      "- [E_wind - E_windfree](WRP) per paired trial; a WRP is recommended only when its gain's CI "
-                      "excludes 0 and exceeds the 95th percentile of its placebo paths' gains (as many viewpoints "
-                      "moved by the same magnitudes, chosen at random, flown under the same winds)."]
-    lines += [
-        "",
-        f"Paper anchor: mean error of the no-WRP path under random offsets "
+        lines += _verdict_lines(ev)
+    return lines + [
+        "", f"Paper anchor: mean error of the no-WRP path under random offsets "
         f"{PAPER['table4_no_wrp_mean_error']:.3f} vs ISWRP {PAPER['iswrp_t030']['error']} / SWRP "
-        f"{PAPER['swrp_t030']['error']} (Table 4; ContextCapture errors, another scale than our oracle's).",
-        "",
-        "![error distributions](evaluate/boxplot.png)",
-        "",
-    ]
-    if risk is not None:
-        top = np.argsort(-np.nan_to_num(risk.risk_m))[:5]
-        lines += ["## Per-view risk (what spreads the error)", "",
-                  "Each viewpoint's risk: what missing it costs the wind-free error (the oracle, the path without "
-                  "it) x sqrt(p (1 - p)), p the share of the campaign's flights that did not take it (returns "
-                  "home on the wind limit or the battery). A first-order map: missed views come in runs.", "",
-                  "![per-view risk](figures/view_risk.png)", "",
-                  "| view | risk (mm) | missed in | cost when missed (mm) |", "|---|---|---|---|"]
-        lines += [f"| {i} | {1e3 * risk.risk_m[i]:.2f} | {100 * risk.p_missed[i]:.0f} % | "
-                  f"{1e3 * risk.loss_m[i]:+.2f} |" for i in top]
-        lines += ["", "In the recording: entity `risk/viewpoints`.", ""]
-    lines += [
-        "## Missions",
-        "",
-    ]
-    for name, files in summary["missions"].items():
-        lines.append(f"- {name}: " + ", ".join(f"`{Path(f).relative_to(out)}`" for f in files))
-    lines += ["", "## Timings (s)", "", "| step | wall (s) |", "|---|---|"]
-    lines += [f"| {k} | {v:.1f} |" for k, v in summary["timings_s"].items()]
-    lines += ["", f"Recording: `rerun {out / 'run.rrd'}`", ""]
-    return write_text_atomic(out / "report.md", "\n".join(lines))
+        f"{PAPER['swrp_t030']['error']} (Table 4; ContextCapture errors, another scale than our oracle's).", "",
+        "![error distributions](evaluate/boxplot.png)", ""]
+
+
+def _verdict_lines(ev: dict) -> list[str]:
+    lines = ["", "| path | wind-free error (m) | P(meets spec) | CI | views not taken (mean) | expected sorties | "
+                 "mission time (s) |", "|---|---|---|---|---|---|---|"]
+    lines += [f"| {row['path']} | {fmt(ev['windfree_error_m'].get(row['path']), 4)} | "
+              f"{fmt(row.get('p_meets_spec'), 3)} | {_ci(row.get('p_meets_spec_ci'))} | "
+              f"{fmt(row.get('mean_views_not_taken'), 2)} | {fmt(row.get('expected_sorties'), 3)} "
+              f"{_ci(row.get('expected_sorties_ci'))} | {fmt(row.get('mean_mission_time_s'), 4)} |"
+              for row in ev["paths"]]
+    spec = ev["paths"][0]
+    lines += ["", f"Spec: error <= {fmt(spec.get('spec_error_m'), 4)} m and completeness >= "
+                  f"{fmt(spec.get('spec_completeness'), 2)}.", "",
+              "| WRP | robustness gain (mm) | CI | placebo 95th pct (mm) | placebos | verdict |",
+              "|---|---|---|---|---|---|"]
+    for kind, v in ev["robustness"].items():
+        ci = v.get("gain_ci_m")
+        lines.append(f"| {kind} | {1e3 * v['gain_m']:+.2f} | "
+                     + (f"[{1e3 * ci[0]:+.2f}, {1e3 * ci[1]:+.2f}]" if ci else "-")
+                     + f" | {1e3 * v['placebo_gain_p95_m']:+.2f} | {len(v['placebo_gains_m'])} | "
+                     + ("**recommended**" if v["recommended"] else f"not recommended: {v['reason']}") + " |")
+    return lines + ["", f"**Path to fly: {ev['recommended_path']}.** Robustness gain = [E_wind - E_windfree](initial) "
+                        "- [E_wind - E_windfree](WRP) per paired trial; a WRP is recommended only when its gain's CI "
+                        "excludes 0 and exceeds the 95th percentile of its placebo paths' gains (as many viewpoints "
+                        "moved by the same magnitudes, chosen at random, flown under the same winds)."]
+
+
+def risk_section(risk: ViewRisk, top_views: int = 5) -> list[str]:
+    """The per-view risk map and the ``top_views`` riskiest viewpoints."""
+    top = np.argsort(-np.nan_to_num(risk.risk_m))[:top_views]
+    return ["## Per-view risk (what spreads the error)", "",
+            "Each viewpoint's risk: what missing it costs the wind-free error (the oracle, the path without "
+            "it) x sqrt(p (1 - p)), p the share of the campaign's flights that did not take it (returns "
+            "home on the wind limit or the battery). A first-order map: missed views come in runs.", "",
+            "![per-view risk](figures/view_risk.png)", "",
+            "| view | risk (mm) | missed in | cost when missed (mm) |", "|---|---|---|---|",
+            *[f"| {i} | {1e3 * risk.risk_m[i]:.2f} | {100 * risk.p_missed[i]:.0f} % | {1e3 * risk.loss_m[i]:+.2f} |"
+              for i in top],
+            "", "In the recording: entity `risk/viewpoints`.", ""]
+
+
+def missions_section(missions: dict[str, list[str]], out: Path) -> list[str]:
+    return ["## Missions", "", *[f"- {name}: " + ", ".join(f"`{Path(f).relative_to(out)}`" for f in files)
+                                 for name, files in missions.items()]]
+
+
+def timings_section(timings_s: dict[str, float], out: Path) -> list[str]:
+    return ["", "## Timings (s)", "", "| step | wall (s) |", "|---|---|",
+            *[f"| {k} | {v:.1f} |" for k, v in timings_s.items()], "", f"Recording: `rerun {out / 'run.rrd'}`", ""]

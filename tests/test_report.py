@@ -1,0 +1,81 @@
+"""report.md's sections, each from a small hand-made input (no flights): what the operator reads first, the
+verdict table, the risk map's order."""
+
+from __future__ import annotations
+
+import numpy as np
+
+from wrp_eval.envelope.result import CellResult, DirectionBoundary, Envelope, ForecastWind
+from wrp_eval.report import EARTH_FRAME_WARNING, envelope_section, risk_section, robustness_section, wrp_section
+from wrp_eval.wrp.risk import ViewRisk
+
+
+def _cell(relative, speed, p, decision, forecast=False) -> CellResult:
+    return CellResult(relative_deg=relative, compass_from_deg=(30 + relative) % 360, speed_m_s=speed,
+                      direction={0.0: "bow", 180.0: "stern"}[relative], flights=24, decision=decision,
+                      meets=decision == "meets", p_meets_spec=p, p_meets_spec_ci=(p - 0.1, min(1.0, p + 0.1)),
+                      repeated_ci=(p - 0.15, min(1.0, p + 0.15)), p_completed=1.0, completeness_mean=0.97,
+                      error_mean_m=0.0251, error_p95_m=0.0262, expected_sorties=1.0, mission_time_s=362.8,
+                      views_lost=0.0, endings={"completed": 24}, limit="none", folder="cells/x", forecast=forecast)
+
+
+def _envelope(go: bool) -> Envelope:
+    cells = (_cell(0.0, 6.0, 1.0 if go else 0.5, "meets" if go else "fails", forecast=True),
+             _cell(0.0, 8.0, 1.0, "meets"), _cell(180.0, 4.0, 0.2, "fails"))
+    bounds = (DirectionBoundary(0.0, "bow", 10.0, (10.0, 10.5), False, True, "returned: no headway (7)"),
+              DirectionBoundary(180.0, "stern", None, (None, 4.0), False, True, "lost: no headway (8)"))
+    rule = {"threshold": 0.8, "confidence": 0.95, "spec_error_m": 0.0277, "spec_completeness": 0.95,
+            "look_flights": 8, "max_flights": 32, "looks": 4, "test": "repeated intervals"}
+    return Envelope(cells, bounds, ForecastWind(6.0, 30.0, 0.0, "wind: section"), go, rule,
+                    {"speeds_m_s": [0.0, 4.0, 8.0, 12.0]}, 72, 72, 1.0, {})
+
+
+def test_the_first_page_gives_the_verdict_the_boundaries_and_the_earth_frame_warning():
+    text = "\n".join(envelope_section(_envelope(go=True), "initial", "envelope/envelope.png", "figures/risk.png"))
+    assert text.startswith("## Go / no-go: **GO** at the forecast (path `initial`)")
+    assert "P(meets spec) **1.00** [0.9, 1] over 24 simulated flights" in text
+    assert "| bow | 10 m/s (fails at 10.5) | returned: no headway (7) |" in text
+    assert "| stern | below 4 m/s (not even the lowest speed meets the spec) | lost: no headway (8) |" in text
+    assert "| bow 6 m/s | 1 | 1 | 362.8 | 0 | 25.1 | 26.2 |" in text
+    assert "![envelope](envelope/envelope.png)" in text and "figures/risk.png" in text
+    assert text.rstrip().endswith(EARTH_FRAME_WARNING)
+    no_go = "\n".join(envelope_section(_envelope(go=False), "iswrp", "e.png", None))
+    assert no_go.startswith("## Go / no-go: **NO-GO**") and "per-view risk" not in no_go
+
+
+def _ev(recommended: bool) -> dict:
+    row = {"trials": 16, "mean_error_m": 0.0253, "mean_error_m_ci": [0.025, 0.0256], "std_error_m": 0.0005,
+           "p95_error_m": 0.0261, "failure_rate": 0.0, "p_meets_spec": 1.0, "p_meets_spec_ci": [0.8, 1.0],
+           "spec_error_m": 0.0277, "spec_completeness": 0.95}
+    return {"confidence": 0.95, "paths": [{**row, "path": "initial"}, {**row, "path": "iswrp"}],
+            "paired": [{"path": "iswrp", "mean_error_diff_m": -0.0004, "mean_error_diff_ci": [-0.0006, -0.0002],
+                        "both_succeeded": 16, "failure_rate_diff": 0.0}],
+            "windfree_error_m": {"initial": 0.0252, "iswrp": 0.0250},
+            "robustness": {"iswrp": {"gain_m": 0.0004, "gain_ci_m": [0.0002, 0.0006], "placebo_gain_p95_m": 0.0001,
+                                     "placebo_gains_m": [0.0, 0.0001], "recommended": recommended,
+                                     "reason": "its gain's CI includes 0"}},
+            "recommended_path": "iswrp" if recommended else "initial"}
+
+
+def test_the_robustness_table_states_each_verdict_and_the_path_to_fly():
+    text = "\n".join(robustness_section(_ev(True)))
+    assert "| iswrp | +0.40 | [+0.20, +0.60] | +0.10 | 2 | **recommended** |" in text
+    assert "**Path to fly: iswrp.**" in text and "| iswrp | -0.0004 | [-0.0006, -0.0002] | 16 | +0.0 points |" in text
+    kept = "\n".join(robustness_section(_ev(False)))
+    assert "not recommended: its gain's CI includes 0" in kept and "**Path to fly: initial.**" in kept
+
+
+def test_the_risk_table_lists_the_riskiest_views_first():
+    risk = ViewRisk(loss_m=np.array([0.001, 0.004, 0.0, 0.002]), p_missed=np.array([0.5, 0.5, 0.0, 0.25]),
+                    risk_m=np.array([0.0005, 0.002, 0.0, 0.0008]), base_error_m=0.025)
+    rows = [line for line in risk_section(risk, top_views=3) if line.startswith("| ") and line[2].isdigit()]
+    assert [int(r.split("|")[1]) for r in rows] == [1, 3, 0]
+    assert rows[0] == "| 1 | 2.00 | 50 % | +4.00 |"
+
+
+def test_the_table3_rows_carry_ours_and_the_papers():
+    row = {"threshold_m": 0.3, "offset_rate_pct": 10.0, "position_offset_m": 4.0, "rotation_offset_deg": 12.0,
+           "time_s": 0.5, "oracle_error_m": 0.0251}
+    lines = wrp_section({"iswrp": row, "swrp": row})
+    assert lines[-2].startswith("| ISWRP | 0.3 | 10 | 4 | 12 | 0.5 | 0.0251 | 28.57 /")
+    assert lines[-1].startswith("| SWRP |")
