@@ -3,6 +3,8 @@ verdict table, the risk map's order."""
 
 from __future__ import annotations
 
+import dataclasses
+
 import numpy as np
 
 from wrp_eval.envelope.result import CellResult, DirectionBoundary, Envelope, ForecastWind
@@ -22,8 +24,8 @@ def _cell(relative, speed, p, decision, forecast=False) -> CellResult:
 def _envelope(go: bool) -> Envelope:
     cells = (_cell(0.0, 6.0, 1.0 if go else 0.5, "meets" if go else "fails", forecast=True),
              _cell(0.0, 8.0, 1.0, "meets"), _cell(180.0, 4.0, 0.2, "fails"))
-    bounds = (DirectionBoundary(0.0, "bow", 10.0, (10.0, 10.5), False, True, "returned: no headway (7)"),
-              DirectionBoundary(180.0, "stern", None, (None, 4.0), False, True, "lost: no headway (8)"))
+    bounds = (DirectionBoundary(0.0, "bow", 10.0, 8.0, (10.0, 10.5), False, "returned: no headway (7)"),
+              DirectionBoundary(180.0, "stern", None, None, (None, 4.0), False, "lost: no headway (8)"))
     rule = {"threshold": 0.8, "confidence": 0.95, "spec_error_m": 0.0277, "spec_completeness": 0.95,
             "look_flights": 8, "max_flights": 32, "looks": 4, "test": "repeated intervals"}
     return Envelope(cells, bounds, ForecastWind(6.0, 30.0, 0.0, "wind: section"), go, rule,
@@ -33,14 +35,18 @@ def _envelope(go: bool) -> Envelope:
 def test_the_first_page_gives_the_verdict_the_boundaries_and_the_earth_frame_warning():
     text = "\n".join(envelope_section(_envelope(go=True), "initial", "envelope/envelope.png", "figures/risk.png"))
     assert text.startswith("## Go / no-go: **GO** at the forecast (path `initial`)")
-    assert "P(meets spec) **1.00** [0.9, 1] over 24 simulated flights" in text
-    assert "| bow | 10 m/s (fails at 10.5) | returned: no headway (7) |" in text
-    assert "| stern | below 4 m/s (not even the lowest speed meets the spec) | lost: no headway (8) |" in text
+    assert "P(meets spec) **1.00** [0.85, 1] over 24 simulated flights" in text     # the repeated interval
+    assert "nominal fixed-n [0.9, 1]" in text
+    assert "| bow | 10 m/s (fails at 10.5) | 8 m/s | returned: no headway (7) |" in text
+    assert "| stern | below 4 m/s (not even the lowest speed meets the spec) | - | lost: no headway (8) |" in text
     assert "| bow 6 m/s | 1 | 1 | 362.8 | 0 | 25.1 | 26.2 |" in text
     assert "![envelope](envelope/envelope.png)" in text and "figures/risk.png" in text
     assert text.rstrip().endswith(EARTH_FRAME_WARNING)
     no_go = "\n".join(envelope_section(_envelope(go=False), "iswrp", "e.png", None))
     assert no_go.startswith("## Go / no-go: **NO-GO**") and "per-view risk" not in no_go
+    unknown = dataclasses.replace(_envelope(go=True), go=None, forecast=None)
+    assert "\n".join(envelope_section(unknown, "initial", "e.png", None)).startswith(
+        "## Go / no-go: **no forecast**")
 
 
 def _ev(recommended: bool) -> dict:

@@ -169,14 +169,16 @@ def envelope_section(env: Envelope, path_name: str, figure: str, risk_figure: st
     map, the earth-frame warning. figure / risk_figure: the envelope's and the risk map's images, relative to the
     report."""
     cell, f, rule = env.forecast_cell, env.forecast, env.rule
-    verdict = "GO" if env.go else "NO-GO"
+    verdict = "no forecast" if env.go is None else ("GO" if env.go else "NO-GO")
     lines = [f"## Go / no-go: **{verdict}** at the forecast (path `{path_name}`)", ""]
     if cell is not None and f is not None:
         lines += [
             f"Forecast {f.speed_m_s:.1f} m/s at 10 m from {f.compass_from_deg:.0f} deg ({cell.direction}, "
             f"{f.relative_deg:.0f} deg off the bow; {f.source}): P(meets spec) **{cell.p_meets_spec:.2f}** "
-            f"{_ci(cell.p_meets_spec_ci)} over {cell.flights} simulated flights; the sequential test says "
-            f"*{cell.decision}* (GO needs its lower bound {_ci(cell.repeated_ci)} >= {rule['threshold']:g}).", "",
+            f"{_ci(cell.repeated_ci)} over {cell.flights} simulated flights (the sequential test's interval, valid "
+            f"for its early stop; nominal fixed-n {_ci(cell.p_meets_spec_ci)}); the test says *{cell.decision}*: "
+            f"GO needs its lower bound >= {rule['threshold']:g}, which with at most {rule['max_flights']} flights "
+            "takes flights without a miss.", "",
             "| at the forecast | P(completed) | expected sorties | mission time (s) | views lost (mean) | "
             "mean error (mm) | p95 error (mm) |", "|---|---|---|---|---|---|---|",
             f"| {cell.direction} {cell.speed_m_s:g} m/s | {fmt(cell.p_completed, 3)} | "
@@ -186,9 +188,13 @@ def envelope_section(env: Envelope, path_name: str, figure: str, risk_figure: st
     lines += ["### Wind envelope", "", f"![envelope]({figure})", "",
               f"Boundary: the highest U10 whose flights meet the spec (error <= {fmt(1e3 * rule['spec_error_m'], 4)} "
               f"mm, completeness >= {fmt(rule['spec_completeness'], 2)}) with P >= {rule['threshold']:g}, per wind "
-              "direction relative to the bow; beyond it, what ended the flights that missed the spec.", "",
-              "| wind from | boundary U10 | beyond it |", "|---|---|---|"]
-    lines += [f"| {b.direction} | {boundary_text(b)} | {b.limit or '-'} |" for b in env.boundaries]
+              "direction relative to the bow, cells the test left undecided counted by their estimate (no error "
+              "control); proved: the highest U10 the test decided (the GO rule); beyond the boundary, what ended "
+              "the flights that missed the spec.", "",
+              "| wind from | boundary U10 | proved up to | beyond it |", "|---|---|---|---|"]
+    lines += [f"| {b.direction} | {boundary_text(b)} | "
+              f"{'-' if b.proved_m_s is None else f'{b.proved_m_s:g} m/s'} | {b.limit or '-'} |"
+              for b in env.boundaries]
     lines += ["", f"{len(env.cells)} cells, {env.flights_total} flights ({rule['test']}; looks of "
                   f"{rule['look_flights']} up to {rule['max_flights']} flights); `envelope/envelope.json`, "
                   "`envelope.csv`, entities `envelope/*` in run.rrd.", ""]

@@ -4,6 +4,7 @@ numbers across cells, resume, and the files written."""
 from __future__ import annotations
 
 import json
+from pathlib import Path
 
 import numpy as np
 
@@ -17,7 +18,7 @@ def test_every_direction_finds_the_boundary_and_stops_cells_early(flown):
     env = job.envelope
     assert [b.direction for b in env.boundaries] == ["bow", "stern"]
     for b in env.boundaries:
-        assert b.bracket_m_s == (9.0, 10.0) and b.monotone and not b.above_grid
+        assert b.bracket_m_s == (9.0, 10.0) and b.proved_m_s == 9.0 and not b.above_grid
         assert "reconstruction failed" in b.limit          # the analytic evaluator fails flights above 9 m/s
     cells = {(c.relative_deg, c.speed_m_s): c for c in env.cells}
     # a clearly failing cell stops at the first look, a clearly meeting one at 24 flights (3 looks)
@@ -47,6 +48,13 @@ def test_flight_k_of_every_cell_draws_the_same_streams(flown):
             assert table.column(name).to_pylist() == tables[0].column(name).to_pylist()
     speeds = {t.column("wind_speed_10m_m_s")[0].as_py() for t in tables}
     assert len(speeds) > 1                                   # and they are different winds
+
+
+def test_the_calm_cell_and_the_cells_folders_are_named_by_their_key(flown):
+    _, job = flown
+    names = {Path(c.folder).name for c in job.envelope.cells}
+    assert "r0.0_u4.0" in names and "r180.0_u9.0" in names
+    assert len({Path(c.folder).parent for c in job.envelope.cells}) == 1   # one folder per path digest
 
 
 def test_a_second_run_flies_nothing_and_says_the_same(flown):

@@ -123,8 +123,8 @@ class TrialPool:
                             running[pool.submit(run_batch, *tasks[index])] = index
                     done, _ = wait(running, return_when=FIRST_COMPLETED)
                     for fut in done:
-                        index = running.pop(fut)
-                        yield index, fut.result()
+                        records = fut.result()   # a crashed worker raises here, its batch still in `running`
+                        yield running.pop(fut), records
             except BrokenProcessPool:
                 for index in running.values():
                     crashes[index] = crashes.get(index, 0) + 1

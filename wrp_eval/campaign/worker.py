@@ -41,7 +41,8 @@ def _limit_threads(threads: int) -> None:
 
 
 def init_worker(spec: dict) -> None:
-    """Build this process's evaluator for ``spec`` (see :func:`make_spec`) unless already built."""
+    """Build this process's evaluator for ``spec`` (:func:`wrp_eval.campaign.runner.worker_spec`) unless already
+    built."""
     if _STATE.get("key") == spec["key"]:
         return
     context = spec["context"]

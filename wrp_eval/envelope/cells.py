@@ -14,6 +14,7 @@ from dataclasses import dataclass, field
 from pathlib import Path
 
 import numpy as np
+import pyarrow.compute as pc
 
 from wrp_eval.campaign.config import CampaignSection, TrialConfig
 from wrp_eval.campaign.store import TrialStore
@@ -51,7 +52,12 @@ class CellKey:
 
     @property
     def folder_name(self) -> str:
-        return "calm" if self.speed_m_s == 0 else f"r{self.relative_deg:05.1f}_u{self.speed_m_s:05.2f}"
+        """Unique per key (the key's own rounded floats, not a shorter format)."""
+        return "calm" if self.speed_m_s == 0 else f"r{self.relative_deg!r}_u{self.speed_m_s!r}"
+
+    @property
+    def direction(self) -> str:
+        return "calm" if self.speed_m_s == 0 else direction_name(self.relative_deg)
 
     def compass_from_deg(self, heading_deg: float) -> float:
         """The meteorological direction (FROM, clockwise from north) of this cell's wind."""
@@ -135,8 +141,9 @@ def replay(cell: Cell, rule: TestRule) -> None:
     trials = stored_trials(cell)
     if trials is None:
         return
-    met = meets_spec(trials, *rule.spec)
-    ids = trials.trial_id
+    # a trial id stored twice (two runs on one folder before the envelope lock): its first record counts
+    ids, first = np.unique(trials.trial_id, return_index=True)
+    met = meets_spec(trials, *rule.spec)[first]
     flights, decision = 0, OPEN
     while decision == OPEN:
         target = rule.next_target(flights)
@@ -152,11 +159,11 @@ def ending_counts(folder: Path, flights: int) -> dict[str, int]:
     """How the cell's first ``flights`` flights ended (sim/mission.py's names; "error" for a trial that raised,
     "unknown" where the evaluator reports no ending)."""
     table = TrialStore(folder).read_table(["trial_id", "ending", "error"])
-    ids = table.column("trial_id").to_numpy()
-    endings = table.column("ending").to_pylist()
-    errors = table.column("error").to_pylist()
-    names = ["error" if err is not None else (e or "unknown") for e, err in zip(endings, errors, strict=True)]
-    return dict(Counter(n for n, k in zip(names, ids, strict=True) if k < flights))
+    table = table.filter(pc.less(table.column("trial_id"), flights))
+    names = pc.if_else(pc.is_valid(table.column("error")), "error",
+                       pc.fill_null(table.column("ending"), "unknown"))
+    counts = pc.value_counts(names)
+    return {str(c["values"]): int(c["counts"]) for c in counts.to_pylist()}
 
 
 def limiting_cause(trials: PathTrials, endings: dict[str, int], spec: tuple[float, float]) -> str:

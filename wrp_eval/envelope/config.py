@@ -23,7 +23,8 @@ class EnvelopeGrid(StrictModel):
     directions: int = Field(8, ge=1, le=72)
     max_flights: int = Field(32, ge=1, le=100_000)
     look_flights: int = Field(8, ge=1, le=100_000)
-    resolution_m_s: float = Field(0.5, gt=0)
+    resolution_m_s: float = Field(0.5, ge=0.05, description="bisect the boundary to this (m/s); cell keys keep "
+                                  "6 decimals, so finer would not be resolved")
 
     @field_validator("speeds_m_s")
     @classmethod

@@ -19,8 +19,9 @@ from wrp_eval.envelope.result import Envelope
 from wrp_eval.recording import recording
 
 CSV_COLUMNS = ("direction", "relative_deg", "compass_from_deg", "speed_m_s", "flights", "decision", "meets",
-               "p_meets_spec", "ci_low", "ci_high", "p_completed", "completeness_mean", "error_mean_m", "error_p95_m",
-               "expected_sorties", "mission_time_s", "views_lost", "limit", "endings", "forecast", "folder")
+               "p_meets_spec", "repeated_ci_low", "repeated_ci_high", "nominal_ci_low", "nominal_ci_high",
+               "p_completed", "completeness_mean", "error_mean_m", "error_p95_m", "expected_sorties",
+               "mission_time_s", "views_lost", "limit", "endings", "forecast", "folder")
 COLOUR_MAP = "RdYlGn"
 
 
@@ -42,19 +43,23 @@ def cells_csv(envelope: Envelope) -> str:
     writer.writerow(CSV_COLUMNS)
     for c in envelope.cells:
         writer.writerow([c.direction, c.relative_deg, c.compass_from_deg, c.speed_m_s, c.flights, c.decision,
-                         c.meets, c.p_meets_spec, *c.p_meets_spec_ci, c.p_completed, c.completeness_mean,
-                         c.error_mean_m, c.error_p95_m, c.expected_sorties, c.mission_time_s, c.views_lost, c.limit,
+                         c.meets, c.p_meets_spec, *c.repeated_ci, *c.p_meets_spec_ci, c.p_completed,
+                         c.completeness_mean, c.error_mean_m, c.error_p95_m, c.expected_sorties,
+                         c.mission_time_s, c.views_lost, c.limit,
                          json.dumps(c.endings, sort_keys=True), c.forecast, c.folder])
     return buffer.getvalue()
 
 
-def _boundary_line(envelope: Envelope, top_m_s: float) -> tuple[np.ndarray, np.ndarray]:
+def _boundary_line(envelope: Envelope, top_m_s: float, proved: bool = False) -> tuple[np.ndarray, np.ndarray]:
     """(theta rad, radius m/s) of the closed boundary line (a direction without a meeting cell sits at 0, one
-    meeting at the top of the grid at the top)."""
+    meeting at the top of the grid at the top); ``proved``: the line of the cells the test decided "meets"."""
     theta, radius = [], []
     for b in sorted(envelope.boundaries, key=lambda b: b.relative_deg):
         theta.append(np.radians(b.relative_deg))
-        radius.append(top_m_s if b.above_grid else (b.boundary_m_s or 0.0))
+        if proved:
+            radius.append(b.proved_m_s or 0.0)
+        else:
+            radius.append(top_m_s if b.above_grid else (b.boundary_m_s or 0.0))
     return np.array(theta + theta[:1]), np.array(radius + radius[:1])
 
 
@@ -86,7 +91,10 @@ def polar_plot(envelope: Envelope, file: Path, ship_length_m: float, ship_breadt
     ax.scatter(theta[~decided], radius[~decided], facecolors="none",
                edgecolors=colormaps[COLOUR_MAP](norm(p[~decided])), s=60, linewidths=1.5, zorder=3)
     line_theta, line_r = _boundary_line(envelope, top)
-    ax.plot(line_theta, line_r, "k-", lw=1.5, label=f"boundary: P(meets spec) >= {envelope.rule['threshold']:g}")
+    ax.plot(line_theta, line_r, "k-", lw=1.5,
+            label=f"boundary: P(meets spec) >= {envelope.rule['threshold']:g} (undecided cells by their estimate)")
+    proved_theta, proved_r = _boundary_line(envelope, top, proved=True)
+    ax.plot(proved_theta, proved_r, "k--", lw=1.0, label="proved by the test (the GO rule)")
     outline = _ship_outline(ship_length_m, ship_breadth_m, 0.3 * top)
     ax.fill(outline[:, 0], outline[:, 1], color="0.6", zorder=2)
     if envelope.forecast is not None:
@@ -121,8 +129,8 @@ def save_envelope_recording(envelope: Envelope, file: Path, recording_id: str | 
     cells = envelope.cells
     p = np.array([c.p_meets_spec for c in cells])
     colours = (255 * colormaps[COLOUR_MAP](np.nan_to_num(p))[:, :3]).astype(np.uint8)
-    labels = [f"{c.direction} {c.speed_m_s:g} m/s: P {c.p_meets_spec:.2f} [{c.p_meets_spec_ci[0]:.2f}, "
-              f"{c.p_meets_spec_ci[1]:.2f}] over {c.flights} flights, {c.decision}; {c.limit}" for c in cells]
+    labels = [f"{c.direction} {c.speed_m_s:g} m/s: P {c.p_meets_spec:.2f} [{c.repeated_ci[0]:.2f}, "
+              f"{c.repeated_ci[1]:.2f}] over {c.flights} flights, {c.decision}; {c.limit}" for c in cells]
     theta, radius = _boundary_line(envelope, float(envelope.grid["speeds_m_s"][-1]))
     with recording(file, recording_id=recording_id) as rec:
         rec.log("envelope", rr.ViewCoordinates.RIGHT_HAND_Z_UP, static=True)

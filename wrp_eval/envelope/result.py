@@ -10,8 +10,10 @@ from dataclasses import dataclass
 class CellResult:
     """One flown cell. relative_deg: wind FROM, clockwise from the bow; compass_from_deg: the same as a
     meteorological direction; speed_m_s: U10; flights: counted by the test; decision: meets / fails / undecided
-    (sequential.py); meets: counts as meeting the threshold; p_meets_spec with its Clopper-Pearson interval at
-    the plain confidence (``p_meets_spec_ci``) and at the test's repeated level (``repeated_ci``); completeness,
+    (sequential.py); meets: counts as meeting the threshold (decided, or undecided with P >= threshold);
+    p_meets_spec with ``repeated_ci``, the test's Clopper-Pearson interval at the repeated level (valid however
+    early the cell stopped: the interval to read), and ``p_meets_spec_ci``, the nominal fixed-n interval at the
+    plain confidence (not adjusted for the early stop; kept for comparison with the evaluation's); completeness,
     error mean and p95 (m, flights that did not fail); sorties and mission time (s, completed missions);
     views_lost: mean views no sortie took; endings: counts by ending; limit: what kept flights from meeting
     the spec; folder: the cell's campaign folder; forecast: the cell of the forecast wind."""
@@ -41,17 +43,18 @@ class CellResult:
 
 @dataclass(frozen=True)
 class DirectionBoundary:
-    """Per direction: boundary_m_s the highest U10 whose cell meets the threshold (None: not even the lowest
-    grid speed); bracket_m_s (boundary, lowest failing speed above it; None where there is none); above_grid: the
-    highest grid speed meets; monotone: no failing cell below a meeting one; limit: what limits the mission in
-    the first failing cell above the boundary ("" when there is none)."""
+    """Per direction: boundary_m_s the highest U10 whose cell counts as meeting the threshold (undecided cells by
+    their point estimate: no error control; None: not even the lowest grid speed); proved_m_s the highest U10
+    whose cell the sequential test decided "meets" (the GO rule; None: none); bracket_m_s (boundary, lowest
+    failing speed above it; None where there is none); above_grid: the highest grid speed meets; limit: what
+    limits the mission in the first failing cell above the boundary ("" when there is none)."""
 
     relative_deg: float
     direction: str
     boundary_m_s: float | None
+    proved_m_s: float | None
     bracket_m_s: tuple[float | None, float | None]
     above_grid: bool
-    monotone: bool
     limit: str
 
 
@@ -69,9 +72,10 @@ class ForecastWind:
 @dataclass(frozen=True)
 class Envelope:
     """The whole envelope: every flown cell, the boundary per direction, the forecast and its cell (None when
-    no forecast was flown), the verdict there (GO when the forecast cell's lower bound reaches the threshold),
-    the rule (threshold, confidence, spec, looks), the grid, how many flights were flown this call and in all,
-    the wall time of this call, and the provenance (config, path digest, root seed, versions)."""
+    no forecast was flown), the verdict there (GO when the sequential test decided that the forecast cell meets
+    the threshold; None without a forecast), the rule (threshold, confidence, spec, looks), the grid, how many
+    flights were flown this call and in all, the wall time of this call, and the provenance (config, path
+    digest, root seed, versions)."""
 
     cells: tuple[CellResult, ...]
     boundaries: tuple[DirectionBoundary, ...]

@@ -19,6 +19,7 @@ from pathlib import Path
 import numpy as np
 
 from wrp_eval.campaign.backends import TrialPool
+from wrp_eval.campaign.config import TrialConfig
 from wrp_eval.campaign.evaluators import DEFAULT_EVALUATOR, resolve_factory
 from wrp_eval.campaign.runner import (
     backend_workers,
@@ -48,7 +49,7 @@ from wrp_eval.envelope.result import CellResult, DirectionBoundary, Envelope, Fo
 from wrp_eval.envelope.search import BoundarySearch
 from wrp_eval.envelope.sequential import MEETS, clopper_pearson, repeated_interval
 from wrp_eval.experiment import ExperimentContext
-from wrp_eval.planning.path import FlightPath
+from wrp_eval.planning.path import FlightPath, digest_of_document
 from wrp_eval.wrp.evaluate import PathTrials
 from wrp_eval.wrp.jobs import SPEC_ERROR_FACTOR, windfree_error
 
@@ -65,35 +66,38 @@ def spec_of(ctx: ExperimentContext, path: FlightPath) -> tuple[float, float]:
 
 @dataclasses.dataclass
 class _Flying:
-    """What a round needs: the cells so far, the test, the pool, the worker spec and the campaign's seeds."""
+    """What a round needs: the cells so far, the test, the worker spec (``worker``: one evaluator per worker
+    process for every cell) and the campaign's seeds. Cells live under ``cells/<path digest>/``: envelopes of
+    different paths (``wrp-eval run`` flies the recommended one) share a folder without mixing flights."""
 
     ctx: ExperimentContext
     out: Path
     path: FlightPath
     path_doc: dict
-    base: object
+    base: TrialConfig
     rule: TestRule
     evaluator: str
     evaluator_options: dict
     workers: int
     cells: dict = dataclasses.field(default_factory=dict)
-    spec: dict | None = None
+    worker: dict | None = None
     flown: int = 0
 
     def cell(self, key: CellKey) -> Cell:
         """The cell of ``key``, opened (its folder checked, its stored flights replayed) on first use."""
         if key not in self.cells:
             trial = cell_trial(self.base, key, self.ctx.particulars.heading_deg, self.rule.max_flights)
-            cell = Cell(key, self.out / "cells" / key.folder_name, trial)
+            folder = self.out / "cells" / digest_of_document(self.path_doc) / key.folder_name
+            cell = Cell(key, folder, trial)
             with TrialStore(cell.folder) as store:
                 open_store(store, trial, self.path_doc, root_seed=self.ctx.campaign_seed, evaluator=self.evaluator,
                            evaluator_options=self.evaluator_options)
             replay(cell, self.rule)
             self.cells[key] = cell
-            if self.spec is None:          # one evaluator per worker for every cell: they differ only in wind
+            if self.worker is None:          # one evaluator per worker for every cell: they differ only in wind
                 print_ = fingerprint(trial.model_dump(mode="json"), "envelope", self.ctx.campaign_seed,
                                      self.evaluator, self.evaluator_options)
-                self.spec = worker_spec(trial, self.path, key=f"envelope-{print_}-{self.workers}",
+                self.worker = worker_spec(trial, self.path, key=f"envelope-{print_}-{self.workers}",
                                         root_seed=self.ctx.campaign_seed, config_dir=self.ctx.config_dir,
                                         evaluator=self.evaluator, evaluator_options=self.evaluator_options)
         return self.cells[key]
@@ -126,7 +130,7 @@ def _fly_look(flying: _Flying, pool: TrialPool, cells: list[Cell]) -> None:
     batch_size = flying.base.campaign.batch_size
     parts = max(1, flying.workers, -(-len(jobs) // batch_size))
     chunks = [c.tolist() for c in np.array_split(np.arange(len(jobs)), parts) if c.size]
-    for index, records in pool.run([(flying.spec, [jobs[i][1] for i in chunk]) for chunk in chunks]):
+    for index, records in pool.run([(flying.worker, [jobs[i][1] for i in chunk]) for chunk in chunks]):
         by_cell: dict[CellKey, list[dict]] = {}
         for i, record in zip(chunks[index], records, strict=True):
             by_cell.setdefault(jobs[i][0].key, []).append(record)
@@ -136,8 +140,8 @@ def _fly_look(flying: _Flying, pool: TrialPool, cells: list[Cell]) -> None:
         flying.flown += len(records)
     for cell in cells:
         replay(cell, flying.rule)
-        log.info("[wrp-eval envelope] cell %s: %d/%d flights meet the spec -> %s", cell.key.folder_name, cell.successes,
-                 cell.flights, cell.decision)
+        log.info("[wrp-eval envelope] cell %s: %d/%d flights meet the spec -> %s", cell.key.folder_name,
+                 cell.successes, cell.flights, cell.decision)
 
 
 def _first_flights(trials: PathTrials, flights: int) -> PathTrials:
@@ -162,7 +166,7 @@ def cell_result(cell: Cell, rule: TestRule, heading_deg: float, forecast: bool =
     low, high = clopper_pearson(cell.successes, cell.flights, rule.confidence)
     return CellResult(
         relative_deg=cell.key.relative_deg, compass_from_deg=cell.key.compass_from_deg(heading_deg),
-        speed_m_s=cell.key.speed_m_s, direction=direction_name(cell.key.relative_deg), flights=cell.flights,
+        speed_m_s=cell.key.speed_m_s, direction=cell.key.direction, flights=cell.flights,
         decision=cell.decision, meets=rule.meets(cell), p_meets_spec=cell.p_hat,
         p_meets_spec_ci=(float(low), float(high)),
         repeated_ci=repeated_interval(cell.successes, cell.flights, rule.confidence, rule.looks),
@@ -179,9 +183,10 @@ def cell_result(cell: Cell, rule: TestRule, heading_deg: float, forecast: bool =
 def _boundary(relative: float, search: BoundarySearch, results: dict[CellKey, CellResult]) -> DirectionBoundary:
     high = search.lowest_failing
     limit = results[CellKey.of(relative, high)].limit if high is not None else ""
+    proved = [s for s in search.outcomes if results[CellKey.of(relative, s)].decision == MEETS]
     return DirectionBoundary(relative_deg=float(relative), direction=direction_name(relative),
-                             boundary_m_s=search.boundary_m_s, bracket_m_s=(search.boundary_m_s, high),
-                             above_grid=search.above_grid, monotone=search.monotone, limit=limit)
+                             boundary_m_s=search.boundary_m_s, proved_m_s=max(proved) if proved else None,
+                             bracket_m_s=(search.boundary_m_s, high), above_grid=search.above_grid, limit=limit)
 
 
 def run_envelope(ctx: ExperimentContext, out: str | Path, grid: EnvelopeGrid, *, path: FlightPath | None = None,
@@ -203,9 +208,15 @@ def run_envelope(ctx: ExperimentContext, out: str | Path, grid: EnvelopeGrid, *,
                 for r in relative_directions(grid.directions)}
     forecast_key = CellKey.of(forecast.relative_deg, forecast.speed_m_s) if forecast is not None else None
     kind = base.campaign.backend.kind
-    with TrialPool(kind, max(1, n_workers) if kind == "ray" else n_workers, base.campaign.backend.address) as pool:
+    # one envelope process per folder (each cell's store is locked only while it is written)
+    with TrialStore(flying.out), TrialPool(kind, max(1, n_workers) if kind == "ray" else n_workers,
+                                           base.campaign.backend.address) as pool:
         while cells := _wanted(flying, searches, forecast_key):
+            before = [c.flights for c in cells]
             _fly_look(flying, pool, cells)
+            if [c.flights for c in cells] == before:
+                raise RuntimeError(f"envelope {flying.out}: a round advanced no cell "
+                                   f"({', '.join(c.key.folder_name for c in cells)})")
     heading = ctx.particulars.heading_deg
     results = {key: cell_result(cell, rule, heading, forecast=key == forecast_key)
                for key, cell in sorted(flying.cells.items()) if cell.flights}
@@ -219,6 +230,6 @@ def run_envelope(ctx: ExperimentContext, out: str | Path, grid: EnvelopeGrid, *,
               "looks": rule.looks, "test": "Clopper-Pearson repeated intervals, Bonferroni over the looks"},
         grid=grid.model_dump(mode="json"), flights_flown=flying.flown,
         flights_total=sum(c.flights for c in results.values()), wall_s=time.perf_counter() - start,
-        provenance={"config": ctx.source, "path_digest": flying.spec["context"].path_digest if flying.spec else None,
+        provenance={"config": ctx.source, "path_digest": digest_of_document(path_doc),
                     "root_seed": ctx.campaign_seed, "evaluator": evaluator, "ship_heading_deg": heading,
                     "environment": versions()})

@@ -3,9 +3,9 @@
 The search assumes that P(meets spec) does not grow with the wind speed in one direction (stronger mean wind,
 stronger turbulence from it, less headway). It first bisects the speed GRID (the middle untested grid speed
 between the highest meeting and the lowest failing speed known), then bisects the continuous bracket between
-two neighbouring grid speeds until it is at most ``resolution_m_s`` wide. Results that contradict the
-assumption (a failing cell below a meeting one) are kept and reported (:attr:`BoundarySearch.monotone`); the
-boundary is then taken above the highest meeting speed.
+two neighbouring grid speeds until it is at most ``resolution_m_s`` wide. The assumption is not tested: the
+search only flies speeds between the highest meeting and the lowest failing speed it knows, so it never sees a
+failing cell below a meeting one (a forecast cell is not fed to the search).
 """
 
 from __future__ import annotations
@@ -36,11 +36,6 @@ class BoundarySearch:
         low = self.highest_meeting
         failing = [s for s, ok in self.outcomes.items() if not ok and (low is None or s > low)]
         return min(failing) if failing else None
-
-    @property
-    def monotone(self) -> bool:
-        low = self.highest_meeting
-        return low is None or all(ok for s, ok in self.outcomes.items() if s < low)
 
     def next_speed(self) -> float | None:
         low, high = self.highest_meeting, self.lowest_failing
