@@ -8,6 +8,7 @@ import signal
 import subprocess
 import sys
 import textwrap
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -20,12 +21,12 @@ from wrp_eval.campaign.store import TrialStore
 from wrp_eval.experiment import ExperimentContext
 
 N_TRIALS, KILL_AT, CHUNK_TRIALS = 60, 30, 4
+REPO = Path(__file__).resolve().parents[2]
 
 SCRIPT = textwrap.dedent("""
-    import os
-    import signal
     import sys
 
+    from tests.kill_once import kill_session_once
     from wrp_eval.campaign.evaluators import make_analytic_evaluator
 
 
@@ -40,12 +41,7 @@ SCRIPT = textwrap.dedent("""
 
         def evaluate(self, batch):
             if any(t.trial_id >= self.kill_at for t in batch):
-                try:
-                    os.close(os.open(self.marker, os.O_CREAT | os.O_EXCL))
-                except FileExistsError:
-                    pass
-                else:
-                    os.killpg(os.getpgid(0), signal.SIGKILL)
+                kill_session_once(self.marker)
             return self.inner.evaluate(batch)
 
 
@@ -68,7 +64,8 @@ def _run(tmp_path, path_file, workers) -> int:
     script.write_text(SCRIPT)
     proc = subprocess.Popen([sys.executable, str(script), str(path_file), str(tmp_path / "c"), str(workers),
                              str(N_TRIALS), str(KILL_AT), str(CHUNK_TRIALS), str(tmp_path / "killed.marker")],
-                            start_new_session=True, stdout=subprocess.DEVNULL, stderr=subprocess.PIPE)
+                            start_new_session=True, stdout=subprocess.DEVNULL, stderr=subprocess.PIPE,
+                            env={**os.environ, "PYTHONPATH": str(REPO)})   # the script imports tests.kill_once
     try:
         _, err = proc.communicate(timeout=180)
     except subprocess.TimeoutExpired:

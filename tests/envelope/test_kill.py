@@ -10,15 +10,15 @@ import signal
 import subprocess
 import sys
 import textwrap
+from pathlib import Path
 
 from tests.envelope.conftest import cells_without_folders, fly
 from wrp_eval.envelope.result import Envelope
 
 SCRIPT = textwrap.dedent("""
-    import os
-    import signal
     import sys
 
+    from tests.kill_once import kill_session_once
     from wrp_eval.campaign.evaluators import make_analytic_evaluator
 
 
@@ -30,12 +30,7 @@ SCRIPT = textwrap.dedent("""
 
         def evaluate(self, batch):
             if any(t.wind.speed_10m_m_s == 12.0 for t in batch):
-                try:
-                    os.close(os.open(self.marker, os.O_CREAT | os.O_EXCL))
-                except FileExistsError:
-                    pass
-                else:
-                    os.killpg(os.getpgid(0), signal.SIGKILL)
+                kill_session_once(self.marker)
             return self.inner.evaluate(batch)
 
 
@@ -53,7 +48,7 @@ SCRIPT = textwrap.dedent("""
 def _run(tmp_path) -> tuple[int, str]:
     script = tmp_path / "envelope_script.py"
     script.write_text(SCRIPT)
-    env = {**os.environ, "PYTHONPATH": os.getcwd()}
+    env = {**os.environ, "PYTHONPATH": str(Path(__file__).resolve().parents[2])}
     proc = subprocess.Popen([sys.executable, str(script), str(tmp_path), str(tmp_path / "killed.marker")],
                             start_new_session=True, stdout=subprocess.PIPE, stderr=subprocess.PIPE, env=env)
     try:
