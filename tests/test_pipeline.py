@@ -11,7 +11,7 @@ from wrp_eval.cli import main
 SMALL = """
 run: {name: pipeline-test, seed: 3}
 ship: {type: fishing}
-wind: {speed_10m_mps: 5.0, turbulence: {severity: light}}
+wind: {speed_10m_m_s: 5.0, turbulence: {severity: light}}
 campaign:
   n_trials: 12
   batch_size: 12

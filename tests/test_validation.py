@@ -58,3 +58,23 @@ def test_input_error_survives_pickling_between_processes():
     import pickle
     err = pickle.loads(pickle.dumps(InputError("cfg.yaml", "key 'x': bad")))
     assert isinstance(err, InputError) and str(err) == "cfg.yaml: key 'x': bad" and err.source == "cfg.yaml"
+
+
+def test_an_old_m_s_key_is_read_as_the_new_one_with_one_deprecation_line(caplog):
+    """wind.speed_10m_mps (and the other *_mps keys) were renamed *_m_s: old configs and stored campaigns keep
+    working, with a warning; both names at once is one clear error."""
+    import logging
+
+    from wrp_eval.campaign.config import TurbulenceSpec
+    from wrp_eval.config import ExperimentConfig
+    from wrp_eval.validation import _warn_renamed
+    _warn_renamed.cache_clear()
+    with caplog.at_level(logging.WARNING, logger="wrp_eval"):
+        cfg = ExperimentConfig.model_validate({"wind": {"speed_10m_mps": 9.0, "turbulence": {"sigma_w_mps": 1.5},
+                                                        "gusts": {"amplitude_mps": 2.0}}})
+    assert (cfg.wind.speed_10m_m_s, cfg.wind.turbulence.sigma_w_m_s, cfg.wind.gusts.amplitude_m_s) == (9.0, 1.5, 2.0)
+    assert sum("deprecated key" in m for m in caplog.messages) == 3
+    assert "wind.speed_10m_mps" in caplog.text
+    assert TurbulenceSpec.model_validate({"sigma_w_mps": 0.7}).sigma_w_m_s == 0.7
+    with pytest.raises(ValueError, match="deprecated name"):
+        ExperimentConfig.model_validate({"wind": {"speed_10m_mps": 9.0, "speed_10m_m_s": 8.0}})

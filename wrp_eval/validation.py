@@ -6,6 +6,11 @@ The experiment config itself is composed in :mod:`wrp_eval.config`.
 
 from __future__ import annotations
 
+import logging
+from collections.abc import Iterator
+from contextlib import contextmanager
+from contextvars import ContextVar
+from functools import cache
 from pathlib import Path
 from typing import Any, TypeVar
 
@@ -22,6 +27,42 @@ class StrictModel(BaseModel):
 
 
 M = TypeVar("M", bound=BaseModel)
+
+log = logging.getLogger(__name__)
+_READING_STORED = ContextVar("reading_stored", default=False)
+
+
+@contextmanager
+def reading_stored() -> Iterator[None]:
+    """Validate documents the program stored itself (a campaign's config): old key names pass silently, the
+    deprecation line is for configs a user writes."""
+    token = _READING_STORED.set(True)
+    try:
+        yield
+    finally:
+        _READING_STORED.reset(token)
+
+
+@cache
+def _warn_renamed(section: str, old: str, new: str) -> None:
+    log.warning("config: %s.%s is a deprecated key, read as %s.%s (rename it)", section, old, section, new)
+
+
+def renamed_keys(data: Any, renames: dict[str, str], section: str) -> Any:
+    """A section written with an old key name (``renames``: old -> new) is read as the new one, with one
+    deprecation line per key and process (configs and stored campaigns keep working); both names at once is an
+    error. For a model's ``model_validator(mode="before")``."""
+    if not isinstance(data, dict) or not (renames.keys() & data.keys()):
+        return data
+    data = dict(data)
+    for old, new in renames.items():
+        if old in data:
+            if new in data:
+                raise ValueError(f"give {new!r} only ({old!r} is its deprecated name)")
+            if not _READING_STORED.get():
+                _warn_renamed(section, old, new)
+            data[new] = data.pop(old)
+    return data
 
 
 def format_validation_error(source: str | Path, err: ValidationError) -> InputError:

@@ -22,7 +22,7 @@ def test_deviation_and_wind_follow_the_compass_from_convention(heading, directio
     trial = TrialConfig.model_validate({"ship": {"particulars": {"heading_deg": heading}}})
     path = tiny_path(4)
     evaluator = AnalyticEvaluator(CampaignContext(trial, path, 0, "digest"), gain_m_per_m_s=0.1)
-    wind = WindDraw(speed_10m_m_s=5.0, direction_deg=direction_from, severity="none", sigma_w_mps=None, file=None,
+    wind = WindDraw(speed_10m_m_s=5.0, direction_deg=direction_from, severity="none", sigma_w_m_s=None, file=None,
                     time=None, seed=3)
     inputs = TrialInputs(0, wind, np.zeros((4, 4)), np.ones((4, 4)), 0, 0)
     outcome = evaluator.evaluate([inputs])[0]

@@ -22,7 +22,7 @@ def _batch(base, draws, dt_s=0.02):
 
 @pytest.mark.parametrize("turbulence, gusts", [
     ({"severity": {"dist": "choice", "values": ["none", "light", "severe", "from_mean"]}}, False),
-    ({"severity": "none", "sigma_w_mps": {"dist": "uniform", "low": 0.2, "high": 1.0}}, False),
+    ({"severity": "none", "sigma_w_m_s": {"dist": "uniform", "low": 0.2, "high": 1.0}}, False),
     ({"severity": {"dist": "choice", "values": ["none", "moderate"]}}, True),
 ])
 def test_each_row_equals_the_wind_stage_field_of_that_trial_alone(turbulence, gusts):

@@ -16,7 +16,7 @@ SHIP = (0.0, 0.0, 0.0)          # lat, lon, heading: a pose is enough for the me
 
 def _campaign(speed, severity, sigma=None) -> CampaignSection:
     return CampaignSection.model_validate({"wind": {"speed_10m_m_s": speed, "direction_deg": 270.0,
-                                                    "turbulence": {"severity": severity, "sigma_w_mps": sigma}}})
+                                                    "turbulence": {"severity": severity, "sigma_w_m_s": sigma}}})
 
 
 def test_the_default_turbulence_follows_the_wind_and_is_never_a_stress_test():
@@ -29,7 +29,7 @@ def test_the_default_turbulence_follows_the_wind_and_is_never_a_stress_test():
 def test_a_moderate_preset_in_a_6_m_s_wind_is_reported_with_its_ratio():
     ratios = turbulence_ratios(WindSection(), _campaign(6.0, "moderate"), 0, 4, SHIP)
     # the ratio is the preset's W20 over the trial's mean wind 20 ft above the sea
-    section = WindSection(speed_10m_mps=6.0, direction_deg=270.0)
+    section = WindSection(speed_10m_m_s=6.0, direction_deg=270.0)
     at_20ft = build_mean_wind([section], SHIP).velocity(np.array([[0.0, 0.0, TWENTY_FT_M]]), 0.0)[0]
     expected = severity_w20_mps("moderate") / np.hypot(at_20ft[0], at_20ft[1])
     assert ratios == pytest.approx(np.full(4, expected)) and expected > 2.0

@@ -26,7 +26,7 @@ def envelope_context(tmp_path) -> ExperimentContext:
     return ExperimentContext(ExperimentConfig.model_validate({
         "campaign": {"path": str(path_file), "seed": 7, "batch_size": 8, "backend": {"workers": 0}},
         "wrp": {"evaluate": {"spec_error_m": 0.6, "spec_completeness": 0.5}},
-        "wind": {"speed_10m_mps": 6.0, "direction_deg": 270.0}}))
+        "wind": {"speed_10m_m_s": 6.0, "direction_deg": 270.0}}))
 
 
 def fly(tmp_path, out: str = "env", grid: EnvelopeGrid = GRID, backend: str | None = None, workers: int | None = None,

@@ -64,5 +64,5 @@ def test_the_forecast_from_a_wrf_file_is_the_mean_wind_at_the_ship():
 
 def test_the_synthetic_forecast_is_the_wind_section_relative_to_the_bow():
     ship = SHIP
-    forecast = forecast_of(WindSection(speed_10m_mps=7.0, direction_deg=10.0), ship, None, "wind")
+    forecast = forecast_of(WindSection(speed_10m_m_s=7.0, direction_deg=10.0), ship, None, "wind")
     assert (forecast.speed_m_s, forecast.compass_from_deg, forecast.relative_deg) == (7.0, 10.0, 340.0)

@@ -101,7 +101,7 @@ def test_commanded_offsets_are_flown(controller_simulator, short_path):
 
 def dryden_wind(severity: str, n_flights: int, seed: int, dt_s: float, speed_10m: float = 3.0):
     """The wind stage's field: synthetic marine mean wind + MIL-F-8785C Dryden turbulence at ``severity``."""
-    section = WindSection(speed_10m_mps=speed_10m, turbulence=TurbulenceSection(severity=severity))
+    section = WindSection(speed_10m_m_s=speed_10m, turbulence=TurbulenceSection(severity=severity))
     return build_wind_field([section] * n_flights, (0.0, 0.0, 0.0), np.random.SeedSequence(seed), dt_s)
 
 

@@ -9,7 +9,7 @@ from wrp_eval.surrogate.diagnostics import oracle_roughness
 CONFIG = """
 run: {name: ceiling-test, seed: 2}
 ship: {type: stylized}
-wind: {speed_10m_mps: 5.0, turbulence: {severity: light}}
+wind: {speed_10m_m_s: 5.0, turbulence: {severity: light}}
 campaign:
   n_trials: 4
   batch_size: 4

@@ -214,7 +214,7 @@ def test_gusts_are_sheltered_like_the_mean_wind():
 def test_each_flight_in_the_wake_flies_the_wind_it_would_fly_alone():
     sections = [parse_model(WindSection, d, "t") for d in (
         {"direction_deg": 270.0, "turbulence": {"severity": "light"}, "gusts": {"enabled": True}},
-        {"direction_deg": 0.0, "speed_10m_mps": 9.0, "gusts": {"enabled": True}},
+        {"direction_deg": 0.0, "speed_10m_m_s": 9.0, "gusts": {"enabled": True}},
         {"direction_deg": 135.0, "turbulence": {"severity": "severe"}, "gusts": {"enabled": True}},
     )]
     batch = build_wind_field(sections, SHIP, np.random.default_rng(5).spawn(3), 0.05)

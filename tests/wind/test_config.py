@@ -16,7 +16,7 @@ def test_defaults_are_a_synthetic_field():
 
 
 @pytest.mark.parametrize("data, message", [
-    ({"speed_10m_mps": -1}, "speed_10m_mps"),
+    ({"speed_10m_m_s": -1}, "speed_10m_m_s"),
     ({"direction_deg": 360}, "direction_deg"),
     ({"interpolation": "cubic"}, "interpolation"),
     ({"grid": {"z_levels_m": [0, 10, 5]}}, "strictly increasing"),

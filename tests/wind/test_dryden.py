@@ -103,7 +103,7 @@ def test_flights_are_independent_of_the_batch_size():
 
 
 def test_velocity_rotates_u_along_the_mean_wind_and_uses_the_airspeed_floor():
-    turb = DrydenTurbulence(2, 0.05, 3, 10.0, airspeed_floor_mps=2.0)
+    turb = DrydenTurbulence(2, 0.05, 3, 10.0, airspeed_floor_m_s=2.0)
     mean = np.array([[0.0, 5.0, 0.0], [0.0, 0.0, 0.0]])        # flight 0: wind toward +y; flight 1: calm
     pts = np.array([[0.0, 0.0, 30.0], [0.0, 0.0, 30.0]])
     world = turb.velocity(pts, 0.0, mean)

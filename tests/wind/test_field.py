@@ -31,7 +31,7 @@ def test_field_is_mean_plus_turbulence_plus_gusts():
 
 
 def test_w20_from_mean_and_presets():
-    section = WindSection(speed_10m_mps=8.0)
+    section = WindSection(speed_10m_m_s=8.0)
     field = build_wind_field([section] * 2, SHIP, 0, 0.01)
     at20 = field.mean.velocity(np.array([[0.0, 0.0, TWENTY_FT_M]]), 0)[0]
     assert field.turbulence.w20_mps[0] == pytest.approx(np.hypot(*at20[:2]))
@@ -71,8 +71,8 @@ def test_each_flight_flies_the_field_it_would_fly_alone_across_sources_and_times
     sections = [parse_model(WindSection, d, "t") for d in (
         {"clamp": True, "turbulence": {"severity": "light"}},
         {**wrf, "turbulence": {"severity": "none"}},
-        {"clamp": True, "speed_10m_mps": 9.0, "direction_deg": 40.0, "turbulence": {"severity": "from_mean"}},
-        {**wrf, "time": "2005-08-28T16:00:00", "turbulence": {"sigma_w_mps": 0.7}},
+        {"clamp": True, "speed_10m_m_s": 9.0, "direction_deg": 40.0, "turbulence": {"severity": "from_mean"}},
+        {**wrf, "time": "2005-08-28T16:00:00", "turbulence": {"sigma_w_m_s": 0.7}},
         {**wrf, "turbulence": {"severity": "severe"}},
     )]
     batch = build_wind_field(sections, SHIP, np.random.default_rng(5).spawn(5), 0.05, wrf_path.parent)
@@ -96,7 +96,7 @@ def test_flights_of_one_section_share_one_grid_and_the_mean_takes_any_points():
 
 
 def test_sample_mean_field_on_the_grid_nodes_above_the_sea():
-    section = WindSection(speed_10m_mps=7.0, grid={"x_range_m": [-40, 40], "y_range_m": [-20, 20],
+    section = WindSection(speed_10m_m_s=7.0, grid={"x_range_m": [-40, 40], "y_range_m": [-20, 20],
                                                     "spacing_m": 20, "z_levels_m": [0, 10, 50]})
     x, y, z, velocity = sample_mean_field(section, SHIP)
     assert x.tolist() == [-40, -20, 0, 20, 40] and y.tolist() == [-20, 0, 20] and z.tolist() == [10, 50]
@@ -107,7 +107,7 @@ def test_sample_mean_field_on_the_grid_nodes_above_the_sea():
 def test_each_flights_sea_wind_is_its_own_mean_wind_at_10_m_over_the_ship():
     # what raises the sea under each flight (ship.motion from_wind): the mean field, not the turbulence
     from wrp_eval.wind.config import TurbulenceSection
-    sections = [WindSection(speed_10m_mps=s, direction_deg=d, turbulence=TurbulenceSection(severity="severe"))
+    sections = [WindSection(speed_10m_m_s=s, direction_deg=d, turbulence=TurbulenceSection(severity="severe"))
                 for s, d in ((4.0, 0.0), (11.0, 135.0))]
     field = build_wind_field(sections, (0.0, 0.0, 30.0), 0, 0.05)
     np.testing.assert_allclose(field.speed_10m_at_ship(2), [4.0, 11.0], rtol=1e-9)

@@ -9,7 +9,7 @@ from wrp_eval.wind.gusts import OneMinusCosineGusts
 
 
 def test_single_gust_shape():
-    g = OneMinusCosineGusts(1, 0, horizon_s=100.0, rate_per_min=0.0, amplitude_mps=4.0, duration_s=5.0)
+    g = OneMinusCosineGusts(1, 0, horizon_s=100.0, rate_per_min=0.0, amplitude_m_s=4.0, duration_s=5.0)
     g.start_s = np.array([[10.0]])          # place one gust by hand: A/2 (1 - cos(2 pi (t - t0)/T))
     g.azimuth_rad = np.array([[np.pi / 2]])
     p = np.zeros((1, 3))
@@ -20,7 +20,7 @@ def test_single_gust_shape():
 
 
 def test_drawn_gusts_sum_and_determinism():
-    g = OneMinusCosineGusts(4, 9, horizon_s=600.0, rate_per_min=2.0, amplitude_mps=4.0, duration_s=5.0,
+    g = OneMinusCosineGusts(4, 9, horizon_s=600.0, rate_per_min=2.0, amplitude_m_s=4.0, duration_s=5.0,
                             mean_azimuth_rad=0.5, direction_spread_deg=20.0)
     h = OneMinusCosineGusts(4, 9, 600.0, 2.0, 4.0, 5.0, 0.5, 20.0)
     np.testing.assert_array_equal(g.start_s, h.start_s)

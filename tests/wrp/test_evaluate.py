@@ -171,7 +171,7 @@ def test_forecast_verdict_goes_only_when_the_ci_clears_the_bar():
 
     from wrp_eval.wrp.config import EvaluateSection
     from wrp_eval.wrp.evaluate import forecast_verdict
-    wind = SimpleNamespace(speed_10m_mps=7.0, direction_deg=250.0)
+    wind = SimpleNamespace(speed_10m_m_s=7.0, direction_deg=250.0)
     errors = np.r_[np.full(57, 0.02), np.full(3, 0.05)]               # 57 of 60 flights meet 0.03 m
     good = PathTrials("initial", np.arange(60), errors, np.zeros(60, bool), np.full(60, 0.99), np.zeros(60), 40)
     ev = EvaluateSection(go_probability=0.8, bootstrap=500)
@@ -189,7 +189,7 @@ def test_forecast_config_flies_every_trial_in_the_forecast_wind():
     from wrp_eval.campaign.config import TrialConfig
     from wrp_eval.wind.config import WindSection
     from wrp_eval.wrp.jobs import forecast_config
-    cfg = forecast_config(TrialConfig(), WindSection(speed_10m_mps=9.5, direction_deg=120.0), 12)
+    cfg = forecast_config(TrialConfig(), WindSection(speed_10m_m_s=9.5, direction_deg=120.0), 12)
     assert cfg.campaign.n_trials == 12
     assert cfg.campaign.wind.speed_10m_m_s == 9.5 and cfg.campaign.wind.direction_deg == 120.0
     assert cfg.campaign.wind.turbulence == TrialConfig().campaign.wind.turbulence
@@ -205,5 +205,5 @@ def test_five_perfect_forecast_flights_are_not_enough_to_go():
     five = PathTrials("initial", np.arange(5), np.full(5, 0.02), np.zeros(5, bool), np.full(5, 0.99),
                       np.zeros(5), 40)
     v = forecast_verdict(five, EvaluateSection(go_probability=0.8), (0.03, 0.95), 0,
-                         SimpleNamespace(speed_10m_mps=6.0, direction_deg=270.0))
+                         SimpleNamespace(speed_10m_m_s=6.0, direction_deg=270.0))
     assert v["p_meets_spec"] == 1.0 and not v["go"]

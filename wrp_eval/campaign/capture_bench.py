@@ -109,7 +109,7 @@ def quickstart_campaign(ctx: ExperimentContext, speed: float, out: Path, flights
     doc["campaign"].update({"n_trials": flights, "seed": 16,
                             "wind": {**doc["campaign"]["wind"], "speed_10m_m_s": float(speed),
                                      "direction_deg": {"dist": "uniform", "low": 0.0, "high": 360.0},
-                                     "turbulence": {"severity": "from_mean", "sigma_w_mps": None}},
+                                     "turbulence": {"severity": "from_mean", "sigma_w_m_s": None}},
                             "perturbation": {"design": "physical", "targeted_share": 0.0}})
     doc["campaign"]["backend"].update({"kind": "local", "workers": 2})
     doc["campaign"]["outputs"].update({"dir": str(out), "rerun": False})

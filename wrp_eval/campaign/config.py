@@ -17,7 +17,7 @@ from pydantic import Discriminator, Field, Tag, model_validator
 from wrp_eval.recon.config import OracleSection
 from wrp_eval.ship.config import ShipSection
 from wrp_eval.sim.config import SimSection
-from wrp_eval.validation import StrictModel
+from wrp_eval.validation import StrictModel, reading_stored, renamed_keys
 from wrp_eval.wind.config import WindSection
 
 
@@ -89,10 +89,15 @@ TextOrDist = fixed_or_dist(str, Choice)
 class TurbulenceSpec(StrictModel):
     """Dryden turbulence of a trial (the wind stage's MIL-F-8785C model): a severity (``from_mean``: W20 from
     the trial's mean wind at 20 ft; light/moderate/severe: the presets; none), or an explicit intensity
-    ``sigma_w_mps`` (then W20 = 10 sigma_w), which wins when given."""
+    ``sigma_w_m_s`` (then W20 = 10 sigma_w), which wins when given."""
 
     severity: fixed_or_dist(Severity, Choice) = "from_mean"
-    sigma_w_mps: NumberOrDist | None = None
+    sigma_w_m_s: NumberOrDist | None = None
+
+    @model_validator(mode="before")
+    @classmethod
+    def _old_keys(cls, data):
+        return renamed_keys(data, {"sigma_w_mps": "sigma_w_m_s"}, "campaign.wind.turbulence")
 
     @model_validator(mode="after")
     def _known_severities(self) -> "TurbulenceSpec":
@@ -235,4 +240,5 @@ class TrialConfig(StrictModel):
     def from_stored(cls, doc: dict) -> "TrialConfig":
         """The trial config of a stored campaign.json ``config`` (older campaigns stored the whole experiment
         document: only the trial sections are read)."""
-        return cls.model_validate({name: doc[name] for name in cls.model_fields if name in doc})
+        with reading_stored():
+            return cls.model_validate({name: doc[name] for name in cls.model_fields if name in doc})

@@ -100,7 +100,7 @@ class AnalyticEvaluator:
             w = inputs.wind
             v = wind_velocity(w.speed_10m_m_s, np.radians(w.direction_deg), self.heading_rad)   # (3,) ship frame
             mean = self.gain * np.array([v[0], v[1], 0.0, 0.02 * w.speed_10m_m_s])
-            std = (self.SEVERITY_STD.get(w.severity, 0.1) if w.sigma_w_mps is None else w.sigma_w_mps) \
+            std = (self.SEVERITY_STD.get(w.severity, 0.1) if w.sigma_w_m_s is None else w.sigma_w_m_s) \
                 * w.speed_10m_m_s * self.gain
             noise = np.random.default_rng(w.seed).normal(0.0, std, size=(self.n_views, 4))
             flown = inputs.commanded_offsets + (mean + noise) * inputs.disturbance

@@ -132,7 +132,7 @@ def make_record(inputs, outcome: TrialOutcome | None, *, root_seed: int, path_di
     row = {
         "trial_id": inputs.trial_id, "root_seed": root_seed, "path_digest": path_digest,
         "wind_speed_10m_m_s": wind.speed_10m_m_s, "wind_direction_deg": wind.direction_deg,
-        "turbulence_severity": wind.severity, "turbulence_sigma_w_mps": wind.sigma_w_mps,
+        "turbulence_severity": wind.severity, "turbulence_sigma_w_mps": wind.sigma_w_m_s,
         "mesoscale_file": wind.file, "mesoscale_time": wind.time, "wind_seed": wind.seed,
         "flight_seed": inputs.flight_seed, "oracle_seed": inputs.oracle_seed, "n_views": n_views,
         "commanded_offsets": _rows(inputs.commanded_offsets, 4), "disturbance": _rows(inputs.disturbance, 4),

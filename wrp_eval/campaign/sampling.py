@@ -29,7 +29,7 @@ from wrp_eval.wind.config import WindSection
 
 WIND_STREAM, PERTURB_STREAM, DISTURB_STREAM, FLIGHT_STREAM, TARGET_STREAM = 0, 1, 2, 3, 4
 # child index of each wind input within the trial's WIND_STREAM children
-_WIND_INPUTS = ("speed_10m_m_s", "direction_deg", "severity", "sigma_w_mps", "file", "time", "seed")
+_WIND_INPUTS = ("speed_10m_m_s", "direction_deg", "severity", "sigma_w_m_s", "file", "time", "seed")
 
 
 def trial_rng(root_seed: int, *key: int) -> np.random.Generator:
@@ -56,13 +56,13 @@ def draw_value(spec, rng: np.random.Generator):
 class WindDraw:
     """The wind scenario of one trial, in the wind stage's conventions. speed_10m_m_s: mean wind at 10 m
     above the sea; direction_deg: meteorological (blowing FROM, clockwise from north); severity: Dryden
-    severity; sigma_w_mps: explicit turbulence intensity or None; file/time: mesoscale output (None: the
+    severity; sigma_w_m_s: explicit turbulence intensity or None; file/time: mesoscale output (None: the
     ``wind:`` section's); seed: of the turbulence (and gust) realisation."""
 
     speed_10m_m_s: float
     direction_deg: float
     severity: str
-    sigma_w_mps: float | None
+    sigma_w_m_s: float | None
     file: str | None
     time: str | None
     seed: int
@@ -72,10 +72,10 @@ def trial_wind_section(base: WindSection, draw: WindDraw) -> WindSection:
     """The ``wind:`` section of one trial: the base with the trial's drawn values.
 
     speed/direction apply to the synthetic source (a netCDF field brings its own); ``severity`` replaces the
-    turbulence severity; an explicit ``sigma_w_mps`` replaces the intensity; ``file``/``time`` (None: keep the
+    turbulence severity; an explicit ``sigma_w_m_s`` replaces the intensity; ``file``/``time`` (None: keep the
     base's) pick the mesoscale output."""
-    turbulence = base.turbulence.model_copy(update={"severity": draw.severity, "sigma_w_mps": draw.sigma_w_mps})
-    update = {"speed_10m_mps": draw.speed_10m_m_s, "direction_deg": draw.direction_deg % 360.0,
+    turbulence = base.turbulence.model_copy(update={"severity": draw.severity, "sigma_w_m_s": draw.sigma_w_m_s})
+    update = {"speed_10m_m_s": draw.speed_10m_m_s, "direction_deg": draw.direction_deg % 360.0,
               "turbulence": turbulence}
     if draw.file is not None:
         update["file"] = draw.file
@@ -95,15 +95,15 @@ def draw_wind(section: CampaignSection, root_seed: int, trial_id: int) -> WindDr
     """The wind of trial ``trial_id``; depends only on (root_seed, trial_id, section.wind), not on the path."""
     spec = section.wind
     specs = {"speed_10m_m_s": spec.speed_10m_m_s, "direction_deg": spec.direction_deg,
-             "severity": spec.turbulence.severity, "sigma_w_mps": spec.turbulence.sigma_w_mps,
+             "severity": spec.turbulence.severity, "sigma_w_m_s": spec.turbulence.sigma_w_m_s,
              "file": spec.mesoscale.file, "time": spec.mesoscale.time}
     values = {name: draw_value(specs[name], trial_rng(root_seed, WIND_STREAM, trial_id, j))
               for j, name in enumerate(_WIND_INPUTS[:-1])}
     seed = int(trial_rng(root_seed, WIND_STREAM, trial_id, len(_WIND_INPUTS) - 1).integers(2**63 - 1))
-    sigma = values["sigma_w_mps"]
+    sigma = values["sigma_w_m_s"]
     return WindDraw(speed_10m_m_s=float(values["speed_10m_m_s"]),
                     direction_deg=float(values["direction_deg"]) % 360.0,
-                    severity=str(values["severity"]), sigma_w_mps=None if sigma is None else max(0.0, float(sigma)),
+                    severity=str(values["severity"]), sigma_w_m_s=None if sigma is None else max(0.0, float(sigma)),
                     file=None if values["file"] is None else str(values["file"]),
                     time=None if values["time"] is None else str(values["time"]), seed=seed)
 

@@ -24,11 +24,11 @@ PRESETS = ("light", "moderate", "severe")
 CHUNK_TRIALS = 256
 
 
-def preset_w20_mps(severity: str, sigma_w_mps: float | None) -> float | None:
+def preset_w20_mps(severity: str, sigma_w_m_s: float | None) -> float | None:
     """The W20 (m/s) a trial's turbulence fixes regardless of its wind: 10 sigma_w when given, the preset's,
     or None (``from_mean`` / ``none``: no fixed W20)."""
-    if sigma_w_mps is not None:
-        return 10.0 * float(sigma_w_mps)
+    if sigma_w_m_s is not None:
+        return 10.0 * float(sigma_w_m_s)
     return severity_w20_mps(severity) if severity in PRESETS else None
 
 
@@ -37,7 +37,7 @@ def turbulence_ratios(base: WindSection, campaign: CampaignSection, root_seed: i
     """(n_trials,) fixed W20 / the W20 of the trial's own mean wind (20 ft over the ship), NaN where the trial's
     turbulence follows its wind (``from_mean``, ``none``). ``ship``: what :func:`build_mean_wind` takes."""
     draws = [draw_wind(campaign, root_seed, k) for k in range(n_trials)]
-    fixed = np.array([np.nan if (w := preset_w20_mps(d.severity, d.sigma_w_mps)) is None else w for d in draws])
+    fixed = np.array([np.nan if (w := preset_w20_mps(d.severity, d.sigma_w_m_s)) is None else w for d in draws])
     ratios = np.full(n_trials, np.nan)
     rows = np.flatnonzero(np.isfinite(fixed))
     for chunk in np.array_split(rows, max(1, -(-rows.size // CHUNK_TRIALS))) if rows.size else []:

@@ -40,7 +40,7 @@ def _wind_section(args: argparse.Namespace, config: ExperimentConfig) -> WindSec
     """The ``wind:`` section with the --wind-speed / --wind-dir overrides (synthetic source only)."""
     overrides = {}
     if args.wind_speed is not None:
-        overrides["speed_10m_mps"] = args.wind_speed
+        overrides["speed_10m_m_s"] = args.wind_speed
     if args.wind_dir is not None:
         overrides["direction_deg"] = args.wind_dir % 360.0
     if overrides and config.wind.source != "synthetic":
@@ -113,7 +113,7 @@ def register(sub: argparse._SubParsersAction) -> None:
                    help="with --hover: ideal navigation (no air wake, still sea as always for a hover): the "
                         "airframe alone, whose tilt is the exact analytic balance")
     p.add_argument("--wind-speed", type=float, default=None,
-                   help="mean wind m/s (path: overrides wind.speed_10m_mps; hover: the constant wind, default 0)")
+                   help="mean wind m/s (path: overrides wind.speed_10m_m_s; hover: the constant wind, default 0)")
     p.add_argument("--wind-dir", type=float, default=None,
                    help="compass bearing the wind blows FROM, deg clockwise from true north (path: overrides "
                         "wind.direction_deg; hover: turned into the ship frame with the config's ship heading, "

@@ -71,7 +71,7 @@ def cell_trial(base: TrialConfig, key: CellKey, heading_deg: float, max_flights:
     doc = base.campaign.model_dump(mode="json")
     doc.update(n_trials=max_flights)
     doc["wind"] = {**doc["wind"], "speed_10m_m_s": key.speed_m_s, "direction_deg": key.compass_from_deg(heading_deg),
-                   "turbulence": {"severity": "from_mean", "sigma_w_mps": None},
+                   "turbulence": {"severity": "from_mean", "sigma_w_m_s": None},
                    "mesoscale": {"file": None, "time": None}}
     doc["perturbation"] = {**doc["perturbation"], "design": "physical", "targeted_share": 0.0}
     doc["outputs"] = {**doc["outputs"], "rerun": False}

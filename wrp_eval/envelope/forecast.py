@@ -28,7 +28,7 @@ def forecast_of(wind: WindSection, ship, base_dir: str | Path | None, source: st
     heading = float(ship.heading_deg)
     if wind.source == "synthetic":
         relative = (wind.direction_deg - heading) % 360.0
-        return ForecastWind(float(wind.speed_10m_mps), float(wind.direction_deg), float(relative), source)
+        return ForecastWind(float(wind.speed_10m_m_s), float(wind.direction_deg), float(relative), source)
     grid = build_mean_grid(wind, ship, base_dir)
     velocity = interpolate(grid, np.array([U10_POINT_M]), wind.interpolation, wind.idw_power, clamp=True)[0]
     relative = relative_from_deg(velocity)

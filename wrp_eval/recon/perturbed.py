@@ -200,7 +200,7 @@ def flight_capture_sets(ctx, path: FlightPath, seed: int, speeds=FLIGHT_SPEEDS_M
     rng = _stream(seed, "flight")
     speed_of = np.repeat(np.asarray(speeds, dtype=float), per_speed)
     directions = rng.uniform(0.0, 360.0, len(speed_of))
-    sections = [config.wind.model_copy(update={"speed_10m_mps": float(u), "direction_deg": float(d)})
+    sections = [config.wind.model_copy(update={"speed_10m_m_s": float(u), "direction_deg": float(d)})
                 for u, d in zip(speed_of, directions, strict=True)]
     sim = _flight_sim_section(config.sim, mode, preset)
     wind_seed, flight_seed = np.random.SeedSequence(int(rng.integers(2 ** 63 - 1))).spawn(2)

@@ -120,7 +120,7 @@ def raw_rollout_rate(section: SimSection, batch: int, sim_seconds: float,
 def moderate_wind(section: SimSection, batch: int, seed: int, dt_s: float | None = None):
     """Synthetic marine wind 6 m/s at 10 m from the west + moderate Dryden turbulence, one stream per flight,
     with the default ship's air wake, stepping by ``dt_s`` (default: the section's chunk)."""
-    wind = WindSection(speed_10m_mps=6.0, turbulence=TurbulenceSection(severity="moderate"))
+    wind = WindSection(speed_10m_m_s=6.0, turbulence=TurbulenceSection(severity="moderate"))
     particulars, _ = resolve_particulars(ShipSection(), ".")
     return build_wind_field([wind] * batch, particulars, np.random.SeedSequence(seed),
                             section.timestep_s * section.chunk_steps if dt_s is None else dt_s)

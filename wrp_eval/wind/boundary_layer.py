@@ -17,7 +17,7 @@ VON_KARMAN = 0.40
 MIN_ROUGHNESS_M = 1e-6     # floor on z0 so that calm columns keep a finite log law
 
 
-def charnock_roughness(speed_10m_mps: np.ndarray | float, alpha: float = 0.011,
+def charnock_roughness(speed_10m_m_s: np.ndarray | float, alpha: float = 0.011,
                        iterations: int = 60) -> tuple[np.ndarray, np.ndarray]:
     """Sea-surface roughness z0 (m) and friction velocity u* (m/s) from the 10 m wind speed.
 
@@ -25,7 +25,7 @@ def charnock_roughness(speed_10m_mps: np.ndarray | float, alpha: float = 0.011,
     solved by fixed-point iteration (it contracts: d z0/d z0 ~ 2 u*/(kappa U10) * ... << 1 at sea).
     alpha ~ 0.011 (open ocean, Smith 1988, JGR 93(C12)) .. 0.018 (coastal / young sea, Wu 1980, JPO 10).
     """
-    u10 = np.maximum(np.asarray(speed_10m_mps, dtype=float), 0.0)
+    u10 = np.maximum(np.asarray(speed_10m_m_s, dtype=float), 0.0)
     z0 = np.full_like(u10, 1e-4)
     for _ in range(iterations):
         ustar = VON_KARMAN * u10 / np.log(10.0 / z0)
@@ -44,7 +44,7 @@ def log_law_factor(height_m: np.ndarray | float, z0_m: np.ndarray | float,
     return np.where(z > z0, f, 0.0)
 
 
-def synthetic_marine_grid(speed_10m_mps: float, direction_deg: float, heading_deg: float,
+def synthetic_marine_grid(speed_10m_m_s: float, direction_deg: float, heading_deg: float,
                           x_m: np.ndarray, y_m: np.ndarray, z_m: np.ndarray, charnock_alpha: float = 0.011,
                           veer_deg_per_100m: float = 0.0, gradient_per_km: float = 0.0) -> WindGrid:
     """A neutral marine boundary layer on a ship-frame grid (the embedded default mean field).
@@ -63,7 +63,7 @@ def synthetic_marine_grid(speed_10m_mps: float, direction_deg: float, heading_de
     east, north = ship_to_enu(gx, gy, heading)
     de, dn, _ = wind_velocity(1.0, direction)                          # unit downwind vector (east, north)
     downwind_m = east * de + north * dn
-    u10 = np.maximum(speed_10m_mps * (1.0 + gradient_per_km * downwind_m / 1000.0), 0.0)
+    u10 = np.maximum(speed_10m_m_s * (1.0 + gradient_per_km * downwind_m / 1000.0), 0.0)
     z0, _ = charnock_roughness(u10, charnock_alpha)
     speed = u10[..., None] * log_law_factor(z_m[None, None, :], z0[..., None])       # (nx, ny, nz)
     from_dir = direction + np.deg2rad(veer_deg_per_100m) * (z_m - 10.0) / 100.0        # (nz,)

@@ -14,7 +14,7 @@ from typing import Literal
 
 from pydantic import Field, model_validator
 
-from wrp_eval.validation import StrictModel
+from wrp_eval.validation import StrictModel, renamed_keys
 
 
 class WindGridSection(StrictModel):
@@ -44,8 +44,14 @@ class TurbulenceSection(StrictModel):
     severity: Literal["none", "from_mean", "light", "moderate", "severe"] = Field(
         "from_mean", description="W20 from the mean field at 20 ft, or a MIL-F-8785C preset "
                                  "(light/moderate/severe: W20 = 15/30/45 kt), or none")
-    sigma_w_mps: float | None = Field(None, ge=0, description="intensity override: sigma_w (W20 = 10 sigma_w)")
-    airspeed_floor_mps: float = Field(2.0, gt=0, description="floor of the frozen-field speed V (hover)")
+    sigma_w_m_s: float | None = Field(None, ge=0, description="intensity override: sigma_w (W20 = 10 sigma_w)")
+    airspeed_floor_m_s: float = Field(2.0, gt=0, description="floor of the frozen-field speed V (hover)")
+
+    @model_validator(mode="before")
+    @classmethod
+    def _old_keys(cls, data):
+        return renamed_keys(data, {"sigma_w_mps": "sigma_w_m_s", "airspeed_floor_mps": "airspeed_floor_m_s"},
+                            "wind.turbulence")
 
 
 class GustSection(StrictModel):
@@ -53,10 +59,15 @@ class GustSection(StrictModel):
 
     enabled: bool = False
     rate_per_min: float = Field(1.0, ge=0, description="mean number of gust onsets per minute")
-    amplitude_mps: float = Field(3.0, ge=0)
+    amplitude_m_s: float = Field(3.0, ge=0)
     duration_s: float = Field(4.0, gt=0)
     direction_spread_deg: float = Field(30.0, ge=0, le=180, description="+- spread about the mean wind azimuth")
     horizon_s: float = Field(1800.0, gt=0, description="gusts are drawn over [0, horizon_s]")
+
+    @model_validator(mode="before")
+    @classmethod
+    def _old_keys(cls, data):
+        return renamed_keys(data, {"amplitude_mps": "amplitude_m_s"}, "wind.gusts")
 
 
 class AirWakeSection(StrictModel):
@@ -86,7 +97,7 @@ class WindSection(StrictModel):
     file: str | None = Field(None, description="netCDF file for source wrf / mm5")
     time: str | None = Field(None, description="ISO time in the file (default: the first output)")
     time_interpolation: Literal["nearest", "linear"] = "nearest"
-    speed_10m_mps: float = Field(6.0, ge=0, le=60, description="synthetic: mean speed at 10 m")
+    speed_10m_m_s: float = Field(6.0, ge=0, le=60, description="synthetic: mean speed at 10 m")
     direction_deg: float = Field(270.0, ge=0, lt=360, description="synthetic: direction the wind blows FROM")
     charnock_alpha: float = Field(0.011, gt=0, le=0.1, description="Charnock constant (0.011 open sea)")
     veer_deg_per_100m: float = Field(0.0, ge=-90, le=90, description="synthetic: clockwise turn per 100 m")
@@ -102,6 +113,11 @@ class WindSection(StrictModel):
     turbulence: TurbulenceSection = TurbulenceSection()
     gusts: GustSection = GustSection()
     air_wake: AirWakeSection = AirWakeSection()
+
+    @model_validator(mode="before")
+    @classmethod
+    def _old_keys(cls, data):
+        return renamed_keys(data, {"speed_10m_mps": "speed_10m_m_s"}, "wind")
 
     @model_validator(mode="after")
     def _check(self) -> "WindSection":

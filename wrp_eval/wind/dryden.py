@@ -157,7 +157,7 @@ def _second_order_output(x1: float, x2: float) -> float:
 
 
 @kernel
-def _step_rows(points, mean_wind, w20_mps, airspeed_floor_mps, dt, noise, state_u, state_vw):
+def _step_rows(points, mean_wind, w20_mps, airspeed_floor_m_s, dt, noise, state_u, state_vw):
     """Advance each flight ``noise.shape[1]`` steps (unit normals (n, m, 3)) with the filters of its altitude
     (``points`` (n, 3) m) and airspeed (the ``mean_wind`` (n, 3) m/s speed, floored), updating ``state_u`` (n,)
     and ``state_vw`` (n, 2, 2) in place; returns the turbulence (n, 3) m/s after them, world frame."""
@@ -166,7 +166,7 @@ def _step_rows(points, mean_wind, w20_mps, airspeed_floor_mps, dt, noise, state_
     out, uvw = np.empty((n, 3)), np.empty(3)
     for row in range(n):
         mx, my, mz = mean_wind[row, 0], mean_wind[row, 1], mean_wind[row, 2]
-        airspeed = np.maximum(np.sqrt(mx ** 2 + my ** 2 + mz ** 2), airspeed_floor_mps)
+        airspeed = np.maximum(np.sqrt(mx ** 2 + my ** 2 + mz ** 2), airspeed_floor_m_s)
         tau, gain = _filters(points[row, 2], w20_mps[row], airspeed)
         a, _, _, c2 = _zoh(tau[0], dt)
         for k in range(noise.shape[1]):
@@ -217,7 +217,7 @@ class DrydenTurbulence:
     """
 
     def __init__(self, n_flights: int, dt_s: float, rngs, w20_mps=0.0, sigma_w_override_mps: float | None = None,
-                 airspeed_floor_mps: float = 1.0, block_steps: int = 1024):
+                 airspeed_floor_m_s: float = 1.0, block_steps: int = 1024):
         if n_flights < 1:
             raise ValueError("n_flights must be >= 1")
         if not dt_s > 0:
@@ -227,7 +227,7 @@ class DrydenTurbulence:
         self.rngs = flight_generators(rngs, n_flights)
         w20 = 10.0 * sigma_w_override_mps if sigma_w_override_mps is not None else w20_mps
         self.w20_mps = np.broadcast_to(np.asarray(w20, dtype=float), (n_flights,)).copy()
-        self.airspeed_floor_mps = float(airspeed_floor_mps)
+        self.airspeed_floor_m_s = float(airspeed_floor_m_s)
         self.block_steps = int(block_steps)
         self._noise = BlockNormals(self.rngs, n_flights, 3, self.block_steps)
         self.state_u = None            # (n,)
@@ -239,7 +239,7 @@ class DrydenTurbulence:
         """(sigma (n,3), length (n,3), V (n,), tau (n,3), gain (n,3)) for the flights' current conditions."""
         altitude = np.broadcast_to(np.asarray(altitude_m, float), (self.n_flights,))
         sigma, length = dryden_parameters(altitude, self.w20_mps)
-        v = np.maximum(np.broadcast_to(np.asarray(airspeed_mps, float), (self.n_flights,)), self.airspeed_floor_mps)
+        v = np.maximum(np.broadcast_to(np.asarray(airspeed_mps, float), (self.n_flights,)), self.airspeed_floor_m_s)
         tau, gain = _filter_rows(np.ascontiguousarray(altitude), self.w20_mps, v)
         return sigma, length, v, tau, gain
 
@@ -293,7 +293,7 @@ class DrydenTurbulence:
             n_steps = int(round((t - self.t_s) / self.dt_s))
             if n_steps < 0:
                 raise ValueError(f"turbulence queried at t = {t} s after t = {self.t_s} s: time must not decrease")
-        world = _step_rows(points, mean_wind, self.w20_mps, self.airspeed_floor_mps, self.dt_s, self._draw(n_steps),
+        world = _step_rows(points, mean_wind, self.w20_mps, self.airspeed_floor_m_s, self.dt_s, self._draw(n_steps),
                            self.state_u, self.state_vw)
         self.t_s += n_steps * self.dt_s
         return world
@@ -342,18 +342,18 @@ def rotate_to_world(uvw: np.ndarray, mean_wind: np.ndarray) -> np.ndarray:
 
 
 def turbulence_series(altitude_m: float, w20_mps: float, dt_s: float, duration_s: float, seed: int,
-                      airspeed_mps: float | None = None, airspeed_floor_mps: float = 2.0) -> dict:
+                      airspeed_mps: float | None = None, airspeed_floor_m_s: float = 2.0) -> dict:
     """One Dryden series at fixed altitude (m) for W20 (m/s), time step and duration (s), seed: t (n,) s,
     uvw (n, 3) m/s along/across/vertical, sigma_uvw (3,) m/s, length_uvw (3,) m, airspeed (m/s). Default
     airspeed: the MIL-F-8785C mean wind at that altitude, W20 ln(h/z0)/ln(20 ft/z0) with z0 = 0.15 ft
-    (h >= 10 ft), floored at ``airspeed_floor_mps`` (hover)."""
+    (h >= 10 ft), floored at ``airspeed_floor_m_s`` (hover)."""
     if airspeed_mps is None:
         shear = float(log_law_factor(max(altitude_m, 10 * FT_M), MIL_SHEAR_Z0_M, 20 * FT_M))
         airspeed_mps = w20_mps * shear
-    airspeed = max(airspeed_mps, airspeed_floor_mps)
+    airspeed = max(airspeed_mps, airspeed_floor_m_s)
     n_steps = int(round(duration_s / dt_s))
     turb = DrydenTurbulence(1, dt_s, np.random.default_rng(seed).spawn(1), w20_mps,
-                            airspeed_floor_mps=airspeed_floor_mps)
+                            airspeed_floor_m_s=airspeed_floor_m_s)
     uvw = turb.generate(n_steps, altitude_m, airspeed)[0]
     sigma, length = dryden_parameters(altitude_m, w20_mps)
     return {"t": dt_s * np.arange(n_steps), "uvw": uvw, "sigma_uvw": sigma, "length_uvw": length,

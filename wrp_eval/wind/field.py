@@ -105,7 +105,7 @@ def build_mean_grid(section: WindSection, ship, base_dir: str | Path | None = No
     pose = ship_pose(ship)
     if section.source == "synthetic":
         x, y, z = grid_axes(section.grid)
-        return synthetic_marine_grid(section.speed_10m_mps, section.direction_deg, pose.heading_deg, x, y, z,
+        return synthetic_marine_grid(section.speed_10m_m_s, section.direction_deg, pose.heading_deg, x, y, z,
                                      section.charnock_alpha, section.veer_deg_per_100m, section.gradient_per_km)
     path = Path(section.file)
     if not path.is_absolute() and base_dir is not None:
@@ -149,10 +149,10 @@ def build_mean_wind(sections: Sequence[WindSection], ship, base_dir: str | Path 
 
 def flight_w20_mps(sections: Sequence[WindSection], at_20ft: np.ndarray) -> np.ndarray | None:
     """Dryden W20 (F,) m/s per flight, or None when no flight has turbulence. at_20ft (F, 3): each flight's
-    mean wind 20 ft over the ship (``severity: from_mean``). ``sigma_w_mps`` overrides the severity
+    mean wind 20 ft over the ship (``severity: from_mean``). ``sigma_w_m_s`` overrides the severity
     (W20 = 10 sigma_w); a flight without turbulence in a batch with some gets W20 = 0, for which the shared
     Dryden filter outputs exactly zero."""
-    turbulent = [s.turbulence.severity != "none" or s.turbulence.sigma_w_mps is not None for s in sections]
+    turbulent = [s.turbulence.severity != "none" or s.turbulence.sigma_w_m_s is not None for s in sections]
     if not any(turbulent):
         return None
     w20 = np.zeros(len(sections))
@@ -160,8 +160,8 @@ def flight_w20_mps(sections: Sequence[WindSection], at_20ft: np.ndarray) -> np.n
         t = s.turbulence
         if not on:
             continue
-        if t.sigma_w_mps is not None:
-            w20[i] = 10.0 * t.sigma_w_mps
+        if t.sigma_w_m_s is not None:
+            w20[i] = 10.0 * t.sigma_w_m_s
         elif t.severity in ("light", "moderate", "severe"):
             w20[i] = severity_w20_mps(t.severity)
         else:  # from_mean, or none with an explicit intensity (overridden above)
@@ -203,13 +203,13 @@ def build_wind_field(sections: Sequence[WindSection], ship, flight_rngs, dt_s: f
     w20 = flight_w20_mps(sections, at_20ft)
     turbulence = None
     if w20 is not None:
-        floor = _shared(sections, "turbulence.airspeed_floor_mps", lambda s: s.turbulence.airspeed_floor_mps)
+        floor = _shared(sections, "turbulence.airspeed_floor_m_s", lambda s: s.turbulence.airspeed_floor_m_s)
         turbulence = DrydenTurbulence(n, dt_s, [s[0] for s in streams], w20, None, floor)
     gusts = None
     g = _shared(sections, "gusts", lambda s: s.gusts)
     if g.enabled:
         azimuth = np.arctan2(at_20ft[:, 1], at_20ft[:, 0])                         # (F,) mean-wind azimuth
-        gusts = OneMinusCosineGusts(n, [s[1] for s in streams], g.horizon_s, g.rate_per_min, g.amplitude_mps,
+        gusts = OneMinusCosineGusts(n, [s[1] for s in streams], g.horizon_s, g.rate_per_min, g.amplitude_m_s,
                                     g.duration_s, azimuth, g.direction_spread_deg)
     return WindField(mean, turbulence, gusts, build_air_wake(sections, ship))
 

@@ -23,13 +23,13 @@ class OneMinusCosineGusts:
     start_s, azimuth_rad (n_flights, g): onsets (s, ascending, padded with inf = never) and azimuths (rad).
     """
 
-    def __init__(self, n_flights: int, rngs, horizon_s: float, rate_per_min: float, amplitude_mps: float,
+    def __init__(self, n_flights: int, rngs, horizon_s: float, rate_per_min: float, amplitude_m_s: float,
                  duration_s: float, mean_azimuth_rad=0.0, direction_spread_deg: float = 30.0):
         rngs = flight_generators(rngs, n_flights)
         if duration_s <= 0 or horizon_s <= 0 or rate_per_min < 0:
             raise ValueError("gust duration and horizon must be > 0 and the rate >= 0")
         self.n_flights = n_flights
-        self.amplitude_mps = float(amplitude_mps)
+        self.amplitude_m_s = float(amplitude_m_s)
         self.duration_s = float(duration_s)
         mean_azimuth = np.broadcast_to(np.asarray(mean_azimuth_rad, dtype=float), (n_flights,))
         starts, azimuths = [], []
@@ -49,7 +49,7 @@ class OneMinusCosineGusts:
         """Sum of the gusts active at time t, (n_flights, 3) m/s in the world frame."""
         phase = (t - self.start_s) / self.duration_s              # (n, g)
         active = (phase >= 0.0) & (phase <= 1.0)
-        mag = np.where(active, 0.5 * self.amplitude_mps * (1.0 - np.cos(2 * np.pi * np.where(active, phase, 0))), 0)
+        mag = np.where(active, 0.5 * self.amplitude_m_s * (1.0 - np.cos(2 * np.pi * np.where(active, phase, 0))), 0)
         # Each flight's sum runs over its own gusts only (the first ``count`` columns), in one call per distinct
         # count: numpy's pairwise summation groups a row's terms by the row's length, so a sum over the padded
         # row would make a flight's last bits depend on the other flights' gust counts (its batch).

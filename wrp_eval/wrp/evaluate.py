@@ -281,10 +281,10 @@ def forecast_verdict(trials: PathTrials, ev, spec: tuple[float, float], seed: in
     ci = row.get("p_meets_spec_ci")
     low = ci[0] if ci else float("nan")
     go = bool(np.isfinite(low) and low >= go_probability)
-    summary = (f"forecast wind {wind.speed_10m_mps:g} m/s from {wind.direction_deg:g} deg, path {trials.name}: "
+    summary = (f"forecast wind {wind.speed_10m_m_s:g} m/s from {wind.direction_deg:g} deg, path {trials.name}: "
                f"P(meets spec) {row['p_meets_spec']:.2f}"
                + (f" [{ci[0]:.2f}, {ci[1]:.2f}]" if ci else "")
                + f" over {row['trials']} flights -> {'GO' if go else 'NO-GO'} (needs the CI's lower bound >= "
                f"{go_probability:g})")
-    return {**row, "go": go, "go_probability": go_probability, "wind_speed_10m_mps": float(wind.speed_10m_mps),
+    return {**row, "go": go, "go_probability": go_probability, "wind_speed_10m_mps": float(wind.speed_10m_m_s),
             "wind_direction_deg": float(wind.direction_deg), "summary": summary}

@@ -360,7 +360,7 @@ def forecast_config(flown, wind, n_trials: int):
     direction; turbulence and the rest as the campaign draws them) and ``n_trials`` trials."""
     doc = flown.campaign.model_dump()
     doc["n_trials"] = n_trials
-    doc["wind"].update({"speed_10m_m_s": float(wind.speed_10m_mps), "direction_deg": float(wind.direction_deg)})
+    doc["wind"].update({"speed_10m_m_s": float(wind.speed_10m_m_s), "direction_deg": float(wind.direction_deg)})
     return flown.model_copy(update={"campaign": type(flown.campaign).model_validate(doc)})
 
 
