@@ -281,28 +281,16 @@ def evaluate_job(ctx: ExperimentContext, out: Path | None = None, *, n_trials: i
     if ev.thresholds_m is not None and len(ev.thresholds_m) != 2:
         raise InputError("wrp.evaluate.thresholds_m", "give two thresholds: [iswrp, swrp]")
     inputs = resolve_inputs(ctx, section, checkpoint, campaign, surrogate=surrogate, trials=trials)
-    paths = {"initial": inputs.path}
-    optimised = {}
-    for i, kind in enumerate(("iswrp", "swrp")):
-        kind_section = with_kind(section, kind, ev.thresholds_m[i] if ev.thresholds_m is not None else None)
-        folder = evaluated_wrp_dir(out, kind)
-        optimised[kind] = run_optimize(ctx, kind_section, folder, inputs, e_original=e_original, quiet=quiet)
-        paths[kind] = FlightPath.load(folder / "path.json")
-    trial = ctx.trial_config
-    campaign_doc = trial.campaign.model_dump()
-    campaign_doc.update({"n_trials": n_trials or ev.n_trials, "path": None})
-    campaign_doc["perturbation"]["design"] = "physical"   # the paths flown as planned: the flight makes the offsets
-    campaign_doc["perturbation"]["targeted_share"] = 0.0  # ... and nothing else (no training-data targets)
-    campaign_doc["outputs"].update({"dir": None, "rerun": False})
-    flown = trial.model_copy(update={"campaign": type(trial.campaign).model_validate(campaign_doc)})
+    paths, optimised = _optimise_both(ctx, out, inputs, e_original, quiet)
+    flown = evaluation_trial(ctx.trial_config, n_trials or ev.n_trials)
     unmoved = [kind for kind in optimised if not optimised[kind]["table3"]["moved"]]
     # a WRP that moved nothing is the initial path: its placebos would all be the initial path too
     placebo_paths, infeasible = placebo_paths_of(ctx, {k: p for k, p in paths.items() if k not in unmoved},
                                                  ev.placebos)
 
-    def fly(name: str, path: FlightPath) -> PathTrials:
+    def fly(name: str, path: FlightPath, trial=flown) -> PathTrials:
         folder = evaluated_campaign_dir(out, name)
-        summary = run_campaign(flown, path, folder, root_seed=ctx.campaign_seed, config_dir=ctx.config_dir,
+        summary = run_campaign(trial, path, folder, root_seed=ctx.campaign_seed, config_dir=ctx.config_dir,
                                progress=not quiet, evaluator=evaluator or DEFAULT_EVALUATOR)
         if not quiet:
             log.info(f"{name}: {summary.done} trials in {folder} ({summary.failed} failed)")
@@ -314,45 +302,70 @@ def evaluate_job(ctx: ExperimentContext, out: Path | None = None, *, n_trials: i
     windfree = {name: windfree_error(ctx, path) for name, path in paths.items()}
     windfree.update({name: windfree_error(ctx, path)
                      for named in placebo_paths.values() for name, path in named.items()})
-    spec_error = ev.spec_error_m if ev.spec_error_m is not None else SPEC_ERROR_FACTOR * windfree["initial"]
-    seed = ctx.campaign_seed
-    result = summarise(flown_trials, seed, ev.bootstrap, ev.confidence, (spec_error, ev.spec_completeness),
-                       windfree, placebo_trials, unmoved)
+    spec = (ev.spec_error_m if ev.spec_error_m is not None else SPEC_ERROR_FACTOR * windfree["initial"],
+            ev.spec_completeness)
+    result = summarise(flown_trials, ctx.campaign_seed, ev.bootstrap, ev.confidence, spec, windfree, placebo_trials,
+                       unmoved)
     result["placebos"] = {"per_wrp": ev.placebos, "not_flown_for": unmoved,
                           "moves_without_a_flyable_direction": infeasible,
                           "how": "as many viewpoints as the WRP moved, chosen at random, moved by the WRP's move "
                                  "magnitudes in random directions with its yaw offsets (wrp/placebo.py)"}
     if forecast and ev.forecast_trials > 0:
         chosen = result["recommended_path"]
-        forecast = forecast_config(flown, ctx.config.wind, ev.forecast_trials)
-        folder = evaluated_campaign_dir(out, "forecast")
-        run_campaign(forecast, paths[chosen], folder, root_seed=ctx.campaign_seed, config_dir=ctx.config_dir,
-                     progress=not quiet, evaluator=evaluator or DEFAULT_EVALUATOR)
-        result["forecast"] = forecast_verdict(read_trials(chosen, folder), ev, (spec_error, ev.spec_completeness),
-                                              seed, ctx.config.wind)
+        fly("forecast", paths[chosen], forecast_config(flown, ctx.config.wind, ev.forecast_trials))
+        result["forecast"] = forecast_verdict(read_trials(chosen, evaluated_campaign_dir(out, "forecast")), ev, spec,
+                                              ctx.campaign_seed, ctx.config.wind)
     result["wrp"] = {kind: d["table3"] for kind, d in optimised.items()}
-    result["common_random_numbers"] = (f"every path flown with campaign seed {seed}: trial k of every path "
-                                       "draws the same wind")
+    result["common_random_numbers"] = (f"every path flown with campaign seed {ctx.campaign_seed}: trial k of every "
+                                       "path draws the same wind")
     out.mkdir(parents=True, exist_ok=True)
     write_json_atomic(out / "evaluate.json", result)
     box_plot(flown_trials, out / "boxplot.png")
     if not quiet:
-        for row in result["paths"]:
-            log.info(f"{row['path']:8s} mean {row['mean_error_m']:.4f} m  std {row['std_error_m']:.4f}  "
-                  f"p95 {row['p95_error_m']:.4f}  failed {100 * row['failure_rate']:.1f} %")
-        for row in result["paired"]:
-            ci = row["mean_error_diff_ci"]
-            log.info(f"{row['path']} - initial: mean error {row['mean_error_diff_m']:+.4f} m "
-                  + (f"[{ci[0]:+.4f}, {ci[1]:+.4f}]" if ci else "") + f" over {row['both_succeeded']} pairs, "
-                  f"failure rate {100 * row['failure_rate_diff']:+.1f} points")
-        for kind, verdict in result["robustness"].items():
-            log.info(f"{kind}: robustness gain {1e3 * verdict['gain_m']:+.2f} mm, placebo p95 "
-                  f"{1e3 * verdict['placebo_gain_p95_m']:+.2f} mm: "
-                  + ("RECOMMENDED" if verdict["recommended"] else f"not recommended ({verdict['reason']})"))
-        log.info(f"recommended path: {result['recommended_path']}")
-        if "forecast" in result:
-            log.info(result["forecast"]["summary"])
+        _log_evaluation(result)
     return result
+
+
+def _optimise_both(ctx: ExperimentContext, out: Path, inputs: WrpInputs, e_original: float | None,
+                   quiet: bool) -> tuple[dict[str, FlightPath], dict[str, dict]]:
+    """ISWRP and SWRP of ``inputs`` into ``out``: (name -> path with "initial" first, kind -> wrp_metrics)."""
+    section, thresholds = ctx.config.wrp, ctx.config.wrp.evaluate.thresholds_m
+    paths, optimised = {"initial": inputs.path}, {}
+    for i, kind in enumerate(("iswrp", "swrp")):
+        kind_section = with_kind(section, kind, thresholds[i] if thresholds is not None else None)
+        folder = evaluated_wrp_dir(out, kind)
+        optimised[kind] = run_optimize(ctx, kind_section, folder, inputs, e_original=e_original, quiet=quiet)
+        paths[kind] = FlightPath.load(folder / "path.json")
+    return paths, optimised
+
+
+def evaluation_trial(trial, n_trials: int):
+    """The experiment's trial config with every path flown as planned: the flight makes the offsets
+    (``physical`` design) and nothing else (no training-data targets), ``n_trials`` trials, no recording."""
+    doc = trial.campaign.model_dump()
+    doc.update({"n_trials": n_trials, "path": None})
+    doc["perturbation"]["design"] = "physical"
+    doc["perturbation"]["targeted_share"] = 0.0
+    doc["outputs"].update({"dir": None, "rerun": False})
+    return trial.model_copy(update={"campaign": type(trial.campaign).model_validate(doc)})
+
+
+def _log_evaluation(result: dict) -> None:
+    for row in result["paths"]:
+        log.info(f"{row['path']:8s} mean {row['mean_error_m']:.4f} m  std {row['std_error_m']:.4f}  "
+                 f"p95 {row['p95_error_m']:.4f}  failed {100 * row['failure_rate']:.1f} %")
+    for row in result["paired"]:
+        ci = row["mean_error_diff_ci"]
+        log.info(f"{row['path']} - initial: mean error {row['mean_error_diff_m']:+.4f} m "
+                 + (f"[{ci[0]:+.4f}, {ci[1]:+.4f}]" if ci else "") + f" over {row['both_succeeded']} pairs, "
+                 f"failure rate {100 * row['failure_rate_diff']:+.1f} points")
+    for kind, verdict in result["robustness"].items():
+        log.info(f"{kind}: robustness gain {1e3 * verdict['gain_m']:+.2f} mm, placebo p95 "
+                 f"{1e3 * verdict['placebo_gain_p95_m']:+.2f} mm: "
+                 + ("RECOMMENDED" if verdict["recommended"] else f"not recommended ({verdict['reason']})"))
+    log.info(f"recommended path: {result['recommended_path']}")
+    if "forecast" in result:
+        log.info(result["forecast"]["summary"])
 
 
 def forecast_config(flown, wind, n_trials: int):
