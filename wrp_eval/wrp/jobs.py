@@ -153,33 +153,15 @@ def run_optimize(ctx: ExperimentContext, section: WrpSection, out: Path, inputs:
                  e_original: float | None = None, use_oracle: bool = True, quiet: bool = False) -> dict:
     """One ISWRP / SWRP optimisation of ``inputs`` by ``section`` into ``out``; returns wrp_metrics.json."""
     torch.set_num_threads(section.threads)
-    path, surrogate, radius = inputs.path, inputs.surrogate, inputs.radius_m
+    path, surrogate = inputs.path, inputs.surrogate
     e0, e0_source = wind_free_error(ctx, inputs, section, e_original)
     threshold = section.threshold_m if section.threshold_m is not None else section.threshold_fraction * e0
-    params = WrpParams(kind=section.kind, threshold_m=float(threshold), e_original_m=float(e0),
-                       sample_radius_m=radius, iterations=section.iterations,
-                       attitude_samples=section.attitude_samples,
-                       yaw_range_rad=float(np.radians(section.yaw_range_deg)),
-                       neighbourhood_samples=section.neighbourhood_samples,
-                       step_m=step_from_surrogate(surrogate, section), swrp_spread=section.swrp_spread,
-                       block_iterations=section.block_iterations, stage2_batch=section.stage2_batch,
-                       acceptance=section.acceptance, min_improvement_fraction=section.min_improvement_fraction,
-                       improve_candidates=section.improve_candidates, validated_error_m=validated_error(surrogate),
-                       risk_measure=section.risk_measure, cvar_alpha=section.cvar_alpha,
-                       neighbour_cholesky=inputs.neighbour_cholesky, **safety_constraints(ctx, path))
+    params = wrp_params(ctx, section, inputs, float(threshold), float(e0))
     seed = section.seed if section.seed is not None else ctx.run_seed
     result = interval_optimise(surrogate, params, seed=seed)
-    confirmation, rounds = None, []
+    rounds: list[dict] = []
     if params.acceptance == "validated" and result.moved.any() and use_oracle:
-        # confirm, revert the rejected moves, and confirm the rest again against what remains (a move confirmed
-        # beside one that was then reverted is judged anew), until nothing more is rejected
-        for _ in range(CONFIRM_ROUNDS):
-            confirmation = confirm_moves(ctx.scored_ship, path, result.offsets, result.moved, params, seed,
-                                         section.confirm_samples, forecast_blur(surrogate))
-            rounds.append(confirmation.to_json_dict())
-            result = revert(result, confirmation.rejected, surrogate)
-            if not confirmation.rejected.any() or not result.moved.any():
-                break
+        result, rounds = _confirmed(ctx, section, inputs, params, result, seed)
     table = result.table3()
     if rounds:
         table["oracle_confirm_s"] = sum(r["seconds"] for r in rounds)
@@ -193,33 +175,73 @@ def run_optimize(ctx: ExperimentContext, section: WrpSection, out: Path, inputs:
         table["oracle_error_m"] = None
     out.mkdir(parents=True, exist_ok=True)
     wrp_path.save(out / "path.json")
-    doc = {"table3": table, "e_original_source": e0_source, "sample_radius_source": inputs.radius_source,
-           "sample_radius_m": radius.tolist(), "step_m": params.step_m, "seed": seed,
-           "yaw_range_deg": section.yaw_range_deg, "iterations": params.iterations,
-           "attitude_samples": params.attitude_samples, "neighbourhood_samples": params.neighbourhood_samples,
-           "neighbourhood": "measured" if params.neighbour_cholesky is not None else "ball",
-           "swrp_spread": params.swrp_spread, "acceptance": params.acceptance,
-           "min_improvement_fraction": params.min_improvement_fraction,
-           "validated_single_view_error_m": params.validated_error_m,
-           "improvement_margin_m": (params.improvement_margin_m() if params.acceptance != "paper"
-                                    and np.isfinite(params.improvement_margin_m()) else None),
-           "risk_measure": params.risk_measure,
-           "confirmation": rounds or ("not run: moves NOT confirmed by the oracle (no oracle in this run)"
-                                      if params.acceptance == "validated" and result.moved.any() else None),
-           "surrogate": {"path_digest": surrogate.meta.path_digest, "metrics": surrogate.meta.metrics.get("test")},
-           "viewpoints": [{"index": i, "moved": bool(result.moved[i]), "dx_m": float(o[0]), "dy_m": float(o[1]),
-                           "dz_m": float(o[2]), "dyaw_deg": float(np.degrees(o[3])),
-                           "accepted_iteration": int(result.accepted_iteration[i])}
-                          for i, o in enumerate(result.offsets)]}
+    doc = _metrics_doc(table, e0_source, inputs, params, section, seed, rounds, result)
     write_json_atomic(out / "wrp_metrics.json", doc)
     if not quiet:
         err = table["oracle_error_m"]
         log.info(f"{section.kind} t={threshold:.4g} m: {table['offset_rate_pct']:.1f} % viewpoints moved, position "
-              f"offset {table['position_offset_m']:.2f} m, rotation offset {table['rotation_offset_deg']:.1f} deg, "
-              f"{table['time_s']:.2f} s; error: oracle "
-              + (f"{err:.4f} m" if err is not None else "n/a") + f", surrogate {table['surrogate_error_m']:.4f} m "
-              f"(E_original {e0:.4f} m) -> {out}")
+                 f"offset {table['position_offset_m']:.2f} m, rotation offset {table['rotation_offset_deg']:.1f} "
+                 f"deg, {table['time_s']:.2f} s; error: oracle "
+                 + (f"{err:.4f} m" if err is not None else "n/a") + f", surrogate {table['surrogate_error_m']:.4f} m "
+                 f"(E_original {e0:.4f} m) -> {out}")
     return doc
+
+
+def wrp_params(ctx: ExperimentContext, section: WrpSection, inputs: WrpInputs, threshold_m: float,
+               e_original_m: float) -> WrpParams:
+    """The optimiser's parameters: the ``wrp:`` section's, with what the inputs measured (sampling radius,
+    step, the surrogate's validated error, the measured neighbourhood) and the planner's flight-safety box."""
+    surrogate = inputs.surrogate
+    return WrpParams(kind=section.kind, threshold_m=threshold_m, e_original_m=e_original_m,
+                     sample_radius_m=inputs.radius_m, iterations=section.iterations,
+                     attitude_samples=section.attitude_samples,
+                     yaw_range_rad=float(np.radians(section.yaw_range_deg)),
+                     neighbourhood_samples=section.neighbourhood_samples,
+                     step_m=step_from_surrogate(surrogate, section), swrp_spread=section.swrp_spread,
+                     block_iterations=section.block_iterations, stage2_batch=section.stage2_batch,
+                     acceptance=section.acceptance, min_improvement_fraction=section.min_improvement_fraction,
+                     improve_candidates=section.improve_candidates, validated_error_m=validated_error(surrogate),
+                     risk_measure=section.risk_measure, cvar_alpha=section.cvar_alpha,
+                     neighbour_cholesky=inputs.neighbour_cholesky, **safety_constraints(ctx, inputs.path))
+
+
+def _confirmed(ctx: ExperimentContext, section: WrpSection, inputs: WrpInputs, params: WrpParams, result, seed: int):
+    """Confirm the moves with the oracle, revert the rejected ones, and confirm the rest again against what
+    remains (a move confirmed beside one that was then reverted is judged anew), until nothing more is rejected;
+    returns (the result, the rounds' documents)."""
+    rounds = []
+    for _ in range(CONFIRM_ROUNDS):
+        confirmation = confirm_moves(ctx.scored_ship, inputs.path, result.offsets, result.moved, params, seed,
+                                     section.confirm_samples, forecast_blur(inputs.surrogate))
+        rounds.append(confirmation.to_json_dict())
+        result = revert(result, confirmation.rejected, inputs.surrogate)
+        if not confirmation.rejected.any() or not result.moved.any():
+            break
+    return result, rounds
+
+
+def _metrics_doc(table: dict, e0_source: str, inputs: WrpInputs, params: WrpParams, section: WrpSection, seed: int,
+                 rounds: list[dict], result) -> dict:
+    """wrp_metrics.json: the Table 3 row, the settings used and every viewpoint's move."""
+    surrogate = inputs.surrogate
+    margin = params.improvement_margin_m()
+    return {"table3": table, "e_original_source": e0_source, "sample_radius_source": inputs.radius_source,
+            "sample_radius_m": inputs.radius_m.tolist(), "step_m": params.step_m, "seed": seed,
+            "yaw_range_deg": section.yaw_range_deg, "iterations": params.iterations,
+            "attitude_samples": params.attitude_samples, "neighbourhood_samples": params.neighbourhood_samples,
+            "neighbourhood": "measured" if params.neighbour_cholesky is not None else "ball",
+            "swrp_spread": params.swrp_spread, "acceptance": params.acceptance,
+            "min_improvement_fraction": params.min_improvement_fraction,
+            "validated_single_view_error_m": params.validated_error_m,
+            "improvement_margin_m": margin if params.acceptance != "paper" and np.isfinite(margin) else None,
+            "risk_measure": params.risk_measure,
+            "confirmation": rounds or ("not run: moves NOT confirmed by the oracle (no oracle in this run)"
+                                       if params.acceptance == "validated" and result.moved.any() else None),
+            "surrogate": {"path_digest": surrogate.meta.path_digest, "metrics": surrogate.meta.metrics.get("test")},
+            "viewpoints": [{"index": i, "moved": bool(result.moved[i]), "dx_m": float(o[0]), "dy_m": float(o[1]),
+                            "dz_m": float(o[2]), "dyaw_deg": float(np.degrees(o[3])),
+                            "accepted_iteration": int(result.accepted_iteration[i])}
+                           for i, o in enumerate(result.offsets)]}
 
 
 def validated_error(surrogate: Surrogate) -> float | None:
