@@ -25,7 +25,7 @@ import numpy as np
 from wrp_eval.config import ExperimentConfig, TrialConfig, load_experiment
 from wrp_eval.planning.path import FlightPath
 from wrp_eval.planning.planner import PlanResult, plan, planning_rng
-from wrp_eval.recon.scene import ScoredShip, make_oracle
+from wrp_eval.recon.scored_ship import ScoredShip, make_oracle
 from wrp_eval.ship.particulars import ShipParticulars
 from wrp_eval.ship.proxy import Proxy, build_proxy
 from wrp_eval.ship.resolve import ResolvedShip, resolve_particulars, resolve_ship_full

@@ -7,7 +7,7 @@ import pytest
 from wrp_eval.config import ExperimentConfig
 from wrp_eval.errors import InputError
 from wrp_eval.recon.config import OracleSection
-from wrp_eval.recon.scene import make_oracle
+from wrp_eval.recon.scored_ship import make_oracle
 from wrp_eval.recon.synthetic import SyntheticOracle
 from wrp_eval.validation import parse_model
 

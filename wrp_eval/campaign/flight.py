@@ -23,7 +23,7 @@ from wrp_eval.campaign.evaluators import CampaignContext
 from wrp_eval.campaign.records import TrialOutcome
 from wrp_eval.campaign.sampling import TrialInputs, trial_wind_rng, trial_wind_section
 from wrp_eval.errors import InputError
-from wrp_eval.recon.scene import scored_ship
+from wrp_eval.recon.scored_ship import scored_ship
 from wrp_eval.sim.captures import CaptureSet
 from wrp_eval.sim.flight import FlightSimulator
 from wrp_eval.sim.flight_state import COMPLETED, OUTCOME_NAMES

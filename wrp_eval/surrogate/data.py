@@ -17,7 +17,7 @@ from wrp_eval.campaign.records import column_array
 from wrp_eval.campaign.store import TrialStore
 from wrp_eval.errors import InputError
 from wrp_eval.planning.path import FlightPath
-from wrp_eval.recon.scene import scored_ship
+from wrp_eval.recon.scored_ship import scored_ship
 from wrp_eval.surrogate.features import CONDITION_NAMES, ViewContext, campaign_view_context, reference_conditions
 
 POSE_NAMES = ("x_m", "y_m", "z_m", "cos_yaw", "sin_yaw", "pitch_rad", "index")

@@ -45,13 +45,13 @@ from wrp_eval.campaign.store import TrialStore
 from wrp_eval.errors import InputError
 from wrp_eval.planning.path import FlightPath
 from wrp_eval.recon.capture_io import captures_from_path
-from wrp_eval.recon.scene import scored_ship
+from wrp_eval.recon.scored_ship import scored_ship
 from wrp_eval.surrogate.metrics import regression_metrics
 
 
 @dataclass(frozen=True)
 class CampaignOracle:
-    """A campaign's path and its scored ship (:class:`wrp_eval.recon.scene.ScoredShip`): offsets in, error out."""
+    """A campaign's path and its scored ship (:class:`wrp_eval.recon.scored_ship.ScoredShip`): offsets in, error out."""
 
     path: object
     ship: object

@@ -117,7 +117,7 @@ def conditions_or_reference(conditions: np.ndarray | None, reference: np.ndarray
 
 def campaign_view_context(scored_ship, path, conditions: np.ndarray | None) -> ViewContext:
     """The :class:`ViewContext` of ``path`` (a :class:`wrp_eval.planning.path.FlightPath`) on ``scored_ship``
-    (:class:`wrp_eval.recon.scene.ScoredShip`), with the per-view mean of ``conditions`` (trials, n, 5) as the
+    (:class:`wrp_eval.recon.scored_ship.ScoredShip`), with the per-view mean of ``conditions`` (trials, n, 5) as the
     reference (zeros without)."""
     cover = scored_ship.coverage(captures_from_path(path))
     reference = reference_conditions(conditions, len(path))

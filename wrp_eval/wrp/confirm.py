@@ -63,7 +63,7 @@ def confirm_moves(scored_ship, path, offsets: np.ndarray, moved: np.ndarray, par
                   samples: int = 8, blur_px: np.ndarray | None = None) -> Confirmation:
     """The oracle's verdict on each move of ``offsets`` (n, 4) where ``moved`` (n,) (module docstring).
 
-    scored_ship: :class:`wrp_eval.recon.scene.ScoredShip`; path: the planned path; blur_px (n,): the forecast
+    scored_ship: :class:`wrp_eval.recon.scored_ship.ScoredShip`; path: the planned path; blur_px (n,): the forecast
     blur at each view (None: sharp); oracle seed 0.
     """
     start = time.perf_counter()

@@ -28,7 +28,7 @@ from wrp_eval.errors import InputError
 from wrp_eval.experiment import ExperimentContext, evaluated_campaign_dir, evaluated_wrp_dir
 from wrp_eval.planning.path import FlightPath, digest_of_document
 from wrp_eval.recon.capture_io import captures_from_path
-from wrp_eval.recon.scene import ScoredShip
+from wrp_eval.recon.scored_ship import ScoredShip
 from wrp_eval.ship.nofly import flyable
 from wrp_eval.surrogate.data import TrialData, load_campaign_trials
 from wrp_eval.surrogate.model import Surrogate

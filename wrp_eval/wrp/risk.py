@@ -46,7 +46,7 @@ def campaign_flown_offsets(campaign_dir: str | Path) -> np.ndarray:
 
 def view_risk(scored_ship, path, offsets: np.ndarray) -> ViewRisk:
     """The risk map of ``path`` from a campaign's flown ``offsets`` (n_trials, n_views, 4) (NaN rows: views not
-    taken), scored by ``scored_ship`` (:class:`wrp_eval.recon.scene.ScoredShip`): one oracle call per view."""
+    taken), scored by ``scored_ship`` (:class:`wrp_eval.recon.scored_ship.ScoredShip`): one oracle call per view."""
     full = captures_from_path(path)
     base = float(scored_ship.score(full, seed=0).error_m)
     n = len(path)
