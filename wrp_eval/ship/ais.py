@@ -152,6 +152,25 @@ def decode_ais(sentences: Sequence[str], source: str = "AIS", labels: Sequence[s
 
     labels: one name per sentence for error messages (default "<source> sentence <i>").
     """
+    kept = _kept_lines(sentences, source, labels)
+    static, positions = _by_ship(_assemble([s for s, _ in kept], [lab for _, lab in kept]))
+    with_dims = [m for m, e in static.items() if "length" in e]
+    if not with_dims:
+        raise InputError(source, "no static data: need message type 5 (class A) or type 24 part B (class B) "
+                                 "for the ship's dimensions")
+    if len(with_dims) > 1:
+        raise InputError(source, f"static data of several ships (MMSI {', '.join(map(str, sorted(with_dims)))}): "
+                                 "give the sentences of one ship")
+    mmsi = with_dims[0]
+    report = _static_report(mmsi, static[mmsi])
+    if (pos := positions.get(mmsi)) is not None:
+        _add_position(report, pos)
+    return report
+
+
+def _kept_lines(sentences: Sequence[str], source: str, labels: Sequence[str] | None) -> list[tuple[str, str]]:
+    """(sentence, label) of every line that is not blank or a '#' comment; anything that is not text, or no
+    line at all, is an :class:`InputError`."""
     if isinstance(sentences, (str, bytes)) or not isinstance(sentences, Sequence):
         raise InputError(source, "AIS data must be a list of NMEA sentences")
     labels = list(labels) if labels is not None else [f"{source} sentence {i + 1}" for i in range(len(sentences))]
@@ -162,9 +181,12 @@ def decode_ais(sentences: Sequence[str], source: str = "AIS", labels: Sequence[s
             raise InputError(lab, f"expected a text line, got {type(s).__name__}")
     if not kept:
         raise InputError(source, "no AIS sentences given")
-    messages = _assemble([s for s, _ in kept], [lab for _, lab in kept])
+    return kept
 
-    report = AisReport()
+
+def _by_ship(messages: list[tuple[NMEAMessage, str]]) -> tuple[dict[int, dict], dict[int, dict]]:
+    """Per MMSI: the static data (type 5, type 24 parts A and B, with the labels they came from) and the last
+    position report."""
     static: dict[int, dict] = {}
     positions: dict[int, dict] = {}
     for msg, label in messages:
@@ -186,19 +208,16 @@ def decode_ais(sentences: Sequence[str], source: str = "AIS", labels: Sequence[s
                 entry["name"] = (fields.get("shipname") or "").strip()
         elif kind == 24:  # part A: the name
             static.setdefault(mmsi, {"labels": []}).setdefault("name", (fields.get("shipname") or "").strip())
-    with_dims = [m for m, e in static.items() if "length" in e]
-    if not with_dims:
-        raise InputError(source, "no static data: need message type 5 (class A) or type 24 part B (class B) "
-                                 "for the ship's dimensions")
-    if len(with_dims) > 1:
-        raise InputError(source, f"static data of several ships (MMSI {', '.join(map(str, sorted(with_dims)))}): "
-                                 "give the sentences of one ship")
-    mmsi = with_dims[0]
-    entry = static[mmsi]
-    last_label = entry["labels"][-1]
+    return static, positions
+
+
+def _static_report(mmsi: int, entry: dict) -> AisReport:
+    """The report of one ship's static data (its dimensions must be given: 0 = not available)."""
     if entry["length"] <= 0 or entry["breadth"] <= 0:
-        raise InputError(last_label, f"static data of MMSI {mmsi} has no dimensions (length "
-                                     f"{entry['length']} m, breadth {entry['breadth']} m; 0 = not available)")
+        raise InputError(entry["labels"][-1], f"static data of MMSI {mmsi} has no dimensions (length "
+                                              f"{entry['length']} m, breadth {entry['breadth']} m; 0 = not "
+                                              "available)")
+    report = AisReport()
     report.mmsi = mmsi
     report.name = entry.get("name", "")
     report.ship_type_code = entry["ship_type"] or None
@@ -206,18 +225,21 @@ def decode_ais(sentences: Sequence[str], source: str = "AIS", labels: Sequence[s
     report.breadth_m = float(entry["breadth"])
     report.draught_m = entry.get("draught") or None  # 0 = not available
     report.static_from = list(entry["labels"])
-    pos = positions.get(mmsi)
-    if pos is not None:
-        lat, lon = pos.get("lat"), pos.get("lon")
-        if lat is not None and lon is not None and abs(lat) <= 90 and abs(lon) <= 180:  # 91/181 = n/a
-            report.lat_deg, report.lon_deg = float(lat), float(lon)
-        heading = pos.get("heading")
-        course = pos.get("course")
-        if heading is not None and int(heading) != HEADING_NOT_AVAILABLE and 0 <= heading < 360:
-            report.heading_deg = float(heading)
-        elif course is not None and 0 <= course < 360:  # 360 = course not available
-            report.heading_deg = float(course)
     return report
+
+
+def _add_position(report: AisReport, pos: dict) -> None:
+    """Position and heading of a position report, where available (lat 91 / lon 181, heading 511 and course 360
+    mean not available; the course stands in for a missing heading)."""
+    lat, lon = pos.get("lat"), pos.get("lon")
+    if lat is not None and lon is not None and abs(lat) <= 90 and abs(lon) <= 180:
+        report.lat_deg, report.lon_deg = float(lat), float(lon)
+    heading = pos.get("heading")
+    course = pos.get("course")
+    if heading is not None and int(heading) != HEADING_NOT_AVAILABLE and 0 <= heading < 360:
+        report.heading_deg = float(heading)
+    elif course is not None and 0 <= course < 360:
+        report.heading_deg = float(course)
 
 
 def particulars_from_report(report: AisReport, overrides: Mapping[str, float] | None = None,
