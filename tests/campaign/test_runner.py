@@ -137,3 +137,15 @@ def test_active_time_is_the_union_of_busy_intervals():
     start, end = np.array([5.0, 0.0, 1.0, 1.5]), np.array([6.0, 2.0, 3.0, 2.5])
     assert active_seconds(start, end) == 4.0      # [0, 3] and [5, 6]
     assert active_seconds(np.array([]), np.array([])) == 0.0
+
+
+def test_split_batches_keeps_every_worker_busy_and_caps_the_size():
+    from wrp_eval.campaign.backends import split_batches
+
+    small = split_batches(32, 64, 2)       # one batch of 32 would leave the second worker idle
+    assert [len(b) for b in small] == [16, 16]
+    large = split_batches(200, 64, 2)
+    assert max(len(b) for b in large) <= 64 and len(large) == 4
+    assert np.array_equal(np.concatenate(large), np.arange(200))
+    assert [len(b) for b in split_batches(3, 64, 8)] == [1, 1, 1]
+    assert split_batches(0, 64, 2) == []

@@ -19,6 +19,8 @@ from concurrent.futures import FIRST_COMPLETED, ProcessPoolExecutor, wait
 from concurrent.futures.process import BrokenProcessPool
 from contextlib import contextmanager
 
+import numpy as np
+
 from wrp_eval.campaign.records import make_record
 from wrp_eval.campaign.worker import ray_run_batch, run_batch, thread_env, trial_inputs_of
 from wrp_eval.errors import InputError
@@ -30,6 +32,14 @@ Task = tuple[dict, Sequence]     # (worker spec, trial ids or TrialInputs)
 
 def default_workers() -> int:
     return max(1, len(os.sched_getaffinity(0)) if hasattr(os, "sched_getaffinity") else (os.cpu_count() or 1))
+
+
+def split_batches(count: int, batch_size: int, workers: int) -> list[np.ndarray]:
+    """Indices 0..count-1 in consecutive batches of at most ``batch_size``, and at least one per worker while
+    there are enough: a campaign smaller than ``workers x batch_size`` keeps every worker busy instead of
+    handing one worker the whole batch. Sizes differ by at most one."""
+    parts = max(1, workers, -(-count // max(1, batch_size)))
+    return [chunk for chunk in np.array_split(np.arange(count), parts) if chunk.size]
 
 
 @contextmanager

@@ -180,7 +180,7 @@ def run_campaign(trial: TrialConfig, path: FlightPath, out_dir: str | Path, *, r
         print_, stored = open_store(store, trial, path_doc, root_seed=root_seed, evaluator=evaluator,
                                     evaluator_options=evaluator_options)
         todo = np.setdiff1d(np.arange(section.n_trials), stored)
-        batches = [todo[i:i + section.batch_size].tolist() for i in range(0, todo.size, section.batch_size)]
+        batches = [todo[chunk].tolist() for chunk in backends.split_batches(todo.size, section.batch_size, workers)]
         spec = worker_spec(trial, path, key=f"{print_}-{workers}", root_seed=root_seed, config_dir=config_dir,
                            evaluator=evaluator, evaluator_options=evaluator_options)
 
@@ -248,17 +248,22 @@ def active_seconds(start: np.ndarray, end: np.ndarray) -> float:
 
 def campaign_status(out_dir: str | Path) -> dict:
     """done / failed / errors / remaining of a campaign folder, and its rate in trials/min over the time it
-    was running: each trial's batch occupied [finished - trial_s * batch_size, finished]; the union of those
-    intervals is the running time (gaps between resumes are left out; parallel workers overlap)."""
+    was running: each trial's batch occupied [finished - trial_s * its size, finished]; the union of those
+    intervals is the running time (gaps between resumes are left out; parallel workers overlap). A batch's
+    trials share their worker and their trial_s (the batch's seconds over its size), which is how its size is
+    counted; a trial retried alone is a batch of one."""
     store = TrialStore(out_dir)
     meta = store.read_meta()
     if meta is None:
         raise InputError(out_dir, "not a campaign folder (no campaign.json)")
-    table = store.read_table(["trial_id", "failed", "error", "finished_unix", "trial_s"])
+    table = store.read_table(["trial_id", "failed", "error", "finished_unix", "trial_s", "worker"])
     ids = table.column("trial_id").to_numpy()
     finished = table.column("finished_unix").to_numpy(zero_copy_only=False).astype(float)
-    batch = int(meta.get("config", {}).get("campaign", {}).get("batch_size", 1))
-    busy = np.nan_to_num(table.column("trial_s").to_numpy(zero_copy_only=False).astype(float)) * batch
+    trial_s = np.nan_to_num(table.column("trial_s").to_numpy(zero_copy_only=False).astype(float))
+    workers = np.asarray([str(w) for w in table.column("worker").to_pylist()])
+    _, batch_of, batch_size = np.unique(np.rec.fromarrays([workers, trial_s]), return_inverse=True,
+                                        return_counts=True)
+    busy = trial_s * batch_size[batch_of.ravel()]
     active = active_seconds(finished - busy, finished)
     n_trials = int(meta["n_trials"])
     done = int(np.unique(ids).size)

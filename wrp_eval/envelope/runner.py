@@ -127,9 +127,7 @@ def _fly_look(flying: _Flying, pool: TrialPool, cells: list[Cell]) -> None:
         stored = set(TrialStore(cell.folder).stored_ids().tolist())
         jobs += [(cell, trial_inputs(cell.trial.campaign, seed, k, n_views))
                  for k in range(cell.flights, flying.rule.next_target(cell.flights)) if k not in stored]
-    batch_size = flying.base.campaign.batch_size
-    parts = max(1, flying.workers, -(-len(jobs) // batch_size))
-    chunks = [c.tolist() for c in np.array_split(np.arange(len(jobs)), parts) if c.size]
+    chunks = [c.tolist() for c in split_batches(len(jobs), flying.base.campaign.batch_size, flying.workers)]
     for index, records in pool.run([(flying.worker, [jobs[i][1] for i in chunk]) for chunk in chunks]):
         by_cell: dict[CellKey, list[dict]] = {}
         for i, record in zip(chunks[index], records, strict=True):

@@ -191,19 +191,82 @@ def _any_of(prob: np.ndarray, groups: np.ndarray, n_groups: int) -> np.ndarray:
     return 1.0 - np.exp(np.bincount(groups, weights=logs, minlength=n_groups))
 
 
-def _cross_matrices(q: np.ndarray) -> np.ndarray:
-    """(k, 3, 3) skew matrices [q]x with [q]x y = q x y."""
-    z = np.zeros(len(q))
-    return np.stack([np.stack([z, -q[:, 2], q[:, 1]], 1), np.stack([q[:, 2], z, -q[:, 0]], 1),
-                     np.stack([-q[:, 1], q[:, 0], z], 1)], 1)
+@kernel
+def _pose_information(view, cam, rel, rotations, weight, focal_px, n_views):
+    """(n_views, 6, 6): sum over observations k of ``weight[k]`` J_k^T J_k by ``view[k]``, J_k (2, 6) the
+    Jacobian of the projection of the camera-frame point ``cam[k]`` = R^T rel[k] (R = rotations[view[k]],
+    world-from-camera; rel = point - centre) with respect to a small world-frame rotation phi and a shift of
+    the camera centre: dX/dphi = R^T [rel]x, dX/dc = -R^T."""
+    info = np.zeros((n_views, 6, 6))
+    jac = np.empty((2, 6))
+    for k in range(view.shape[0]):
+        v = view[k]
+        x, y, z = cam[k, 0], cam[k, 1], cam[k, 2]
+        a = focal_px / z
+        qx, qy, qz = rel[k, 0], rel[k, 1], rel[k, 2]
+        for r in range(2):
+            d0, d1, d2 = (a, 0.0, -a * x / z) if r == 0 else (0.0, a, -a * y / z)
+            # row r of d_proj R^T: entry c = d . R[c, :]
+            p0 = d0 * rotations[v, 0, 0] + d1 * rotations[v, 0, 1] + d2 * rotations[v, 0, 2]
+            p1 = d0 * rotations[v, 1, 0] + d1 * rotations[v, 1, 1] + d2 * rotations[v, 1, 2]
+            p2 = d0 * rotations[v, 2, 0] + d1 * rotations[v, 2, 1] + d2 * rotations[v, 2, 2]
+            jac[r, 0] = p1 * qz - p2 * qy          # (p^T [q]x)
+            jac[r, 1] = p2 * qx - p0 * qz
+            jac[r, 2] = p0 * qy - p1 * qx
+            jac[r, 3], jac[r, 4], jac[r, 5] = -p0, -p1, -p2
+        w = weight[k]
+        for i in range(6):
+            for j in range(i, 6):
+                info[v, i, j] += w * (jac[0, i] * jac[0, j] + jac[1, i] * jac[1, j])
+    for v in range(n_views):
+        for i in range(6):
+            for j in range(i):
+                info[v, i, j] = info[v, j, i]
+    return info
 
 
-def _sum_by(groups: np.ndarray, values: np.ndarray, n_groups: int) -> np.ndarray:
-    """Sum the rows of ``values`` (k, ...) by ``groups`` (k,) -> (n_groups, ...) (one sparse product)."""
-    k = len(groups)
-    one_hot = sp.csr_matrix((np.ones(k), (groups, np.arange(k))), shape=(n_groups, k))
-    width = int(np.prod(values.shape[1:]))
-    return np.asarray(one_hot @ values.reshape(k, width)).reshape((n_groups,) + values.shape[1:])
+@kernel
+def _fused_points(sample, view, rel, dist, coef, dc, phi, normals, prior_info):
+    """Step 4 per sample s: the information C_s^-1 = sum coef_k (I - r_k r_k^T) + prior_info I over its
+    observations k (r_k = rel_k / dist_k, the unit ray), the point shift C_s sum coef_k (I - r_k r_k^T) shift_k
+    (shift_k = dc[view_k] + phi[view_k] x rel_k: the view's pose error moving its ray at the sample) and the
+    variance along the normal n_s^T C_s n_s. Returns (S, 3) m and (S,) m^2; S = len(normals)."""
+    n_samples = normals.shape[0]
+    info = np.zeros((n_samples, 6))       # symmetric 3 x 3: xx, yy, zz, xy, xz, yz
+    moved = np.zeros((n_samples, 3))
+    for k in range(sample.shape[0]):
+        s, v, c = sample[k], view[k], coef[k]
+        qx, qy, qz = rel[k, 0], rel[k, 1], rel[k, 2]
+        rx, ry, rz = qx / dist[k], qy / dist[k], qz / dist[k]
+        info[s, 0] += c * (1.0 - rx * rx)
+        info[s, 1] += c * (1.0 - ry * ry)
+        info[s, 2] += c * (1.0 - rz * rz)
+        info[s, 3] -= c * rx * ry
+        info[s, 4] -= c * rx * rz
+        info[s, 5] -= c * ry * rz
+        sx = dc[v, 0] + phi[v, 1] * qz - phi[v, 2] * qy
+        sy = dc[v, 1] + phi[v, 2] * qx - phi[v, 0] * qz
+        sz = dc[v, 2] + phi[v, 0] * qy - phi[v, 1] * qx
+        along = rx * sx + ry * sy + rz * sz
+        moved[s, 0] += c * (sx - rx * along)
+        moved[s, 1] += c * (sy - ry * along)
+        moved[s, 2] += c * (sz - rz * along)
+    shift = np.empty((n_samples, 3))
+    sigma2 = np.empty(n_samples)
+    for s in range(n_samples):
+        a, b, d = info[s, 0] + prior_info, info[s, 1] + prior_info, info[s, 2] + prior_info
+        e, f, g = info[s, 3], info[s, 4], info[s, 5]           # [[a, e, f], [e, b, g], [f, g, d]]
+        c00, c11, c22 = b * d - g * g, a * d - f * f, a * b - e * e   # cofactors (the matrix is symmetric)
+        c01, c02, c12 = f * g - e * d, e * g - f * b, e * f - a * g
+        det = a * c00 + e * c01 + f * c02
+        m = moved[s]
+        shift[s, 0] = (c00 * m[0] + c01 * m[1] + c02 * m[2]) / det
+        shift[s, 1] = (c01 * m[0] + c11 * m[1] + c12 * m[2]) / det
+        shift[s, 2] = (c02 * m[0] + c12 * m[1] + c22 * m[2]) / det
+        nx, ny, nz = normals[s, 0], normals[s, 1], normals[s, 2]
+        sigma2[s] = (c00 * nx * nx + c11 * ny * ny + c22 * nz * nz
+                     + 2.0 * (c01 * nx * ny + c02 * nx * nz + c12 * ny * nz)) / det
+    return shift, sigma2
 
 
 def pose_errors(obs: SampleObservations, matched: np.ndarray, existence: np.ndarray, capture_set: CaptureSet,
@@ -214,17 +277,9 @@ def pose_errors(obs: SampleObservations, matched: np.ndarray, existence: np.ndar
     p = section.synthetic
     n = len(capture_set)
     f = capture_set.camera.focal_px
-    rot = capture_set.rotations()[obs.view]
-    x, y, z = obs.cam[:, 0], obs.cam[:, 1], obs.cam[:, 2]
-    d_proj = (f / z)[:, None, None] * np.stack([np.stack([np.ones_like(x), np.zeros_like(x), -x / z], 1),
-                                                np.stack([np.zeros_like(x), np.ones_like(x), -y / z], 1)], 1)
-    rot_t = np.transpose(rot, (0, 2, 1))
-    # X = R^T (p - c): dX/dphi = R^T [p - c]x, dX/dc = -R^T
-    proj_rot = np.matmul(d_proj, rot_t)
-    jac = np.concatenate([np.matmul(proj_rot, _cross_matrices(obs.rel)), -proj_rot], axis=2)  # (k, 2, 6)
     keypoints = p.keypoints_per_mpx * 1e-6 * obs.patch_px2 * matched * existence[obs.sample]
-    jac = jac * np.sqrt(keypoints / obs.sigma_px ** 2)[:, None, None]
-    info = _sum_by(obs.view, np.matmul(jac.transpose(0, 2, 1), jac), n)
+    info = _pose_information(obs.view, obs.cam, obs.rel, capture_set.rotations(), keypoints / obs.sigma_px ** 2,
+                             float(f), n)
     true_c = np.asarray(capture_set.positions, dtype=float)
     pull = np.zeros((n, 6))
     if p.prior_position_sigma_m is None:
@@ -294,16 +349,10 @@ def fuse(capture_set: CaptureSet, gt: GroundTruth, registered: np.ndarray, secti
     phi, dc, pose_sigma = pose_errors(obs, matched, existence, capture_set, section, z_views)
 
     # step 4: weighted least-squares intersection of the matched rays
-    ray = obs.rel / obs.dist[:, None]
     coef = matched * (f / (obs.dist * obs.sigma_px)) ** 2
-    across = np.eye(3)[None] - ray[:, :, None] * ray[:, None, :]
-    info = _sum_by(obs.sample, coef[:, None, None] * across, n_samples) + np.eye(3)[None] * MAX_POINT_SIGMA_M ** -2
-    cov = np.linalg.inv(info)
-    shift = dc[obs.view] + np.cross(phi[obs.view], obs.rel)
-    moved = coef[:, None] * (shift - ray * np.einsum("kj,kj->k", ray, shift)[:, None])
-    point_shift = np.einsum("sij,sj->si", cov, _sum_by(obs.sample, moved, n_samples))
     normals = gt.sample_normals
-    sigma_geo2 = np.einsum("si,sij,sj->s", normals, cov, normals)
+    point_shift, sigma_geo2 = _fused_points(obs.sample, obs.view, obs.rel, obs.dist, coef, dc, phi, normals,
+                                            MAX_POINT_SIGMA_M ** -2)
     weight_sum = np.bincount(obs.sample, weights=matched, minlength=n_samples)
     gsd = np.bincount(obs.sample, weights=matched * obs.gsd_m, minlength=n_samples) / np.maximum(weight_sum, 1e-12)
     sigma_n = np.sqrt(sigma_geo2 + (p.noise_floor_gsd * gsd) ** 2)

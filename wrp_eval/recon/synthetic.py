@@ -55,6 +55,7 @@ import scipy.sparse as sp
 from scipy.sparse.csgraph import connected_components, minimum_spanning_tree
 
 from wrp_eval.camera import Camera, optical_axes
+from wrp_eval.compiled import kernel
 from wrp_eval.recon.base import GroundTruth, MeshOracle
 from wrp_eval.recon.config import OracleSection
 from wrp_eval.recon.fusion import FusedReconstruction, fuse
@@ -302,6 +303,61 @@ def register_incremental(n_views: int, n_hits: int, hit_view: np.ndarray, hit: n
     return registered, order
 
 
+DROPPED, CANDIDATE, MATCHABLE, TRIANGULATES = 0, 1, 2, 3   # _match_pairs' status codes, in increasing order
+
+
+@kernel
+def _match_pairs(points, normals, dirs, hit, partner, positions, rotations, hit_map, normal_map, focal_px,
+                 width_px, height_px, rays_x, rays_y, px_spacing, max_range_m, cos_incidence_max,
+                 cos_parallax_max, parallax_min_rad):
+    """Step 3 for every candidate pair k (hit ``hit[k]`` of its view, other view ``partner[k]``): status (k,)
+    int8 (DROPPED: out of j's range, incidence or parallax; CANDIDATE; MATCHABLE; TRIANGULATES) and the index
+    (k,) of j's ray at the hit's image cell in the flattened (n x rays) maps (-1 where dropped).
+
+    points, normals, dirs (h, 3): the hits; positions (n, 3) m and rotations (n, 3, 3) world-from-camera of
+    the views; hit_map, normal_map (n * rays, 3): each view's ray hits (NaN where none). The shadow-map test:
+    j's ray at p's image cell landed on p's surface patch (on its plane, within a slope-scaled distance)."""
+    k_pairs = hit.shape[0]
+    status = np.zeros(k_pairs, dtype=np.int8)
+    grid = np.full(k_pairs, -1, dtype=np.int64)
+    rays_per_view = rays_x * rays_y
+    for k in range(k_pairs):
+        h, j = hit[k], partner[k]
+        rx = points[h, 0] - positions[j, 0]
+        ry = points[h, 1] - positions[j, 1]
+        rz = points[h, 2] - positions[j, 2]
+        dist = np.sqrt(rx * rx + ry * ry + rz * rz)
+        cos_j = abs(normals[h, 0] * rx + normals[h, 1] * ry + normals[h, 2] * rz) / max(dist, 1e-9)
+        # parallax: angle at p between the two viewing rays (cos = (-d_i) . (-rel / |rel|))
+        cos_alpha = (dirs[h, 0] * rx + dirs[h, 1] * ry + dirs[h, 2] * rz) / max(dist, 1e-9)
+        if not (dist <= max_range_m and cos_j >= cos_incidence_max and cos_alpha >= cos_parallax_max):
+            continue
+        status[k] = CANDIDATE
+        cx = rotations[j, 0, 0] * rx + rotations[j, 1, 0] * ry + rotations[j, 2, 0] * rz
+        cy = rotations[j, 0, 1] * rx + rotations[j, 1, 1] * ry + rotations[j, 2, 1] * rz
+        z = rotations[j, 0, 2] * rx + rotations[j, 1, 2] * ry + rotations[j, 2, 2] * rz
+        zs = z if z > 1e-9 else 1e-9
+        u = focal_px * cx / zs + width_px / 2
+        v = focal_px * cy / zs + height_px / 2
+        iu = min(max(int(u * rays_x / width_px), 0), rays_x - 1)
+        iv = min(max(int(v * rays_y / height_px), 0), rays_y - 1)
+        g = j * rays_per_view + iv * rays_x + iu
+        grid[k] = g
+        if not (z > 1e-9 and 0 <= u < width_px and 0 <= v < height_px):
+            continue
+        dx = points[h, 0] - hit_map[g, 0]
+        dy = points[h, 1] - hit_map[g, 1]
+        dz = points[h, 2] - hit_map[g, 2]
+        spacing_j = dist * px_spacing / focal_px
+        same_plane = abs(dx * normal_map[g, 0] + dy * normal_map[g, 1] + dz * normal_map[g, 2]) \
+            <= 0.5 * spacing_j + 1e-3
+        reach = 2.0 * spacing_j / max(cos_j, cos_incidence_max)
+        if same_plane and dx * dx + dy * dy + dz * dz <= reach * reach:       # False where j's ray hit nothing
+            alpha = np.arccos(min(max(cos_alpha, -1.0), 1.0))
+            status[k] = TRIANGULATES if alpha >= parallax_min_rad else MATCHABLE
+    return status, grid
+
+
 class SyntheticOracle(MeshOracle):
     """The default oracle. ``evaluate(capture_set, ship_mesh, seed)`` -> :class:`ReconResult`."""
 
@@ -339,37 +395,18 @@ class SyntheticOracle(MeshOracle):
         hit, partner, _ = candidate_pairs(obs, n, cell_m, p.max_partners, axes,
                                           np.radians(p.parallax_max_deg) + max(cam.half_fov_x, cam.half_fov_y))
 
-        # --- match every candidate pair (vectorised over pairs) ---
-        pos = np.asarray(capture_set.positions, dtype=np.float32)
-        rot = capture_set.rotations().astype(np.float32)  # roll included: decides what lands in j's image
-        # cheap geometric tests first (range, incidence in j, parallax <= max), projection on the survivors
-        rel = obs.points[hit] - pos[partner]
-        dist_j = np.sqrt(np.einsum("kj,kj->k", rel, rel))
-        cos_j = np.abs(np.einsum("kj,kj->k", obs.normals[hit], rel)) / np.maximum(dist_j, 1e-9)
-        # parallax: angle at p between the two viewing rays (cos = (-d_i) . (-rel / |rel|))
-        cos_alpha = np.einsum("kj,kj->k", obs.dirs[hit], rel) / np.maximum(dist_j, 1e-9)
-        keep = np.flatnonzero((dist_j <= max_range) & (cos_j >= np.cos(inc_max))
-                              & (cos_alpha >= np.cos(np.radians(p.parallax_max_deg))))
-        hit, partner, rel, dist_j, cos_j = hit[keep], partner[keep], rel[keep], dist_j[keep], cos_j[keep]
-        alpha = np.arccos(np.clip(cos_alpha[keep], -1.0, 1.0))
-        cam_xyz = np.einsum("kij,ki->kj", rot[partner], rel)
-        z = cam_xyz[:, 2]
-        zs = np.where(z > 1e-9, z, 1e-9)
-        u = f * cam_xyz[:, 0] / zs + cam.image_width_px / 2
-        v = f * cam_xyz[:, 1] / zs + cam.image_height_px / 2
-        inside = (z > 1e-9) & (u >= 0) & (u < cam.image_width_px) & (v >= 0) & (v < cam.image_height_px)
-        iu = np.clip((u * p.rays_x / cam.image_width_px).astype(np.int64), 0, p.rays_x - 1)
-        iv = np.clip((v * p.rays_y / cam.image_height_px).astype(np.int64), 0, p.rays_y - 1)
-        grid_index = partner * rays_per_view + iv * p.rays_x + iu
-        dq = obs.points[hit] - obs.hit_map.reshape(-1, 3)[grid_index]
-        nq = obs.normal_map.reshape(-1, 3)[grid_index]
-        spacing_j = dist_j * px_spacing / f
-        # shadow-map test: j's ray at p's image cell landed on p's surface patch (near it, on its plane)
-        with np.errstate(invalid="ignore"):
-            same_plane = np.abs(np.einsum("kj,kj->k", dq, nq)) <= 0.5 * spacing_j + 1e-3
-            near = np.einsum("kj,kj->k", dq, dq) <= (2.0 * spacing_j / np.maximum(cos_j, np.cos(inc_max))) ** 2
-        matchable = inside & same_plane & near
-        triangulates = matchable & (alpha >= np.radians(p.parallax_min_deg))
+        # --- match every candidate pair (one compiled pass over the pairs) ---
+        pos = np.asarray(capture_set.positions, dtype=float)
+        rot = capture_set.rotations()  # roll included: decides what lands in j's image
+        status, grid_index = _match_pairs(
+            obs.points, obs.normals, obs.dirs, hit, partner, pos, rot, obs.hit_map.reshape(-1, 3),
+            obs.normal_map.reshape(-1, 3), f, float(cam.image_width_px), float(cam.image_height_px), p.rays_x,
+            p.rays_y, float(px_spacing), float(max_range), float(np.cos(inc_max)),
+            float(np.cos(np.radians(p.parallax_max_deg))), float(np.radians(p.parallax_min_deg)))
+        keep = np.flatnonzero(status > 0)
+        hit, partner, grid_index, status = hit[keep], partner[keep], grid_index[keep], status[keep]
+        matchable = status >= MATCHABLE
+        triangulates = status == TRIANGULATES
 
         # --- registration (step 4): which views join the reconstruction ---
         if p.registration == "components":
