@@ -18,7 +18,7 @@ from pathlib import Path
 
 import numpy as np
 
-from wrp_eval.campaign.backends import TrialPool
+from wrp_eval.campaign.backends import TrialPool, split_batches
 from wrp_eval.campaign.config import TrialConfig
 from wrp_eval.campaign.evaluators import DEFAULT_EVALUATOR, resolve_factory
 from wrp_eval.campaign.runner import (

@@ -52,7 +52,6 @@ from dataclasses import dataclass
 
 import numpy as np
 import open3d as o3d
-import scipy.sparse as sp
 from scipy.spatial import cKDTree
 
 from wrp_eval.compiled import kernel
