@@ -81,29 +81,55 @@ def _ortools_route(icost: list, strategy: str, time_limit_s: float) -> tuple[int
 
 
 @kernel
-def _best_two_opt(order: np.ndarray, cost: np.ndarray) -> tuple[float, int, int]:
-    """(delta, i, j) of the best 2-opt move of a closed tour (symmetric cost): reversing order[i+1 .. j]
-    changes the length by delta; over i < j - 1, (0, n - 1) excluded, the first best in row-major order."""
+def _best_two_opt(order: np.ndarray, cost: np.ndarray, neighbours: np.ndarray) -> tuple[float, int, int]:
+    """(delta, i, j) of the best improving 2-opt move of a closed tour: reversing order[i+1 .. j] changes the
+    length by delta < 0; over i < j - 1, (0, n - 1) excluded, ties to the smallest (i, j); (inf, -1, -1) when
+    no move improves. ``neighbours`` (n, n - 1): each node's other nodes by increasing cost
+    (:func:`neighbour_lists`).
+
+    A move replaces edges (a, b) and (c, d) by (a, c) and (b, d); it improves only if (a, c) is shorter than
+    (a, b) or (b, d) shorter than (c, d) (else the new pair costs at least the old). So from each edge
+    (x, y) only the nodes nearer x than y (the move's other edge starts there) and nearer y than x (the
+    other edge ends there) are scanned: every improving move is met, at a cost that falls as the tour
+    shortens (Bentley 1992, "Fast algorithms for geometric traveling salesman problems", neighbour lists).
+    The delta is the full scan's expression, so the move chosen is the full scan's (tests/planning)."""
     n = len(order)
+    pos = np.empty(n, dtype=np.int64)
     edge = np.empty(n)
     for k in range(n):
+        pos[order[k]] = k
         edge[k] = cost[order[k], order[(k + 1) % n]]
     best, best_i, best_j = np.inf, -1, -1
-    for i in range(n - 2):
-        row_a, row_b = cost[order[i]], cost[order[i + 1]]
-        edge_i = edge[i]
-        for j in range(i + 2, n - 1 if i == 0 else n):
-            delta = row_a[order[j]] + row_b[order[(j + 1) % n]] - edge_i - edge[j]
-            if delta < best:
-                best, best_i, best_j = delta, i, j
+    for k in range(n):
+        for end in range(2):        # 0: scan from the edge's first node x, 1: from its second node y
+            node = order[k] if end == 0 else order[(k + 1) % n]
+            # a tolerance over the edge: the cost matrix may differ from its transpose by rounding
+            bound = edge[k] + 1e-6
+            for other in neighbours[node]:
+                if cost[node, other] >= bound:
+                    break
+                m = pos[other] if end == 0 else (pos[other] - 1) % n
+                i, j = (k, m) if k < m else (m, k)
+                if j < i + 2 or (i == 0 and j == n - 1):
+                    continue
+                delta = cost[order[i], order[j]] + cost[order[i + 1], order[(j + 1) % n]] - edge[i] - edge[j]
+                if delta < best or (delta == best and (i < best_i or (i == best_i and j < best_j))):
+                    best, best_i, best_j = delta, i, j
     return best, best_i, best_j
 
 
-def _two_opt_move(order: np.ndarray, cost: np.ndarray) -> np.ndarray | None:
-    """The best improving 2-opt move of a closed tour (symmetric cost), or None at a 2-opt optimum."""
+def neighbour_lists(cost: np.ndarray) -> np.ndarray:
+    """(n, n - 1): each node's other nodes by increasing ``cost`` from it (ties by index)."""
+    order = np.argsort(cost, axis=1, kind="stable")
+    mine = order == np.arange(len(cost))[:, None]
+    return order[~mine].reshape(len(cost), len(cost) - 1)
+
+
+def _two_opt_move(order: np.ndarray, cost: np.ndarray, neighbours: np.ndarray) -> np.ndarray | None:
+    """The best improving 2-opt move of a closed tour, or None at a 2-opt optimum."""
     if len(order) < 4:
         return None
-    delta, i, j = _best_two_opt(order, cost)
+    delta, i, j = _best_two_opt(order, cost, neighbours)
     if delta >= -1e-9:
         return None
     new = order.copy()
@@ -158,10 +184,12 @@ def _or_opt_move(order: np.ndarray, cost: np.ndarray, max_len: int = 3) -> np.nd
     return np.concatenate([rest[:after + 1], run, rest[after + 1:]])
 
 
-def local_search(order: np.ndarray, cost: np.ndarray) -> np.ndarray:
-    """2-opt and Or-opt best-improvement descent to a local optimum (vectorised move evaluation)."""
+def local_search(order: np.ndarray, cost: np.ndarray, neighbours: np.ndarray | None = None) -> np.ndarray:
+    """2-opt and Or-opt best-improvement descent to a local optimum (compiled move scans). ``neighbours``:
+    :func:`neighbour_lists` of ``cost`` (computed here when not given)."""
+    neighbours = neighbour_lists(cost) if neighbours is None else neighbours
     while True:
-        new = _two_opt_move(order, cost)
+        new = _two_opt_move(order, cost, neighbours)
         if new is None:
             new = _or_opt_move(order, cost)
             if new is None:
@@ -174,11 +202,12 @@ _ACCEPT_WORSE = 0.01   # threshold acceptance: a kicked tour up to 1 % longer be
 
 
 def iterated_local_search(order: np.ndarray, cost: np.ndarray, kicks: int,
-                          rng: np.random.Generator) -> np.ndarray:
+                          rng: np.random.Generator, neighbours: np.ndarray | None = None) -> np.ndarray:
     """Iterated local search (double-bridge kicks, Martin, Otto & Felten 1991) for a fixed number of kicks:
     deterministic for a seeded ``rng``. Returns the best tour found, starting at node 0."""
     n = len(order)
-    best = local_search(np.asarray(order), cost)
+    neighbours = neighbour_lists(cost) if neighbours is None else neighbours
+    best = local_search(np.asarray(order), cost, neighbours)
     best_len = tour_length(best, cost)
     if n < 8:
         return np.roll(best, -int(np.flatnonzero(best == 0)[0]))
@@ -189,7 +218,7 @@ def iterated_local_search(order: np.ndarray, cost: np.ndarray, kicks: int,
         # alternate a global double bridge and a local one (inside ``span`` consecutive views)
         a, b = np.sort(rng.choice(np.arange(2, n if kick % 2 == 0 else span), size=2, replace=False))
         kicked = np.concatenate([rolled[:1], rolled[a:b], rolled[1:a], rolled[b:]])
-        cand = local_search(kicked, cost)
+        cand = local_search(kicked, cost, neighbours)
         cand_len = tour_length(cand, cost)
         # threshold acceptance (Dueck & Scheuer 1990): wander over slightly worse tours, keep the best
         if cand_len < current_len * (1.0 + _ACCEPT_WORSE):
@@ -218,10 +247,11 @@ def solve_multistart(cost: np.ndarray, rng: np.random.Generator, random_starts: 
     n = len(cost)
     if n <= 3:
         return np.arange(n)
+    neighbours = neighbour_lists(cost)
     starts = [solve_ortools(cost)] + [rng.permutation(n) for _ in range(random_starts)]
-    optima = [local_search(s, cost) for s in starts]
+    optima = [local_search(s, cost, neighbours) for s in starts]
     best = min(optima, key=lambda o: tour_length(o, cost))
-    return iterated_local_search(best, cost, kicks, rng)
+    return iterated_local_search(best, cost, kicks, rng, neighbours)
 
 
 def solve_genetic(cost: np.ndarray, rng: np.random.Generator, population: int = 120,

@@ -127,6 +127,37 @@ def _in_view(samples: np.ndarray, normals: np.ndarray, centres: np.ndarray, rot:
     return out
 
 
+@kernel
+def _view_candidates(samples, normals, centres, rot, focal_px, width_px, height_px, max_dist_m, cos_incidence_min):
+    """The pairs :func:`_in_view` keeps, sample-major, with what step 1 needs of them: sample index (k,),
+    view index (k,) into ``centres``, rel = sample - centre (k, 3) m, its length (k,) m, the camera-frame point
+    R^T rel (k, 3) m and the incidence cosine |n . rel| / |rel| (k,)."""
+    keep = _in_view(samples, normals, centres, rot, focal_px, width_px, height_px, max_dist_m, cos_incidence_min)
+    count = int(keep.sum())
+    s_idx = np.empty(count, dtype=np.int64)
+    v_idx = np.empty(count, dtype=np.int64)
+    rel = np.empty((count, 3))
+    dist = np.empty(count)
+    cam = np.empty((count, 3))
+    cos_inc = np.empty(count)
+    k = 0
+    for s in range(samples.shape[0]):
+        for v in range(centres.shape[0]):
+            if not keep[s, v]:
+                continue
+            rx = samples[s, 0] - centres[v, 0]
+            ry = samples[s, 1] - centres[v, 1]
+            rz = samples[s, 2] - centres[v, 2]
+            s_idx[k], v_idx[k] = s, v
+            rel[k, 0], rel[k, 1], rel[k, 2] = rx, ry, rz
+            dist[k] = np.sqrt(rx * rx + ry * ry + rz * rz)
+            for c in range(3):
+                cam[k, c] = rx * rot[v, 0, c] + ry * rot[v, 1, c] + rz * rot[v, 2, c]
+            cos_inc[k] = abs(rx * normals[s, 0] + ry * normals[s, 1] + rz * normals[s, 2]) / max(dist[k], 1e-9)
+            k += 1
+    return s_idx, v_idx, rel, dist, cam, cos_inc
+
+
 def observe_samples(capture_set: CaptureSet, gt: GroundTruth, registered: np.ndarray, section: OracleSection,
                     sample_area_m2: float) -> SampleObservations:
     """The observations of step 1 (module docstring) of every ground-truth sample by the registered views."""
@@ -137,16 +168,12 @@ def observe_samples(capture_set: CaptureSet, gt: GroundTruth, registered: np.nda
     centres = np.asarray(capture_set.positions, dtype=float)[views]
     rot = np.ascontiguousarray(capture_set.rotations()[views])
     inc_max = np.radians(p.incidence_max_deg)
-    candidate = _in_view(gt.samples, gt.sample_normals, centres, rot, f, float(cam_model.image_width_px),
-                         float(cam_model.image_height_px), float(cam_model.distance_for_gsd(p.max_gsd_m)),
-                         float(np.cos(inc_max + np.radians(INCIDENCE_RAMP_DEG))))
-    s_idx, v_idx = np.nonzero(candidate)                                      # sample-major
-    rel_k = gt.samples[s_idx] - centres[v_idx]
-    dist_k = np.sqrt(np.sum(rel_k * rel_k, axis=1))
-    cam_k = np.einsum("kj,kji->ki", rel_k, rot[v_idx])                        # R^T (p - c)
+    s_idx, v_idx, rel_k, dist_k, cam_k, cos_k = _view_candidates(
+        gt.samples, gt.sample_normals, centres, rot, f, float(cam_model.image_width_px),
+        float(cam_model.image_height_px), float(cam_model.distance_for_gsd(p.max_gsd_m)),
+        float(np.cos(inc_max + np.radians(INCIDENCE_RAMP_DEG))))                # sample-major
     u_k = f * cam_k[:, 0] / cam_k[:, 2] + cam_model.image_width_px / 2
     v_k = f * cam_k[:, 1] / cam_k[:, 2] + cam_model.image_height_px / 2
-    cos_k = np.abs(np.einsum("ki,ki->k", rel_k, gt.sample_normals[s_idx])) / np.maximum(dist_k, 1e-9)
     # occlusion: is the segment from the sample (just off the surface) to the camera free?
     toward = -rel_k / dist_k[:, None]
     origins = gt.samples[s_idx] + OCCLUSION_OFFSET_M * toward
