@@ -6,7 +6,8 @@ plan
 * oracle: the synthetic oracle on the path flown as planned (median of 3 after a warm-up call), and its
   milliseconds per view;
 * campaign: ``FLIGHTS`` physical-design flights of the path at U10 ``WIND_M_S`` (directions uniform, turbulence
-  from the mean wind, 2 local workers): trials per minute and each trial's flight and oracle seconds.
+  from the mean wind, 2 local workers): trials per minute and each trial's flight and oracle seconds; and
+  ``LARGE_CAMPAIGN_FLIGHTS`` flights of the 143-view inspection path (a training campaign's size).
 
 Each curve is fitted as cost ~ a views^k on log-log axes; the exponents are records (the performance issue's
 targets: planning <= 1.3, oracle and campaign <= 1.1).
@@ -27,8 +28,12 @@ from wrp_eval.recon.capture_io import captures_from_path
 
 GSDS_MM = (7.5, 4.0, 2.5, 1.85)
 FLIGHTS = 32
+# the performance issue's rate on the inspection path, also at the size of a training campaign: 32 flights are a
+# batch of 16 per worker and ~7 s of pool start-up; at 256 each worker flies batches of 64
+INSPECTION_GSD_MM = 4.0
+LARGE_CAMPAIGN_FLIGHTS = 256
 WIND_M_S = 8.0
-PLAN_STAGES = ("sampling_s", "visibility_s", "min_s", "max_s", "tsp_s", "transitions_s")
+PLAN_STAGES = ("sampling_s", "visibility_s", "min_s", "max_s", "metrics_s", "tsp_s", "transitions_s")
 EXPONENT_TARGETS = {"plan": 1.3, "oracle": 1.1, "campaign": 1.1}
 
 
@@ -119,5 +124,20 @@ def view_count_records(points: list[dict]) -> list[BenchRecord]:
     return records
 
 
+def large_campaign_record(flights: int = LARGE_CAMPAIGN_FLIGHTS) -> BenchRecord:
+    """Trials per minute of ``flights`` physical flights of the inspection path (gsd ``INSPECTION_GSD_MM``)."""
+    ctx = _at_gsd(quickstart_context(), INSPECTION_GSD_MM)
+    path = ctx.planned.path
+    with tempfile.TemporaryDirectory() as tmp:
+        summary, table = quickstart_campaign(ctx, WIND_M_S, Path(tmp) / "c", flights=flights)
+    median = {c: float(np.nanmedian(table.column(c).to_numpy(zero_copy_only=False).astype(float)))
+              for c in ("flight_s", "oracle_s")}
+    return BenchRecord(f"scaling.views.campaign_trials_per_min_{flights}.v{len(path)}", float(summary.trials_per_min),
+                       "trials/min", "performance issue target (143 views, 2 workers)", 150.0,
+                       f"{flights} physical flights at U10 {WIND_M_S:g} m/s, 2 local workers, wall "
+                       f"{summary.wall_s:.1f} s; median trial: flight {median['flight_s']:.3f} s + oracle "
+                       f"{median['oracle_s']:.3f} s")
+
+
 def run_bench() -> list[BenchRecord]:
-    return view_count_records(view_count_points())
+    return view_count_records(view_count_points()) + [large_campaign_record()]
