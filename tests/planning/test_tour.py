@@ -128,7 +128,13 @@ def _or_opt_best_numpy(order, cost, max_len=3):
 
 
 def test_compiled_move_scans_pick_the_moves_the_numpy_scans_picked():
-    from wrp_eval.planning.tour import _best_or_opt, _two_opt_move, flight_costs, neighbour_lists
+    from wrp_eval.planning.tour import (
+        _best_or_opt,
+        _or_opt_move,
+        _two_opt_move,
+        flight_costs,
+        neighbour_lists,
+    )
 
     rng = np.random.default_rng(1)
     box = np.array([[10.0, 10.0, 0.0], [40.0, 25.0, 20.0]])
@@ -149,6 +155,13 @@ def test_compiled_move_scans_pick_the_moves_the_numpy_scans_picked():
             if new is None:
                 break
             order = new
-        old_move = _or_opt_best_numpy(order, cost)
-        _, i, j, length, reverse = _best_or_opt(order, cost, 3)
-        assert old_move == (None if i < 0 else (i, j, length, reverse))
+        # the Or-opt scan from a random tour and along an Or-opt descent from the 2-opt optimum
+        for start in (rng.permutation(n), order):
+            current = start
+            while True:
+                old_move = _or_opt_best_numpy(current, cost)
+                _, i, j, length, reverse = _best_or_opt(current, cost, 3, neighbours)
+                assert old_move == (None if i < 0 else (i, j, length, reverse))
+                if i < 0:
+                    break
+                current = _or_opt_move(current, cost, neighbours)

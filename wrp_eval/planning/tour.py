@@ -138,43 +138,58 @@ def _two_opt_move(order: np.ndarray, cost: np.ndarray, neighbours: np.ndarray) -
 
 
 @kernel
-def _best_or_opt(order: np.ndarray, cost: np.ndarray, max_len: int) -> tuple[float, int, int, int, bool]:
+def _best_or_opt(order: np.ndarray, cost: np.ndarray, max_len: int,
+                 neighbours: np.ndarray) -> tuple[float, int, int, int, bool]:
     """(delta, i, j, length, reverse) of the best Or-opt move: the run order[i .. i+length-1] (length 1 ..
-    max_len) moved between order[j] and order[j+1], reversed or not; delta < -1e-9 only if it improves.
-    Scanned per length, forward then reversed, each in row-major (i, j) order, the first best kept. ``cost``
-    must be symmetric (the run is read from the rows of its ends)."""
+    max_len) moved between u = order[j] and v = order[j+1], reversed or not; i = -1 when no move improves by
+    more than 1e-9. Ties go to the smallest (length, reverse, i, j). ``neighbours``: :func:`neighbour_lists`.
+
+    The run's end that meets u is a, the one that meets v is b; the move changes the length by
+    c(u, a) + c(b, v) - c(u, v) - gain (gain: what taking the run out saves). It can only improve if c(u, a) or
+    c(b, v) is below (gain + c(u, v)) / 2, so from each run only the nodes nearer a or b than (gain + the
+    longest edge) / 2 are tried as u or v: every improving move is met and its delta is the full scan's
+    expression, the same move is chosen (tests/planning)."""
     n = len(order)
+    pos = np.empty(n, dtype=np.int64)
     edge = np.empty(n)
     for k in range(n):
+        pos[order[k]] = k
         edge[k] = cost[order[k], order[(k + 1) % n]]
-    best, best_i, best_j, best_len, best_rev = -1e-9, -1, -1, 0, False
+    longest = edge.max()
+    best, best_i, best_j, best_len, best_rev = np.inf, -1, -1, 0, 0
     for length in range(1, min(max_len, n - 3) + 1):
-        for reverse in (False, True):
-            low, low_i, low_j = np.inf, -1, -1
-            for i in range(n):
-                first, last = order[i], order[(i + length - 1) % n]
-                prev, nxt = order[(i - 1) % n], order[(i + length) % n]
-                gain = cost[prev, first] + cost[last, nxt] - cost[prev, nxt]
-                # the run's end that meets u = order[j] and the one that meets v = order[j + 1]
-                row_u, row_v = (cost[last], cost[first]) if reverse else (cost[first], cost[last])
-                for j in range(n):
-                    offset = j - i if j >= i else j - i + n
-                    if offset < length or offset == n - 1:  # edge j must lie outside the run, not just before it
-                        continue
-                    d = row_u[order[j]] + row_v[order[(j + 1) % n]] - edge[j] - gain
-                    if d < low:
-                        low, low_i, low_j = d, i, j
-            if low < best:
-                best, best_i, best_j, best_len, best_rev = low, low_i, low_j, length, reverse
-    return best, best_i, best_j, best_len, best_rev
+        for i in range(n):
+            first, last = order[i], order[(i + length - 1) % n]
+            prev, nxt = order[(i - 1) % n], order[(i + length) % n]
+            gain = cost[prev, first] + cost[last, nxt] - cost[prev, nxt]
+            bound = 0.5 * (gain + longest) + 1e-6
+            for reverse in range(2):
+                end_u, end_v = (last, first) if reverse else (first, last)
+                for side in range(2):
+                    near = end_u if side == 0 else end_v
+                    for other in neighbours[near]:
+                        if cost[near, other] >= bound:
+                            break
+                        j = pos[other] if side == 0 else (pos[other] - 1) % n
+                        offset = j - i if j >= i else j - i + n
+                        if offset < length or offset == n - 1:  # edge j outside the run, not just before it
+                            continue
+                        d = cost[end_u, order[j]] + cost[end_v, order[(j + 1) % n]] - edge[j] - gain
+                        if d < best or (d == best and (length, reverse, i, j) < (best_len, best_rev, best_i,
+                                                                                    best_j)):
+                            best, best_i, best_j, best_len, best_rev = d, i, j, length, reverse
+    if best >= -1e-9:
+        return -1e-9, -1, -1, 0, False
+    return best, best_i, best_j, best_len, best_rev == 1
 
 
-def _or_opt_move(order: np.ndarray, cost: np.ndarray, max_len: int = 3) -> np.ndarray | None:
+def _or_opt_move(order: np.ndarray, cost: np.ndarray, neighbours: np.ndarray,
+                 max_len: int = 3) -> np.ndarray | None:
     """The best improving Or-opt move (a run of 1..max_len views moved elsewhere, either way round), or None."""
     n = len(order)
     if n < 4:
         return None
-    _, i, j, length, reverse = _best_or_opt(order, cost, max_len)
+    _, i, j, length, reverse = _best_or_opt(order, cost, max_len, neighbours)
     if i < 0:
         return None
     run_idx = (i + np.arange(length)) % n
@@ -191,7 +206,7 @@ def local_search(order: np.ndarray, cost: np.ndarray, neighbours: np.ndarray | N
     while True:
         new = _two_opt_move(order, cost, neighbours)
         if new is None:
-            new = _or_opt_move(order, cost)
+            new = _or_opt_move(order, cost, neighbours)
             if new is None:
                 return order
         order = new
