@@ -53,7 +53,7 @@ class Step:
         return False
 
 
-def run_pipeline(ctx: ExperimentContext, *, quiet: bool = True, smallest: bool = False) -> dict:
+def run_pipeline(ctx: ExperimentContext, *, smallest: bool = False) -> dict:
     """Run every stage of the experiment; returns the run summary (also run_summary.json).
 
     A config with a ``study:`` section runs its variants instead (:mod:`wrp_eval.study.runner`: each variant
@@ -62,7 +62,7 @@ def run_pipeline(ctx: ExperimentContext, *, quiet: bool = True, smallest: bool =
     whose trials the WRP and the report reuse) and the surrogate is trained once and used as trained."""
     config = ctx.config
     if config.study is not None:
-        return run_study(ctx, smallest=smallest, quiet=quiet)
+        return run_study(ctx, smallest=smallest)
     if smallest:
         raise InputError(ctx.source, "--smallest needs a study: section (it applies study.smallest)")
     out = ctx.folders.root
@@ -71,7 +71,7 @@ def run_pipeline(ctx: ExperimentContext, *, quiet: bool = True, smallest: bool =
     summary: dict = {"config": ctx.source, "seed": ctx.run_seed, "out": str(out)}
     job_start = time.perf_counter()
     path = _ship_and_plan(ctx, summary, timings)
-    trials, envelope = _flights(ctx, path, summary, timings, quiet)
+    trials, envelope = _flights(ctx, path, summary, timings)
     with Step(timings, "export", "missions of the three paths"):
         summary["missions"] = export_missions(ctx)
     with Step(timings, "report", "report.md, figures and run.rrd"):
@@ -104,23 +104,23 @@ def _ship_and_plan(ctx: ExperimentContext, summary: dict, timings: dict) -> Flig
     return path
 
 
-def _flights(ctx: ExperimentContext, path: FlightPath, summary: dict, timings: dict, quiet: bool):
+def _flights(ctx: ExperimentContext, path: FlightPath, summary: dict, timings: dict):
     """Campaign, surrogate, ISWRP / SWRP with their evaluation, and the envelope of the recommended path;
     returns (the campaign's trials, the envelope or None)."""
     config, folders = ctx.config, ctx.folders
     campaign_dir = folders.campaign
     with Step(timings, "campaign", f"{config.campaign.n_trials} perturbed flights scored by the "
                                    f"{config.campaign.oracle} oracle"):
-        camp = campaign_job(ctx, out_dir=campaign_dir, progress=not quiet, path=path)
+        camp = campaign_job(ctx, out_dir=campaign_dir, path=path)
         summary["campaign"] = {"dir": str(campaign_dir), "trials": camp.done, "failed": camp.failed,
                                "trials_per_min": camp.trials_per_min, "turbulence_stress": camp.stress_note}
     with Step(timings, "surrogate", "train the CNN surrogate on the campaign"):
-        trained, trials, _ = train_from_campaign(ctx, campaign_dir, folders.surrogate, progress=not quiet)
+        trained, trials, _ = train_from_campaign(ctx, campaign_dir, folders.surrogate)
         summary["surrogate"] = {**trained.metrics["test"],
                                 "physical_variance_share": trained.metrics.get("physical_variance_share")}
     with Step(timings, "wrp", "ISWRP and SWRP, then the three paths flown under the same winds"):
         summary["evaluate"] = evaluate_job(ctx, folders.evaluate, checkpoint=folders.surrogate / CHECKPOINT_NAME,
-                                           campaign=campaign_dir, quiet=quiet, surrogate=trained.surrogate,
+                                           campaign=campaign_dir, surrogate=trained.surrogate,
                                            trials=trials, forecast=config.envelope.run_grid is None)
         if camp.stress_note and summary["evaluate"].get("forecast"):
             summary["evaluate"]["forecast"]["stress_notes"] = [f"**Stress test**: {camp.stress_note}.", ""]

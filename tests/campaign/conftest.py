@@ -76,5 +76,5 @@ def run_analytic():
 
     def run(config, out, overrides=None, **options):
         return campaign_job(ExperimentContext(config), out_dir=out, evaluator=EVALUATOR, evaluator_options=options,
-                            progress=False, **(overrides or {}))
+                            **(overrides or {}))
     return run

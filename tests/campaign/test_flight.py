@@ -17,10 +17,8 @@ def test_flights_are_batch_independent_and_recorded(tmp_path, tiny_path, make_co
     common = dict(n_trials=3, wind={"speed_10m_m_s": {"dist": "uniform", "low": 4, "high": 8},
                                     "turbulence": {"severity": "light"}},
                   perturbation={"design": "box", "position_half_width_m": 1.0, "yaw_half_width_deg": 5})
-    together = campaign_job(ExperimentContext(make_config(path_file, batch_size=3, **common)), out_dir=tmp_path / "a",
-                            progress=False)
-    alone = campaign_job(ExperimentContext(make_config(path_file, batch_size=1, **common)), out_dir=tmp_path / "b",
-                         progress=False)
+    together = campaign_job(ExperimentContext(make_config(path_file, batch_size=3, **common)), out_dir=tmp_path / "a")
+    alone = campaign_job(ExperimentContext(make_config(path_file, batch_size=1, **common)), out_dir=tmp_path / "b")
     assert together.errors == 0 and together.done == 3
     a, b = TrialStore(together.out_dir).read_table(), TrialStore(alone.out_dir).read_table()
     assert comparable(a) == comparable(b)

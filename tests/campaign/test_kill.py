@@ -54,7 +54,7 @@ SCRIPT = textwrap.dedent("""
             "path": path, "n_trials": int(n_trials), "batch_size": 2, "seed": 3,
             "backend": {"workers": int(workers)}, "outputs": {"rerun": True, "chunk_trials": int(chunk_trials)}}})
         campaign_job(ExperimentContext(config), out_dir=out, evaluator="__main__:KillingEvaluator",
-                     evaluator_options={"kill_at": int(kill_at), "marker": marker}, progress=False)
+                     evaluator_options={"kill_at": int(kill_at), "marker": marker})
 """)
 
 
@@ -88,8 +88,7 @@ def test_kill_9_mid_campaign_then_rerun_completes_without_duplicates(tmp_path, p
     np.testing.assert_array_equal(store.stored_ids(), np.arange(N_TRIALS))   # complete and unique
     # the resumed campaign's records equal those of an uninterrupted one
     config = make_config(path_file, n_trials=N_TRIALS, batch_size=2, seed=3)
-    fresh = campaign_job(ExperimentContext(config), out_dir=tmp_path / "fresh", evaluator=ANALYTIC_EVALUATOR,
-                         progress=False)
+    fresh = campaign_job(ExperimentContext(config), out_dir=tmp_path / "fresh", evaluator=ANALYTIC_EVALUATOR)
     assert comparable(store.read_table()) == comparable(TrialStore(fresh.out_dir).read_table())
     np.testing.assert_array_equal(read_trial_ids(tmp_path / "c" / "campaign.rrd"), np.arange(N_TRIALS))
     assert temporaries(tmp_path / "c") == [] and temporaries(store.trials_dir) == []

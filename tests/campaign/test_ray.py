@@ -28,8 +28,7 @@ def test_ray_set_up_error_is_the_campaigns_input_error(tmp_path, path_file, make
     ray.init(num_cpus=1, include_dashboard=False, log_to_driver=False)   # reused by the campaign
     try:
         with pytest.raises(InputError, match="no_such_ship"):
-            campaign_job(ExperimentContext(ExperimentConfig.model_validate(doc)), out_dir=tmp_path / "c",
-                         progress=False)
+            campaign_job(ExperimentContext(ExperimentConfig.model_validate(doc)), out_dir=tmp_path / "c")
         assert ray.is_initialized()   # an instance the caller started is left running
     finally:
         ray.shutdown()

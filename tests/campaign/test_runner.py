@@ -128,7 +128,7 @@ def test_a_worker_set_up_error_stops_the_campaign_with_its_message(tmp_path, pat
     doc = make_config(path_file, backend={"workers": 1}).model_dump(mode="json")
     doc["ship"]["mesh"] = {"path": str(tmp_path / "no_such_ship.stl")}
     with pytest.raises(InputError, match="no_such_ship"):
-        campaign_job(ExperimentContext(ExperimentConfig.model_validate(doc)), out_dir=tmp_path / "c", progress=False)
+        campaign_job(ExperimentContext(ExperimentConfig.model_validate(doc)), out_dir=tmp_path / "c")
     assert TrialStore(tmp_path / "c").stored_ids().size == 0
 
 

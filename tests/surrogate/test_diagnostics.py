@@ -27,7 +27,7 @@ def campaign_dir(tmp_path_factory):
     folder = tmp_path_factory.mktemp("ceiling")
     cfg = folder / "c.yaml"
     cfg.write_text(CONFIG)
-    summary = campaign_job(ExperimentContext.load(cfg), out_dir=folder / "campaign", progress=False)
+    summary = campaign_job(ExperimentContext.load(cfg), out_dir=folder / "campaign")
     assert summary.done == 4 and summary.failed < 4
     return folder / "campaign"
 

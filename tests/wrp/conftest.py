@@ -7,6 +7,7 @@ import pytest
 import torch
 
 from wrp_eval.surrogate.model import Surrogate, SurrogateMeta, ViewSequenceCNN
+from wrp_eval.wrp.config import WrpSection
 from wrp_eval.wrp.optimize import WrpParams
 
 torch.set_num_threads(1)
@@ -36,13 +37,23 @@ def surrogate():
     return small_surrogate()
 
 
+def wrp_params(kind: str, threshold_m: float, e_original_m: float, sample_radius_m, *, step_m: float = 2.0,
+               validated_error_m=None, neighbour_cholesky=None, base_positions=None, min_altitude_m: float = 0.0,
+               no_fly_bounds=None, **settings) -> WrpParams:
+    """The parameters of a ``wrp:`` section with ``settings`` (acceptance "paper", Alg. 3 as written, unless
+    given) and these measured inputs."""
+    return WrpParams.of(WrpSection(kind=kind, **{"acceptance": "paper", **settings}), threshold_m=threshold_m,
+                        e_original_m=e_original_m, sample_radius_m=np.asarray(sample_radius_m, float), step_m=step_m,
+                        validated_error_m=validated_error_m, neighbour_cholesky=neighbour_cholesky,
+                        base_positions=base_positions, min_altitude_m=min_altitude_m, no_fly_bounds=no_fly_bounds)
+
+
 def params_for(s: Surrogate, kind: str, threshold: float, **kw) -> WrpParams:
     e0 = float(s.predict(np.zeros((1, s.n_views, 4)))[0])
-    base = dict(kind=kind, threshold_m=threshold, e_original_m=e0, sample_radius_m=np.full(s.n_views, 0.4),
-                iterations=40, attitude_samples=5, neighbourhood_samples=4, step_m=1.5, block_iterations=8,
+    base = dict(iterations=40, attitude_samples=5, neighbourhood_samples=4, step_m=1.5, block_iterations=8,
                 stage2_batch=3)
     base.update(kw)
-    return WrpParams(**base)
+    return wrp_params(kind, threshold, e0, np.full(s.n_views, 0.4), **base)
 
 
 def _surrogate_helpers():

@@ -6,9 +6,8 @@ import numpy as np
 import pytest
 
 from wrp_eval.wrp.confirm import confirm_moves, neighbour_draws
-from wrp_eval.wrp.optimize import WrpParams
 
-from .conftest import helpers
+from .conftest import helpers, wrp_params
 
 
 class KnownOracle:
@@ -33,7 +32,7 @@ def test_confirmation_keeps_moves_the_oracle_agrees_with_and_reverts_the_others(
     offsets[3, :3] = [0.0, 0.0, 2.0]           # away from view 3's best: rejected
     offsets[4, 3] = 0.1                        # yaw only: the known oracle does not care, no gain: rejected
     moved = np.array([False, True, False, True, True])
-    params = WrpParams("iswrp", 0.1, 1.0, np.full(5, 0.2))
+    params = wrp_params("iswrp", 0.1, 1.0, np.full(5, 0.2))
     oracle = KnownOracle(best)
     c = confirm_moves(oracle, path, offsets, moved, params, seed=4, samples=6)
     assert c.confirmed.tolist() == [False, True, False, False, False]
@@ -56,10 +55,10 @@ def test_oracle_verdicts_need_a_gain_beyond_the_oracles_noise_and_count_failures
         np.stack([base, np.r_[base[:7], np.nan]]),               # without it one draw fails: confirmed
         np.stack([np.r_[np.nan, base[1:]], base]),               # with it one draw fails: rejected
     ])
-    gain, ok = oracle_verdicts(errors, WrpParams("iswrp", 0.1, 0.03, np.full(4, 0.2)))
+    gain, ok = oracle_verdicts(errors, wrp_params("iswrp", 0.1, 0.03, np.full(4, 0.2)))
     assert ok.tolist() == [True, False, True, False]
     assert gain[0] == pytest.approx(0.001) and gain[1] == pytest.approx(0.00005) and np.isnan(gain[2:]).all()
-    swrp = WrpParams("swrp", 0.1, 0.03, np.full(4, 0.2), acceptance="validated", validated_error_m=1e-4)
+    swrp = wrp_params("swrp", 0.1, 0.03, np.full(4, 0.2), acceptance="validated", validated_error_m=1e-4)
     spread = np.stack([np.stack([np.full(8, 0.03), 0.03 + np.linspace(-0.003, 0.003, 8)])])
     g, ok = oracle_verdicts(spread, swrp)                       # the spread drops by ~2.2 mm > 2 x 0.1 mm
     assert ok.tolist() == [True] and g[0] > 2e-4
@@ -74,7 +73,7 @@ def test_revert_puts_rejected_views_back_and_keeps_the_rest():
     offsets = np.array([[0.5, 0, 0, 0.1], [0, 0, 0, 0], [0, 1.0, 0, 0], [0, 0, -1.0, 0]])
     moved = np.array([True, False, True, True])
     r = WrpResult(offsets, moved, np.array([3, -1, 5, 7]), np.array([1.0, np.nan, 2.0, 3.0]),
-                  np.array([0.1, np.nan, 0.2, 0.3]), 0.0, 1.0, 1, 1, WrpParams("iswrp", 0.1, 1.0, np.full(4, 0.5)))
+                  np.array([0.1, np.nan, 0.2, 0.3]), 0.0, 1.0, 1, 1, wrp_params("iswrp", 0.1, 1.0, np.full(4, 0.5)))
     out = revert(r, np.array([False, False, True, False]), s)
     assert out.moved.tolist() == [True, False, False, True]
     np.testing.assert_array_equal(out.offsets[2], 0.0)

@@ -62,7 +62,7 @@ def test_evaluate_flies_all_paths_with_the_same_winds(tmp_path, acceptance):
                 "evaluate": {"n_trials": 6, "bootstrap": 200, "placebos": 2, "forecast_trials": 4}}})
     doc = evaluate_job(ExperimentContext(config, tmp_path), tmp_path / "ev", checkpoint=str(tmp_path / "s.pt"),
                        campaign=str(camp),
-                       e_original=1.45, quiet=True, evaluator=ANALYTIC_EVALUATOR)   # the known function's scale
+                       e_original=1.45, evaluator=ANALYTIC_EVALUATOR)   # the known function's scale
     assert [p["path"] for p in doc["paths"]] == ["initial", "iswrp", "swrp"]
     assert all(p["trials"] == 6 for p in doc["paths"])
     winds = [TrialStore(tmp_path / "ev" / f"campaign-{n}").read_table(["trial_id", "wind_seed",

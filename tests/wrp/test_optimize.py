@@ -1,3 +1,5 @@
+from dataclasses import replace
+
 import numpy as np
 import pytest
 
@@ -11,7 +13,7 @@ from wrp_eval.wrp.optimize import (
     sample_radii,
 )
 
-from .conftest import params_for, small_surrogate
+from .conftest import params_for, small_surrogate, wrp_params
 
 
 def reference_optimise(s, p: WrpParams, seed: int) -> np.ndarray:
@@ -88,7 +90,7 @@ def test_moved_viewpoints_stay_above_the_minimum_altitude_and_out_of_the_no_fly_
     base = np.column_stack([np.linspace(-10, 10, 6), np.full(6, 6.0), np.full(6, 5.5)])
     box = np.array([[-20.0, -20.0, 0.0], [20.0, 5.0, 30.0]])
     p = params_for(surrogate, "iswrp", 0.004)
-    p = WrpParams(**{**p.__dict__, "base_positions": base, "min_altitude_m": 5.0, "no_fly_bounds": box})
+    p = replace(p, base_positions=base, min_altitude_m=5.0, no_fly_bounds=box)
     assert not np.all(p.feasible(0, free.offsets[:, :3]))            # the case is not trivial
     r = interval_optimise(surrogate, p, seed=2)
     moved_to = base + r.offsets[:, :3]
@@ -120,7 +122,7 @@ def test_same_seed_same_result_and_batching_does_not_matter(surrogate):
     p = params_for(surrogate, "iswrp", 0.01)
     a = interval_optimise(surrogate, p, seed=4)
     b = interval_optimise(surrogate, p, seed=4)
-    c = interval_optimise(surrogate, WrpParams(**{**p.__dict__, "stage2_batch": 1}), seed=4)
+    c = interval_optimise(surrogate, replace(p, stage2_batch=1), seed=4)
     d = interval_optimise(surrogate, p, seed=5)
     np.testing.assert_array_equal(a.offsets, b.offsets)
     np.testing.assert_array_equal(a.offsets, c.offsets)
@@ -129,16 +131,16 @@ def test_same_seed_same_result_and_batching_does_not_matter(surrogate):
 
 def test_neighbourhood_statistic_hand_computed():
     e = np.array([[1.0, 2.0, 3.0]])
-    p = WrpParams("iswrp", 0.1, 1.5, np.ones(1))
+    p = wrp_params("iswrp", 0.1, 1.5, np.ones(1))
     assert neighbourhood_statistic(e, p)[0] == pytest.approx(0.5)
-    assert neighbourhood_statistic(e, WrpParams("swrp", 0.1, 1.5, np.ones(1), swrp_spread="variance"))[0] == \
+    assert neighbourhood_statistic(e, wrp_params("swrp", 0.1, 1.5, np.ones(1), swrp_spread="variance"))[0] == \
         pytest.approx(2 / 3)
     # the default: the standard deviation, in the unit of t (issue 18)
-    assert neighbourhood_statistic(e, WrpParams("swrp", 0.1, 1.5, np.ones(1)))[0] == pytest.approx(np.sqrt(2 / 3))
+    assert neighbourhood_statistic(e, wrp_params("swrp", 0.1, 1.5, np.ones(1)))[0] == pytest.approx(np.sqrt(2 / 3))
 
 
 def test_draws_respect_radii_and_ranges():
-    p = WrpParams("iswrp", 0.1, 1.0, np.array([0.3, 2.0]), attitude_samples=7, neighbourhood_samples=50,
+    p = wrp_params("iswrp", 0.1, 1.0, np.array([0.3, 2.0]), attitude_samples=7, neighbourhood_samples=50,
                   step_m=1.2, block_iterations=30)
     for view, radius in ((0, 0.3), (1, 2.0)):
         d = iteration_draws(1, view, 0, p)
@@ -214,11 +216,11 @@ def test_measured_neighbourhood_follows_the_campaigns_offset_covariance():
     dev[::7, 0] = np.nan                                                    # views not taken are left out
     chol = offset_cholesky(dev)
     np.testing.assert_allclose(chol[0] @ chol[0].T, cov, atol=0.15)
-    p = WrpParams("swrp", 0.01, 1.0, np.full(2, 0.5), block_iterations=500, neighbourhood_samples=8,
+    p = wrp_params("swrp", 0.01, 1.0, np.full(2, 0.5), block_iterations=500, neighbourhood_samples=8,
                   neighbour_cholesky=chol)
     draws = iteration_draws(0, 0, 0, p).neighbour_offset.reshape(-1, 3)
     np.testing.assert_allclose(np.cov(draws.T), cov, atol=0.25)             # about the candidate, not a ball
-    ball = iteration_draws(0, 0, 0, WrpParams("swrp", 0.01, 1.0, np.full(2, 0.5), block_iterations=500,
+    ball = iteration_draws(0, 0, 0, wrp_params("swrp", 0.01, 1.0, np.full(2, 0.5), block_iterations=500,
                                               neighbourhood_samples=8)).neighbour_offset.reshape(-1, 3)
     assert np.linalg.norm(ball, axis=1).max() <= 0.5 + 1e-12
 
@@ -243,7 +245,7 @@ def test_cvar_is_the_mean_of_the_worst_tail():
     e = np.array([[1.0, 5.0, 2.0, 4.0, 3.0], [0.0, 0.0, 0.0, 0.0, 10.0]])
     np.testing.assert_allclose(cvar(e, 0.6), [4.5, 5.0])                  # the worst 2 of 5
     np.testing.assert_allclose(cvar(e, 0.0), e.mean(axis=1))
-    p = WrpParams("iswrp", 0.1, 1.0, np.full(2, 0.5), risk_measure="cvar", cvar_alpha=0.8)
+    p = wrp_params("iswrp", 0.1, 1.0, np.full(2, 0.5), risk_measure="cvar", cvar_alpha=0.8)
     np.testing.assert_allclose(neighbourhood_score(e, p), [5.0, 10.0])
     with pytest.raises(ValueError):
-        WrpParams("iswrp", 0.1, 1.0, np.full(2, 0.5), risk_measure="var")
+        wrp_params("iswrp", 0.1, 1.0, np.full(2, 0.5), risk_measure="var")

@@ -54,8 +54,7 @@ def run_bench() -> list[BenchRecord]:
         path_file = tmp / "path.json"
         path.save(path_file)
 
-        real = campaign_job(ExperimentContext(reference_config(path_file, BENCH_TRIALS, tmp / "real", True, None)),
-                            progress=False)
+        real = campaign_job(ExperimentContext(reference_config(path_file, BENCH_TRIALS, tmp / "real", True, None)))
         table = TrialStore(real.out_dir).read_table(["finished_unix", "worker", "failed", "flight_s", "oracle_s"])
         finished = np.sort(table.column("finished_unix").to_numpy())
         first_batches = BENCH_BATCH * cores

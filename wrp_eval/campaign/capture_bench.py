@@ -113,7 +113,7 @@ def quickstart_campaign(ctx: ExperimentContext, speed: float, out: Path, flights
                             "perturbation": {"design": "physical", "targeted_share": 0.0}})
     doc["campaign"]["backend"].update({"kind": "local", "workers": 2})
     doc["campaign"]["outputs"].update({"dir": str(out), "rerun": False})
-    summary = campaign_job(ctx.with_config(ExperimentConfig.model_validate(doc)), progress=False)
+    summary = campaign_job(ctx.with_config(ExperimentConfig.model_validate(doc)))
     return summary, TrialStore(out).read_table()
 
 

@@ -22,7 +22,7 @@ log = logging.getLogger(__name__)
 def campaign_job(ctx: ExperimentContext, *, out_dir: str | Path | None = None, n_trials: int | None = None,
                  backend: str | None = None, workers: int | None = None, rerun: bool | None = None,
                  evaluator: str = DEFAULT_EVALUATOR, evaluator_options: dict | None = None,
-                 progress: bool = True, path: FlightPath | None = None) -> CampaignSummary:
+                 path: FlightPath | None = None) -> CampaignSummary:
     """Run (or resume) the experiment's campaign: ``campaign.path`` or the plan, flown ``campaign.n_trials``
     times from root seed ``campaign.seed`` (else ``run.seed``) into ``out_dir`` (default the run's campaign
     folder); the keyword overrides are the command line's. ``path``: fly this path instead (``wrp-eval run``
@@ -37,5 +37,5 @@ def campaign_job(ctx: ExperimentContext, *, out_dir: str | Path | None = None, n
         log.info(f"[wrp-eval campaign] {note}")
     summary = run_campaign(trial, path if path is not None else ctx.campaign_path, out, root_seed=ctx.campaign_seed,
                            config_dir=ctx.config_dir, evaluator=evaluator, evaluator_options=evaluator_options,
-                           progress=progress, ship_mesh=mesh)
+                           ship_mesh=mesh)
     return replace(summary, stress_note=note)

@@ -28,6 +28,7 @@ from wrp_eval.campaign.progress import CampaignProgress
 from wrp_eval.campaign.rerun_log import CampaignRecorder
 from wrp_eval.campaign.store import TrialStore
 from wrp_eval.errors import InputError
+from wrp_eval.logs import progress_shown
 from wrp_eval.planning.path import FlightPath, digest_of_document
 from wrp_eval.ship.resolve import resolve_ship_full
 
@@ -161,7 +162,7 @@ def backend_workers(section: CampaignSection) -> int:
 
 def run_campaign(trial: TrialConfig, path: FlightPath, out_dir: str | Path, *, root_seed: int,
                  config_dir: Path | None = None, evaluator: str = DEFAULT_EVALUATOR,
-                 evaluator_options: dict | None = None, progress: bool = True,
+                 evaluator_options: dict | None = None,
                  ship_mesh=None) -> CampaignSummary:
     """Run (or resume) the campaign of ``trial`` flying ``path`` into ``out_dir``. ``trial`` already carries
     any overrides (see :func:`with_overrides`). ``evaluator`` names the factory ``"module:function"`` of the
@@ -192,7 +193,7 @@ def run_campaign(trial: TrialConfig, path: FlightPath, out_dir: str | Path, *, r
                 for row in store.read_table().to_pylist():
                     recorder.log_trial(row)
 
-        bar = CampaignProgress(section.n_trials, int(np.unique(stored).size), enabled=progress)
+        bar = CampaignProgress(section.n_trials, int(np.unique(stored).size), enabled=progress_shown())
         with backends.TrialPool(section.backend.kind, max(1, workers) if section.backend.kind == "ray" else workers,
                                 section.backend.address) as pool:
             ran = _store_as_they_come(pool.run([(spec, ids) for ids in batches]), store, section.outputs, recorder,

@@ -123,7 +123,7 @@ def campaign_curve() -> list[tuple[int, float]]:
         ExperimentContext(ExperimentConfig()).campaign_path.save(path_file)
         for n in counts:
             config = reference_config(path_file, n, tmp / f"c{n}", False, None)
-            summary = campaign_job(ExperimentContext(config), progress=False)
+            summary = campaign_job(ExperimentContext(config))
             out.append((n, float(summary.wall_s)))
     return out
 

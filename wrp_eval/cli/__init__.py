@@ -30,6 +30,7 @@ from wrp_eval.cli import (
     wind,
 )
 from wrp_eval.errors import InputError
+from wrp_eval.logs import progress_log
 
 COMMANDS = (run, ship, plan, wind, fly, reconstruct, validate_oracle, campaign, train, optimize, evaluate,
             envelope, export, bench)   # in pipeline order; `wrp-eval --help` lists them so
@@ -50,9 +51,12 @@ def build_parser() -> argparse.ArgumentParser:
 def main(argv: list[str] | None = None) -> int:
     parser = build_parser()
     args = parser.parse_args(argv)
-    # the jobs report progress through `logging` (wrp_eval.* loggers); the command line shows it on stderr
+    # the jobs report through `logging` (wrp_eval.* loggers, wrp_eval/logs.py); the command line shows it on
+    # stderr, the per-step lines and progress bars (wrp_eval.progress) unless --quiet (run: only with --progress)
     logging.basicConfig(level=logging.WARNING, format="%(message)s", stream=sys.stderr, force=True)
     logging.getLogger("wrp_eval").setLevel(logging.INFO)
+    silent = getattr(args, "quiet", False) or getattr(args, "progress", True) is False
+    progress_log.setLevel(logging.WARNING if silent else logging.NOTSET)
     try:
         return int(args.func(args) or 0)
     except InputError as err:

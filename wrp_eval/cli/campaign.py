@@ -22,8 +22,7 @@ from wrp_eval.experiment import ExperimentContext
 
 def _run(args: argparse.Namespace, config_file: str) -> int:
     summary = campaign_job(ExperimentContext.load(config_file), out_dir=args.out, n_trials=args.trials,
-                           backend=args.backend, workers=args.workers, rerun=False if args.no_rerun else None,
-                           progress=not args.quiet)
+                           backend=args.backend, workers=args.workers, rerun=False if args.no_rerun else None)
     print(f"campaign {summary.out_dir}: {summary.done}/{summary.n_trials} trials stored "
           f"({summary.ran} run now in {summary.wall_s:.1f} s, {summary.trials_per_min:.1f} trials/min), "
           f"{summary.failed} failed of which {summary.errors} raised")

@@ -46,7 +46,7 @@ def _evaluate(args: argparse.Namespace) -> int:
     if args.trials is not None and args.trials < 2:
         raise InputError("--trials", f"need at least 2 trials, got {args.trials}")
     evaluate_job(ExperimentContext.load(args.config), args.out, n_trials=args.trials, checkpoint=args.checkpoint,
-                 campaign=args.campaign, e_original=args.e_original, quiet=args.quiet)
+                 campaign=args.campaign, e_original=args.e_original)
     return 0
 
 

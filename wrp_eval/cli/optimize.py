@@ -23,7 +23,7 @@ def _optimize(args: argparse.Namespace) -> int:
         raise InputError("--threshold", f"must be >= 0, got {args.threshold}")
     optimize_job(ExperimentContext.load(args.config), kind=args.kind, threshold_m=args.threshold, out=args.out,
                  checkpoint=args.checkpoint, campaign=args.campaign, e_original=args.e_original,
-                 use_oracle=not args.no_oracle, quiet=args.quiet)
+                 use_oracle=not args.no_oracle)
     return 0
 
 

@@ -13,7 +13,7 @@ from wrp_eval.pipeline import run_pipeline
 
 def _run(args: argparse.Namespace) -> int:
     ctx = ExperimentContext.load(args.config)
-    summary = run_pipeline(ctx, quiet=not args.progress, smallest=args.smallest)
+    summary = run_pipeline(ctx, smallest=args.smallest)
     out = Path(summary["out"])
     print(f"\nwrp-eval run finished in {summary['timings_s']['total']:.0f} s.")
     print(f"Report:    {summary['report']}")

@@ -35,7 +35,7 @@ def _train(args: argparse.Namespace) -> int:
     if args.cv and not args.quiet:
         print(f"training the surrogate and {args.cv} cross-validation folds, {min(workers, args.cv + 1)} at a "
               f"time ...", flush=True)
-    result, data, cv = train_from_campaign(ctx, args.campaign, out, progress=not args.quiet, folds=args.cv,
+    result, data, cv = train_from_campaign(ctx, args.campaign, out, folds=args.cv,
                                            workers=workers)
     m = result.metrics["test"]
     print(f"surrogate {out / CHECKPOINT_NAME}: test R^2 {m['r2']:.4f}, RMSE {m['rmse']:.4g} m, MAE {m['mae']:.4g} m "

@@ -32,14 +32,17 @@ def _median_run(proxy, complexity, section: PlanningSection):
 
 
 def run_bench() -> list[BenchRecord]:
-
     ship = resolve_ship_full(ShipSection(type="stylized"))
     proxy, complexity = ship.proxy, ship.complexity.complexity
-    records: list[BenchRecord] = []
     ours = _median_run(proxy, complexity, PlanningSection(method="ours"))
+    return (_ours_records(ours) + _tour_records(ours, proxy) + _zhou_records(proxy, complexity)
+            + _oblique_records(proxy, complexity))
+
+
+def _ours_records(ours) -> list[BenchRecord]:
     t = ours.metrics["timings"]
     note = f"median of {_REPEATS}; 2-core CPU, no GPU"
-    records += [
+    return [
         BenchRecord("plan.sampling_s", t["sampling_s"], "s", None, None, note),
         BenchRecord("plan.visibility_s", t["visibility_s"], "s", None, None, note),
         BenchRecord("plan.min_s", t["min_s"], "s", TABLE7, 2.708, note),
@@ -57,7 +60,10 @@ def run_bench() -> list[BenchRecord]:
                     "our H = mean h(s,U); the paper's scale is undefined"),
         BenchRecord("plan.R", ours.metrics["R"], "", "paper Table 2 (Max-Min, stylized)", 0.40057, "redundancy"),
     ]
-    # Tour quality on the same views: our default vs a long OR-Tools run, and the paper's GA.
+
+
+def _tour_records(ours, proxy) -> list[BenchRecord]:
+    """Tour quality on the same views: our default vs a long OR-Tools run, and the paper's GA."""
     cost, _ = flight_costs(ours.chosen.positions, proxy.no_fly_bounds())
     ours_len = ours.metrics["tour_cost_m"]     # the closed tour the planner chose
     gls_len = tour_length(solve_ortools(cost, PlanningSection().tour_time_limit_s), cost)
@@ -66,7 +72,7 @@ def run_bench() -> list[BenchRecord]:
     ga_len = tour_length(solve_genetic(cost, np.random.default_rng(0)), cost)
     ga_s = time.perf_counter() - start
     best_len = min(best_len, ours_len, gls_len, ga_len)
-    records += [
+    return [
         BenchRecord("plan.tour_gap_pct", 100.0 * (ours_len / best_len - 1.0), "%", "target", 1.0,
                     f"vs best of a {_LONG_SOLVER_S:g} s OR-Tools run ({best_len:.1f} m)"),
         BenchRecord("plan.tour_gap_gls_pct", 100.0 * (gls_len / best_len - 1.0), "%", "target", 1.0,
@@ -75,21 +81,26 @@ def run_bench() -> list[BenchRecord]:
         BenchRecord("plan.ga_gap_pct", 100.0 * (ga_len / best_len - 1.0), "%", None, None,
                     "genetic algorithm vs the best tour"),
     ]
+
+
+def _zhou_records(proxy, complexity) -> list[BenchRecord]:
     zhou = _median_run(proxy, complexity, PlanningSection(method="zhou2020"))
     tz = zhou.metrics["timings"]
-    records += [
-        BenchRecord("plan.zhou2020.min_s", tz["min_s"], "s", "paper Table 7 (Zhou et al. 2020)", 37.724, note),
-        BenchRecord("plan.zhou2020.max_s", tz["max_s"], "s", "paper Table 7 (Zhou et al. 2020)", 1.127, note),
+    note = f"median of {_REPEATS}; 2-core CPU, no GPU"
+    anchor = "paper Table 7 (Zhou et al. 2020)"
+    return [
+        BenchRecord("plan.zhou2020.min_s", tz["min_s"], "s", anchor, 37.724, note),
+        BenchRecord("plan.zhou2020.max_s", tz["max_s"], "s", anchor, 1.127, note),
         BenchRecord("plan.zhou2020.total_s", tz["total_s"], "s", None, None, note),
-        BenchRecord("plan.zhou2020.n_views", zhou.metrics["n_views"], "views", "paper Table 7 (Zhou et al. 2020)",
-                    57, ""),
-        BenchRecord("plan.zhou2020.length_m", zhou.metrics["length_m"], "m", "paper Table 7 (Zhou et al. 2020)",
-                    711.510, ""),
+        BenchRecord("plan.zhou2020.n_views", zhou.metrics["n_views"], "views", anchor, 57, ""),
+        BenchRecord("plan.zhou2020.length_m", zhou.metrics["length_m"], "m", anchor, 711.510, ""),
     ]
+
+
+def _oblique_records(proxy, complexity) -> list[BenchRecord]:
     oblique = plan(proxy, complexity, PlanningSection(method="oblique"), planning_rng(0))
-    records += [
+    return [
         BenchRecord("plan.oblique.n_views", len(oblique.path), "views", "paper Table 8 (OP 60/0.7/0.75)", 447, ""),
         BenchRecord("plan.oblique.length_m", oblique.metrics["length_m"], "m", "paper Table 8 (OP 60/0.7/0.75)",
                     1856.949, ""),
     ]
-    return records

@@ -15,7 +15,7 @@ from scipy.spatial import cKDTree
 
 from wrp_eval.camera import Camera, yaw_pitch_towards
 from wrp_eval.planning.config import PlanningSection
-from wrp_eval.planning.minmax import maximise, minimise, set_metrics
+from wrp_eval.planning.minmax import MinResult, maximise, minimise, set_metrics
 from wrp_eval.planning.oblique import oblique_views
 from wrp_eval.planning.path import KIND_SURFACE, KIND_TRANSITION, FlightPath
 from wrp_eval.planning.reconstructability import SlotTable
@@ -29,7 +29,12 @@ from wrp_eval.planning.tour import (
     solve_ortools,
     tour_length,
 )
-from wrp_eval.planning.transitions import proxy_axis_targets, transition_views
+from wrp_eval.planning.transitions import (
+    TransitionResult,
+    TransitionScene,
+    proxy_axis_targets,
+    transition_views,
+)
 from wrp_eval.planning.views import ViewSet, candidate_views
 from wrp_eval.planning.visibility import ProxyRaycaster, visibility
 from wrp_eval.ship.nofly import segments_intrude
@@ -162,35 +167,71 @@ def plan(proxy: Proxy, complexity: np.ndarray, section: PlanningSection, rng: np
     radii = r0 / relative_complexity(complexity, section.max_radius_factor) if ours else np.full(5, r0)
     thr_face = face_thresholds(complexity, section)
 
+    samples, candidates, raycaster, visible = _candidates_seen(proxy, section, radii, rng, d_max, max_inc, timings,
+                                                               t0)
+    thr_asked = thr_face[samples.face]
+    active, h, thr, set_doc = _min_max(samples, candidates, visible, thr_asked, radii, d_max, section, timings)
+    t4 = time.perf_counter()
+
+    chosen_idx = np.flatnonzero(active)
+    order, closed_length = _tour(candidates.positions[chosen_idx], proxy, section, rng)
+    chosen = candidates.subset(chosen_idx[order])
+    chosen_obs = visible[chosen_idx[order]]
+    t5 = time.perf_counter()
+    timings["tsp_s"] = t5 - t4
+
+    views = (chosen.positions, chosen.yaw, chosen.pitch, chosen.face.copy(), np.full(len(chosen), KIND_SURFACE))
+    violations = checked = 0
+    if ours and section.transitions:
+        scene = TransitionScene(proxy, samples.points, samples.normals, samples.face, radii, camera, raycaster,
+                                d_max, max_inc, section.min_altitude_m, section.overlap_min, section.overlap_max,
+                                clearance_m=0.5 * distance)
+        views, violations, checked = _with_transitions(views, chosen, chosen_obs, samples, scene)
+    t6 = time.perf_counter()
+    timings["transitions_s"] = t6 - t5
+
+    meta = {"planned_distance_m": distance, "d_max_m": d_max, "tour_solver": section.tour_solver}
+    path, n_detour = finish_path(*views, proxy, section, camera, section.method, meta)
+    timings["total_s"] = time.perf_counter() - t0
+
+    metrics = {"method": section.method, "n_samples": len(samples), "n_candidates": len(candidates),
+               "n_views": int(len(chosen_idx)), "n_views_after_min": set_doc.pop("n_views_after_min"),
+               "n_detour_views": n_detour,
+               "per_face": _per_face(proxy, samples, candidates, chosen_idx, radii, thr_face, complexity),
+               **set_doc, "min_h": float(h.min()) if h.size else 0.0,
+               "samples_below_asked_threshold": int(np.sum(h < thr_asked - 1e-9)),
+               "tour_cost_m": closed_length, "osmc_violations": violations, "osmc_pairs": checked,
+               **_path_metrics(path), "planned_distance_m": distance, "d_max_m": d_max,
+               "timings": timings}
+    return PlanResult(path, metrics, samples, candidates, chosen, visible, thr, h)
+
+
+def _candidates_seen(proxy: Proxy, section: PlanningSection, radii: np.ndarray, rng: np.random.Generator,
+                     d_max: float, max_inc: float, timings: dict, t0: float):
+    """The Poisson-disk samples, the candidate views, the proxy raycaster and the visibility (candidates x
+    samples) bool matrix; sampling_s and visibility_s (from ``t0``) into ``timings``."""
     samples = poisson_samples(proxy, radii, rng)
     t1 = time.perf_counter()
     timings["sampling_s"] = t1 - t0
-
-    candidates = candidate_views(samples, proxy, distance, tilt_rad=np.radians(section.tilt_deg),
+    candidates = candidate_views(samples, proxy, section.planned_distance_m(), tilt_rad=np.radians(section.tilt_deg),
                                  n_tilts=section.n_tilts, min_altitude_m=section.min_altitude_m)
     raycaster = ProxyRaycaster(proxy)
     visible = visibility(samples.points, samples.normals, candidates.positions, candidates.yaw,
-                         candidates.pitch, camera, raycaster, d_max, max_inc)
-    t2 = time.perf_counter()
-    timings["visibility_s"] = t2 - t1
+                         candidates.pitch, section.camera(), raycaster, d_max, max_inc)
+    timings["visibility_s"] = time.perf_counter() - t1
+    return samples, candidates, raycaster, visible
 
-    # Minimisation starts from the normal candidates; samples they cannot lift to the threshold (sparse
-    # faces, hull edges) also bring their own tilted candidates into the starting set.
-    thr_asked = thr_face[samples.face]
-    start_idx = np.flatnonzero(candidates.tilt == 0)
-    table_min = SlotTable.build(visible[start_idx], samples.points, samples.normals,
-                                candidates.positions[start_idx], d_max, cache=True)
-    short = table_min.h(np.ones(len(start_idx), dtype=bool)) < thr_asked - 1e-9
-    if np.any(short) and section.n_tilts:
-        start_idx = np.flatnonzero((candidates.tilt == 0) | short[candidates.sample])
-        table_min = SlotTable.build(visible[start_idx], samples.points, samples.normals,
-                                    candidates.positions[start_idx], d_max, cache=True)
-    min_res = minimise(table_min, np.ones(len(start_idx), dtype=bool), thr_asked)
+
+def _min_max(samples, candidates, visible: np.ndarray, thr_asked: np.ndarray, radii: np.ndarray, d_max: float,
+             section: PlanningSection, timings: dict) -> tuple[np.ndarray, np.ndarray, np.ndarray, dict]:
+    """Minimisation then maximisation (min_s, max_s, metrics_s into ``timings``): (active candidates, h per
+    sample, the effective thresholds, {n_views_after_min, H, R, H_min_only, R_min_only, max_swaps})."""
+    t2 = time.perf_counter()
+    start_idx, min_res = _minimised(samples, candidates, visible, thr_asked, d_max, section.n_tilts)
     active = np.zeros(len(candidates), dtype=bool)
     active[start_idx[min_res.active]] = True
     t3 = time.perf_counter()
     timings["min_s"] = t3 - t2
-
     table = SlotTable.build(visible, samples.points, samples.normals, candidates.positions, d_max)
     thr = min_res.threshold
     h_min_only, r_min_only = set_metrics(table, active, thr)
@@ -202,61 +243,65 @@ def plan(proxy: Proxy, complexity: np.ndarray, section: PlanningSection, rng: np
     timings["max_s"] = t4 - t3b
     H, R = set_metrics(table, active, thr)
     timings["metrics_s"] = (t3b - t3) + (time.perf_counter() - t4)
-    t4 = time.perf_counter()
+    return active, h, thr, {"n_views_after_min": n_views_min, "H": H, "R": R, "H_min_only": h_min_only,
+                            "R_min_only": r_min_only, "max_swaps": swaps}
 
-    chosen_idx = np.flatnonzero(active)
-    cost, _ = flight_costs(candidates.positions[chosen_idx], proxy.no_fly_bounds())
+
+def _minimised(samples, candidates, visible: np.ndarray, thr_asked: np.ndarray, d_max: float,
+               n_tilts: int) -> tuple[np.ndarray, MinResult]:
+    """Minimisation (the candidates it started from, its result). It starts from the normal candidates;
+    samples they cannot lift to the threshold (sparse faces, hull edges) also bring their own tilted candidates
+    into the starting set."""
+    start_idx = np.flatnonzero(candidates.tilt == 0)
+    table_min = SlotTable.build(visible[start_idx], samples.points, samples.normals,
+                                candidates.positions[start_idx], d_max, cache=True)
+    short = table_min.h(np.ones(len(start_idx), dtype=bool)) < thr_asked - 1e-9
+    if np.any(short) and n_tilts:
+        start_idx = np.flatnonzero((candidates.tilt == 0) | short[candidates.sample])
+        table_min = SlotTable.build(visible[start_idx], samples.points, samples.normals,
+                                    candidates.positions[start_idx], d_max, cache=True)
+    return start_idx, minimise(table_min, np.ones(len(start_idx), dtype=bool), thr_asked)
+
+
+def _tour(positions: np.ndarray, proxy: Proxy, section: PlanningSection,
+          rng: np.random.Generator) -> tuple[np.ndarray, float]:
+    """(the open tour's order of the views at ``positions`` (n, 3), the closed tour's cost m) by the section's
+    solver."""
+    cost, _ = flight_costs(positions, proxy.no_fly_bounds())
     if section.tour_solver == "multistart":
         order = solve_multistart(cost, rng)
     elif section.tour_solver == "ortools":
         order = solve_ortools(cost, section.tour_time_limit_s)
     else:
         order = solve_genetic(cost, rng, section.ga_population, section.ga_generations)
-    closed_length = tour_length(order, cost)
-    order = open_at_longest_edge(order, cost)
-    chosen = candidates.subset(chosen_idx[order])
-    chosen_obs = visible[chosen_idx[order]]
-    t5 = time.perf_counter()
-    timings["tsp_s"] = t5 - t4
+    return open_at_longest_edge(order, cost), tour_length(order, cost)
 
-    pos, yaw, pitch = chosen.positions, chosen.yaw, chosen.pitch
-    face, kind = chosen.face.copy(), np.full(len(chosen), KIND_SURFACE)
-    violations = checked = 0
-    if ours and section.transitions:
-        targets = samples.points[chosen.sample]
-        tr = transition_views(pos, face, chosen_obs, targets, radii, proxy, samples.points, samples.normals,
-                              samples.face, camera, raycaster, d_max, max_inc, section.min_altitude_m,
-                              section.overlap_min, section.overlap_max, clearance_m=0.5 * distance)
-        violations, checked = tr.violations, tr.checked_pairs
-        seq = [(pos[i:i + 1], yaw[i:i + 1], pitch[i:i + 1], face[i:i + 1], kind[i:i + 1]) for i in range(len(pos))]
-        out = []
-        for i, item in enumerate(seq):  # interleave: view i, then the transition views after it
-            out.append(item)
-            if i < len(tr.positions) and len(tr.positions[i]):
-                k = len(tr.positions[i])
-                out.append((tr.positions[i], tr.yaw[i], tr.pitch[i], np.full(k, -1), np.full(k, KIND_TRANSITION)))
-        pos, yaw, pitch, face, kind = (np.concatenate([o[j] for o in out]) for j in range(5))
-    t6 = time.perf_counter()
-    timings["transitions_s"] = t6 - t5
 
-    meta = {"planned_distance_m": distance, "d_max_m": d_max, "tour_solver": section.tour_solver}
-    path, n_detour = finish_path(pos, yaw, pitch, face, kind, proxy, section, camera, section.method, meta)
-    timings["total_s"] = time.perf_counter() - t0
+def _with_transitions(views: tuple[np.ndarray, ...], chosen, chosen_obs: np.ndarray, samples,
+                      scene: TransitionScene) -> tuple[tuple[np.ndarray, ...], int, int]:
+    """(positions, yaw, pitch, face, kind) of the surface ``views`` in tour order with each segment's transition
+    views after its first view (face -1, KIND_TRANSITION); the OSMC violations left and the pairs checked."""
+    tr = transition_views(chosen.positions, chosen.face, chosen_obs, samples.points[chosen.sample], scene)
+    return _interleaved(views, tr), tr.violations, tr.checked_pairs
 
-    n_faces = len(proxy.face_names)
-    views_per_face = np.bincount(candidates.face[chosen_idx], minlength=n_faces)
-    per_face = {name: {"samples": int(np.sum(samples.face == i)),
-                       "candidates": int(np.sum(candidates.face == i)),
-                       "views": int(views_per_face[i]), "radius_m": float(radii[i]),
-                       "threshold": float(thr_face[i]), "complexity": float(np.asarray(complexity)[i])}
-                for i, name in enumerate(proxy.face_names)}
-    metrics = {"method": section.method, "n_samples": len(samples), "n_candidates": len(candidates),
-               "n_views": int(len(chosen_idx)), "n_views_after_min": n_views_min,
-               "n_detour_views": n_detour, "per_face": per_face,
-               "H": H, "R": R, "H_min_only": h_min_only, "R_min_only": r_min_only, "max_swaps": swaps,
-               "min_h": float(h.min()) if h.size else 0.0,
-               "samples_below_asked_threshold": int(np.sum(h < thr_asked - 1e-9)),
-               "tour_cost_m": closed_length, "osmc_violations": violations, "osmc_pairs": checked,
-               **_path_metrics(path), "planned_distance_m": distance, "d_max_m": d_max,
-               "timings": timings}
-    return PlanResult(path, metrics, samples, candidates, chosen, visible, thr, h)
+
+def _interleaved(views: tuple[np.ndarray, ...], tr: TransitionResult) -> tuple[np.ndarray, ...]:
+    """The surface ``views`` with each segment's transition views of ``tr`` after its first view."""
+    pos, yaw, pitch, face, kind = views
+    out = []
+    for i in range(len(pos)):
+        out.append((pos[i:i + 1], yaw[i:i + 1], pitch[i:i + 1], face[i:i + 1], kind[i:i + 1]))
+        if i < len(tr.positions) and len(tr.positions[i]):
+            k = len(tr.positions[i])
+            out.append((tr.positions[i], tr.yaw[i], tr.pitch[i], np.full(k, -1), np.full(k, KIND_TRANSITION)))
+    return tuple(np.concatenate([o[j] for o in out]) for j in range(5))
+
+
+def _per_face(proxy: Proxy, samples, candidates, chosen_idx: np.ndarray, radii: np.ndarray, thr_face: np.ndarray,
+              complexity: np.ndarray) -> dict:
+    views_per_face = np.bincount(candidates.face[chosen_idx], minlength=len(proxy.face_names))
+    return {name: {"samples": int(np.sum(samples.face == i)),
+                   "candidates": int(np.sum(candidates.face == i)),
+                   "views": int(views_per_face[i]), "radius_m": float(radii[i]),
+                   "threshold": float(thr_face[i]), "complexity": float(np.asarray(complexity)[i])}
+            for i, name in enumerate(proxy.face_names)}

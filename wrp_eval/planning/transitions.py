@@ -101,11 +101,30 @@ def keep_clear(positions: np.ndarray, proxy: Proxy, clearance_m: float) -> np.nd
 _REFINEMENTS = (1.0, 0.5, 0.25)  # spacing factors tried in turn on segments that still violate OSMC
 
 
+@dataclass(frozen=True)
+class TransitionScene:
+    """What transition views are placed and judged against: the proxy; the Poisson-disk samples (points,
+    normals (n_s, 3), sample_faces (n_s,)) and the faces' radii (5,) m; the camera, the proxy raycaster, the
+    view range d_max (m) and incidence limit (rad) of the visibility test; the lowest allowed height (m); the
+    OSMC interval [t_min, t_max] of Eq. 4; clearance_m: how far from the proxy a transition view must be."""
+
+    proxy: Proxy
+    points: np.ndarray
+    normals: np.ndarray
+    sample_faces: np.ndarray
+    radii: np.ndarray
+    camera: Camera
+    raycaster: ProxyRaycaster
+    d_max: float
+    max_incidence_rad: float
+    min_altitude_m: float
+    t_min: float
+    t_max: float
+    clearance_m: float
+
+
 def transition_views(order_positions: np.ndarray, order_faces: np.ndarray, order_obs: np.ndarray,
-                     order_targets: np.ndarray, radii: np.ndarray, proxy: Proxy, points: np.ndarray,
-                     normals: np.ndarray, sample_faces: np.ndarray, camera: Camera, raycaster: ProxyRaycaster,
-                     d_max: float, max_incidence_rad: float, min_altitude_m: float, t_min: float,
-                     t_max: float, clearance_m: float = 0.0) -> TransitionResult:
+                     order_targets: np.ndarray, scene: TransitionScene) -> TransitionResult:
     """Transition views for every face-changing segment of the ordered surface views (open sequence).
 
     order_positions (n, 3), order_faces (n,), order_obs (n, n_s) bool visibility rows and order_targets
@@ -116,12 +135,13 @@ def transition_views(order_positions: np.ndarray, order_faces: np.ndarray, order
     (long segments of a poor tour need intermediate views closer together). Candidates nearer to the proxy
     than ``clearance_m`` move straight away from it to that distance (a view a few metres off the hull
     sees almost nothing to match)."""
+    proxy, points, radii = scene.proxy, scene.points, scene.radii
     n = len(order_positions)
     seg = np.flatnonzero(order_faces[:-1] != order_faces[1:]) if n > 1 else np.zeros(0, dtype=int)
     empty = [np.zeros((0, 3)) for _ in range(max(n - 1, 0))]
     out_pos, out_yaw = list(empty), [np.zeros(0) for _ in empty]
     out_pitch, out_obs = list(out_yaw), [np.zeros((0, len(points)), dtype=bool) for _ in empty]
-    sample_weights = radii[sample_faces] ** 2
+    sample_weights = radii[scene.sample_faces] ** 2
     bad_of = {}
     todo = seg
     for factor in _REFINEMENTS:
@@ -134,8 +154,8 @@ def transition_views(order_positions: np.ndarray, order_faces: np.ndarray, order
         frac = (np.arange(counts.sum()) - np.repeat(np.cumsum(counts) - counts, counts) + 1) / \
             np.repeat(counts + 1, counts)
         cand = a[owner] + frac[:, None] * (b[owner] - a[owner])
-        cand = make_safe(keep_clear(cand, proxy, clearance_m), proxy_axis_targets(proxy, cand), proxy,
-                         min_altitude_m)
+        cand = make_safe(keep_clear(cand, proxy, scene.clearance_m), proxy_axis_targets(proxy, cand), proxy,
+                         scene.min_altitude_m)
         ta, tb = order_targets[todo][owner], order_targets[todo + 1][owner]
         # two orientations per position, interleaved (axis, look-at blend) so that segment order is kept
         cand = np.repeat(cand, 2, axis=0)
@@ -144,12 +164,13 @@ def transition_views(order_positions: np.ndarray, order_faces: np.ndarray, order
         targets[1::2] = ta + frac[:, None] * (tb - ta)
         counts = 2 * counts
         yaw, pitch = yaw_pitch_towards(cand, targets)
-        obs = visibility(points, normals, cand, yaw, pitch, camera, raycaster, d_max, max_incidence_rad)
+        obs = visibility(points, scene.normals, cand, yaw, pitch, scene.camera, scene.raycaster, scene.d_max,
+                         scene.max_incidence_rad)
         starts = np.cumsum(counts) - counts
         for k, i in enumerate(todo):  # one small shortest-path problem per face change
             rows = slice(starts[k], starts[k] + counts[k])
             nodes_obs = np.concatenate([order_obs[i:i + 1], obs[rows], order_obs[i + 1:i + 2]])
-            chain, bad = best_chain(overlap_matrix(nodes_obs, sample_weights), t_min, t_max)
+            chain, bad = best_chain(overlap_matrix(nodes_obs, sample_weights), scene.t_min, scene.t_max)
             if i in bad_of and bad >= bad_of[i]:
                 continue  # the coarser sampling was no worse
             pick = starts[k] + np.array(chain, dtype=int) - 1

@@ -57,7 +57,7 @@ from scipy.sparse.csgraph import connected_components, minimum_spanning_tree
 from wrp_eval.camera import Camera, optical_axes
 from wrp_eval.compiled import kernel
 from wrp_eval.recon.base import GroundTruth, MeshOracle
-from wrp_eval.recon.config import OracleSection
+from wrp_eval.recon.config import OracleSection, SyntheticOracleSection
 from wrp_eval.recon.fusion import FusedReconstruction, fuse
 from wrp_eval.recon.image_effects import blur_keypoint_fraction
 from wrp_eval.sim.captures import CaptureSet
@@ -237,70 +237,86 @@ def register_incremental(n_views: int, n_hits: int, hit_view: np.ndarray, hit: n
     stronger blur survives both); None = every ray counts 1.
     Returns the registered mask (n,) and the registration order.
     """
-    n = n_views
-    registered = np.zeros(n, dtype=bool)
-    order: list[int] = []
     mi = np.flatnonzero(matchable)
-    h_m, p_m, g_m, t_m = hit[mi], partner[mi], grid_index[mi], triangulates[mi]
-    v_m = hit_view[h_m]
     if len(mi) == 0:
-        return registered, order
-    # seed: most triangulating rays over both directions of a pair; ties -> lowest (i, j)
+        return np.zeros(n_views, dtype=bool), []
     if ray_weight is None:
-        ray_weight = np.ones(n * rays_per_view)
+        ray_weight = np.ones(n_views * rays_per_view)
         hit_ray = np.zeros(n_hits, dtype=np.int64)  # with unit weights any ray index gives weight 1
-    pair_weight = np.minimum(ray_weight[hit_ray[h_m]], ray_weight[g_m])
-    tri = np.bincount(v_m[t_m] * n + p_m[t_m], weights=pair_weight[t_m], minlength=n * n).reshape(n, n)
-    tri = np.triu(tri + tri.T, k=1)
-    seed = int(np.argmax(tri))
-    if tri.flat[seed] < min_rays:
-        return registered, order
-    # CSR views of the matchable pairs: by hit (sorted already), by the hit's view (sorted with the hits),
-    # by partner (one stable sort)
-    hit_ptr = np.searchsorted(h_m, np.arange(n_hits + 1))
-    view_ptr = np.searchsorted(v_m, np.arange(n + 1))
-    # stable sort on 16-bit keys is a radix sort in numpy (linear)
-    by_partner = np.argsort(p_m.astype(np.int16) if n < 2**15 else p_m, kind="stable")
-    partner_ptr = np.searchsorted(p_m[by_partner], np.arange(n + 1))
-    tri_hit = np.zeros(n_hits, dtype=bool)          # hit triangulated by two registered views
-    corr_ray = np.zeros(n * rays_per_view, dtype=bool)  # ray of a view matches a triangulated hit
-    corr_count = np.zeros(n)
-    stamp_hit = np.zeros(n_hits, dtype=np.int64)           # scratch for duplicate removal without sorting
-    stamp_ray = np.zeros(n * rays_per_view, dtype=np.int64)
+    mapper = _IncrementalMapper(n_views, n_hits, hit_view, hit[mi], partner[mi], grid_index[mi], triangulates[mi],
+                                rays_per_view, ray_weight)
+    seed = mapper.seed_pair(hit_ray, min_rays)
+    if seed is None:
+        return mapper.registered, mapper.order
+    for v in seed:
+        mapper.register(v)
+    while True:
+        cand = np.where(mapper.registered, -1, mapper.corr_count)
+        v = int(np.argmax(cand))  # ties -> lowest index
+        if cand[v] < min_rays:
+            break
+        mapper.register(v)
+    return mapper.registered, mapper.order
 
-    def distinct(idx: np.ndarray, stamp: np.ndarray) -> np.ndarray:
+
+class _IncrementalMapper:
+    """The state of :func:`register_incremental` over the matchable pairs (m): h, p, g, t (m,) their hit, partner,
+    partner's ray and triangulation flag; the registered views in order; per hit "triangulated", per ray "has a
+    2D-3D correspondence", per view its correspondence count."""
+
+    def __init__(self, n_views: int, n_hits: int, hit_view: np.ndarray, h: np.ndarray, p: np.ndarray, g: np.ndarray,
+                 t: np.ndarray, rays_per_view: int, ray_weight: np.ndarray):
+        self.n, self.rays_per_view, self.ray_weight = n_views, rays_per_view, ray_weight
+        self.h, self.p, self.g, self.t, self.v = h, p, g, t, hit_view[h]
+        self.registered = np.zeros(n_views, dtype=bool)
+        self.order: list[int] = []
+        # CSR views of the matchable pairs: by hit (sorted already), by the hit's view (sorted with the hits),
+        # by partner (one stable sort; on 16-bit keys numpy's stable sort is a linear radix sort)
+        self.hit_ptr = np.searchsorted(h, np.arange(n_hits + 1))
+        self.view_ptr = np.searchsorted(self.v, np.arange(n_views + 1))
+        self.by_partner = np.argsort(p.astype(np.int16) if n_views < 2**15 else p, kind="stable")
+        self.partner_ptr = np.searchsorted(p[self.by_partner], np.arange(n_views + 1))
+        self.tri_hit = np.zeros(n_hits, dtype=bool)                    # triangulated by two registered views
+        self.corr_ray = np.zeros(n_views * rays_per_view, dtype=bool)  # a view's ray matches a triangulated hit
+        self.corr_count = np.zeros(n_views)
+        self.stamp_hit = np.zeros(n_hits, dtype=np.int64)           # scratch for duplicate removal without sorting
+        self.stamp_ray = np.zeros(n_views * rays_per_view, dtype=np.int64)
+
+    def seed_pair(self, hit_ray: np.ndarray, min_rays: float) -> tuple[int, int] | None:
+        """The view pair with the most triangulating rays over both directions (ties: lowest (i, j)), or None
+        below ``min_rays``; a pair's ray weighs the smaller of its two rays' weights."""
+        n, t = self.n, self.t
+        pair_weight = np.minimum(self.ray_weight[hit_ray[self.h]], self.ray_weight[self.g])
+        tri = np.bincount(self.v[t] * n + self.p[t], weights=pair_weight[t], minlength=n * n).reshape(n, n)
+        tri = np.triu(tri + tri.T, k=1)
+        seed = int(np.argmax(tri))
+        return None if tri.flat[seed] < min_rays else divmod(seed, n)
+
+    @staticmethod
+    def _distinct(idx: np.ndarray, stamp: np.ndarray) -> np.ndarray:
         """idx without repeats (the last occurrence of each kept), O(len(idx))."""
         pos = np.arange(len(idx))
         stamp[idx] = pos
         return idx[stamp[idx] == pos]
 
-    def register(v: int) -> None:
-        registered[v] = True
-        order.append(v)
-        own = np.arange(view_ptr[v], view_ptr[v + 1])          # v's hits x their partners
-        own = own[t_m[own] & registered[p_m[own]]]
-        seen = by_partner[partner_ptr[v]:partner_ptr[v + 1]]  # others' hits x partner v
-        seen = seen[t_m[seen] & registered[v_m[seen]]]
-        new = np.concatenate([h_m[own], h_m[seen]])
-        new = distinct(new[~tri_hit[new]], stamp_hit)
+    def register(self, v: int) -> None:
+        """Register view ``v``: its pairs with registered views triangulate new hits, whose matching rays in
+        every view become 2D-3D correspondences."""
+        self.registered[v] = True
+        self.order.append(v)
+        own = np.arange(self.view_ptr[v], self.view_ptr[v + 1])                   # v's hits x their partners
+        own = own[self.t[own] & self.registered[self.p[own]]]
+        seen = self.by_partner[self.partner_ptr[v]:self.partner_ptr[v + 1]]    # others' hits x partner v
+        seen = seen[self.t[seen] & self.registered[self.v[seen]]]
+        new = np.concatenate([self.h[own], self.h[seen]])
+        new = self._distinct(new[~self.tri_hit[new]], self.stamp_hit)
         if len(new) == 0:
             return
-        tri_hit[new] = True
-        g = g_m[_ranges(hit_ptr, new)]  # every view's ray that matches a newly triangulated hit
-        g = distinct(g[~corr_ray[g]], stamp_ray)
-        corr_ray[g] = True
-        corr_count[:] += np.bincount(g // rays_per_view, weights=ray_weight[g], minlength=n)
-
-    i, j = divmod(seed, n)
-    register(i)
-    register(j)
-    while True:
-        cand = np.where(registered, -1, corr_count)
-        v = int(np.argmax(cand))  # ties -> lowest index
-        if cand[v] < min_rays:
-            break
-        register(v)
-    return registered, order
+        self.tri_hit[new] = True
+        g = self.g[_ranges(self.hit_ptr, new)]  # every view's ray that matches a newly triangulated hit
+        g = self._distinct(g[~self.corr_ray[g]], self.stamp_ray)
+        self.corr_ray[g] = True
+        self.corr_count[:] += np.bincount(g // self.rays_per_view, weights=self.ray_weight[g], minlength=self.n)
 
 
 DROPPED, CANDIDATE, MATCHABLE, TRIANGULATES = 0, 1, 2, 3   # _match_pairs' status codes, in increasing order
@@ -358,6 +374,60 @@ def _match_pairs(points, normals, dirs, hit, partner, positions, rotations, hit_
     return status, grid
 
 
+@dataclass(frozen=True)
+class MatchedPairs:
+    """The candidate (hit, other view) pairs that pass step 3's range, incidence and parallax tests (k pairs):
+    hit (k,) index into the observations, partner (k,) view, grid_index (k,) the partner's ray at the hit's
+    image cell (flattened n x rays), matchable and triangulates (k,) bool."""
+
+    hit: np.ndarray
+    partner: np.ndarray
+    grid_index: np.ndarray
+    matchable: np.ndarray
+    triangulates: np.ndarray
+
+
+def match_pairs(obs: Observations, hit: np.ndarray, partner: np.ndarray, capture_set: CaptureSet,
+                p: SyntheticOracleSection, max_range_m: float, incidence_max: float,
+                px_spacing: float) -> MatchedPairs:
+    """Step 3 on the candidate pairs (:func:`candidate_pairs`) in one compiled pass (:func:`_match_pairs`)."""
+    cam = capture_set.camera
+    status, grid_index = _match_pairs(
+        obs.points, obs.normals, obs.dirs, hit, partner, np.asarray(capture_set.positions, dtype=float),
+        capture_set.rotations(),  # roll included: decides what lands in j's image
+        obs.hit_map.reshape(-1, 3), obs.normal_map.reshape(-1, 3), cam.focal_px, float(cam.image_width_px),
+        float(cam.image_height_px), p.rays_x, p.rays_y, px_spacing, float(max_range_m), float(np.cos(incidence_max)),
+        float(np.cos(np.radians(p.parallax_max_deg))), float(np.radians(p.parallax_min_deg)))
+    keep = np.flatnonzero(status > 0)
+    status = status[keep]
+    return MatchedPairs(hit[keep], partner[keep], grid_index[keep], status >= MATCHABLE, status == TRIANGULATES)
+
+
+def register_views(obs: Observations, pairs: MatchedPairs, capture_set: CaptureSet,
+                   p: SyntheticOracleSection) -> tuple[np.ndarray, str, dict]:
+    """Step 4, which views join the reconstruction: (registered (n,) bool, what stopped it, diagnostics)."""
+    n = len(capture_set)
+    if p.registration == "components":
+        registered, n_comp = register_components(n, obs.view[pairs.hit], pairs.partner, pairs.matchable,
+                                                 np.bincount(obs.view, minlength=n), p.min_overlap,
+                                                 p.min_matched_rays)
+        return registered, f"{n_comp} disconnected view groups, largest kept", {"view_groups": int(n_comp)}
+    # a blurred view has fewer keypoints behind its rays (image_effects.py); min_registration_rays is calibrated
+    # against COLMAP on REGISTRATION_CALIBRATION_WIDTH_PX renders, so the blur is taken at that width (where the
+    # texture law never binds: the GSD is coarse there)
+    rays_per_view = p.rays_x * p.rays_y
+    hit_weight = blur_keypoint_fraction(capture_set.blur()[obs.view] * REGISTRATION_CALIBRATION_WIDTH_PX
+                                        / capture_set.camera.image_width_px)
+    ray_weight = np.zeros(n * rays_per_view)
+    hit_ray = obs.view * rays_per_view + obs.ray
+    ray_weight[hit_ray] = hit_weight
+    registered, order = register_incremental(n, len(obs.points), obs.view, pairs.hit, pairs.partner,
+                                             pairs.matchable, pairs.triangulates, pairs.grid_index, rays_per_view,
+                                             p.min_registration_rays, hit_ray, ray_weight)
+    detail = f"incremental registration stopped: no other view sees >= {p.min_registration_rays} triangulated points"
+    return registered, detail, {"registration_order": [int(v) for v in order]}
+
+
 class SyntheticOracle(MeshOracle):
     """The default oracle. ``evaluate(capture_set, ship_mesh, seed)`` -> :class:`ReconResult`."""
 
@@ -382,7 +452,6 @@ class SyntheticOracle(MeshOracle):
         inc_max = np.radians(p.incidence_max_deg)
         obs = observe(capture_set, gt, p.rays_x, p.rays_y, max_range, inc_max)
         _, px_spacing = ray_grid(cam, p.rays_x, p.rays_y)
-        rays_per_view = p.rays_x * p.rays_y
         if len(obs.points) == 0:
             return empty, 0, "no view sees the ship", {"hits": 0}
         # Cells must be larger than the spacing of neighbouring rays on the surface, or a view's sparse
@@ -395,41 +464,8 @@ class SyntheticOracle(MeshOracle):
         hit, partner, _ = candidate_pairs(obs, n, cell_m, p.max_partners, axes,
                                           np.radians(p.parallax_max_deg) + max(cam.half_fov_x, cam.half_fov_y))
 
-        # --- match every candidate pair (one compiled pass over the pairs) ---
-        pos = np.asarray(capture_set.positions, dtype=float)
-        rot = capture_set.rotations()  # roll included: decides what lands in j's image
-        status, grid_index = _match_pairs(
-            obs.points, obs.normals, obs.dirs, hit, partner, pos, rot, obs.hit_map.reshape(-1, 3),
-            obs.normal_map.reshape(-1, 3), f, float(cam.image_width_px), float(cam.image_height_px), p.rays_x,
-            p.rays_y, float(px_spacing), float(max_range), float(np.cos(inc_max)),
-            float(np.cos(np.radians(p.parallax_max_deg))), float(np.radians(p.parallax_min_deg)))
-        keep = np.flatnonzero(status > 0)
-        hit, partner, grid_index, status = hit[keep], partner[keep], grid_index[keep], status[keep]
-        matchable = status >= MATCHABLE
-        triangulates = status == TRIANGULATES
-
-        # --- registration (step 4): which views join the reconstruction ---
-        if p.registration == "components":
-            registered_mask, n_comp = register_components(n, obs.view[hit], partner, matchable,
-                                                          np.bincount(obs.view, minlength=n),
-                                                          p.min_overlap, p.min_matched_rays)
-            detail = f"{n_comp} disconnected view groups, largest kept"
-            reg_extra = {"view_groups": int(n_comp)}
-        else:
-            # a blurred view has fewer keypoints behind its rays (image_effects.py); min_registration_rays is
-            # calibrated against COLMAP on REGISTRATION_CALIBRATION_WIDTH_PX renders, so the blur is taken
-            # at that width (where the texture law never binds: the GSD is coarse there)
-            hit_weight = blur_keypoint_fraction(capture_set.blur()[obs.view] * REGISTRATION_CALIBRATION_WIDTH_PX
-                                                / cam.image_width_px)
-            ray_weight = np.zeros(n * rays_per_view)
-            hit_ray = obs.view * rays_per_view + obs.ray
-            ray_weight[hit_ray] = hit_weight
-            registered_mask, order = register_incremental(n, len(obs.points), obs.view, hit, partner, matchable,
-                                                          triangulates, grid_index, rays_per_view,
-                                                          p.min_registration_rays, hit_ray, ray_weight)
-            detail = (f"incremental registration stopped: no other view sees >= {p.min_registration_rays} "
-                      f"triangulated points")
-            reg_extra = {"registration_order": [int(v) for v in order]}
+        pairs = match_pairs(obs, hit, partner, capture_set, p, max_range, inc_max, float(px_spacing))
+        registered_mask, detail, reg_extra = register_views(obs, pairs, capture_set, p)
         n_registered = int(registered_mask.sum())
         reason = ""
         if n_registered < 3:
@@ -440,7 +476,7 @@ class SyntheticOracle(MeshOracle):
         # --- reconstruct (fusion.py): estimated poses, triangulated and fused points on the visible truth ---
         fused = fuse(capture_set, gt, registered_mask, self.section, seed)
         registered_sigma = fused.pose_sigma[registered_mask & np.isfinite(fused.pose_sigma[:, 0])]
-        extra = {"hits": int(len(obs.points)), "candidate_pairs": int(len(hit)), **reg_extra, "cell_m": cell_m,
+        extra = {"hits": int(len(obs.points)), "candidate_pairs": int(len(pairs.hit)), **reg_extra, "cell_m": cell_m,
                  "median_sigma_n_m": float(np.nanmedian(fused.sigma_n)) if np.any(fused.existence > 0) else None,
                  "mean_existence": float(fused.existence.mean()), "observations": fused.observations,
                  "median_pose_sigma_deg": float(np.degrees(np.median(registered_sigma[:, 0])))

@@ -187,35 +187,47 @@ def build_scene(n_drones: int, params: QuadrotorParams = PHANTOM4, timestep_s: f
     root = sea_scene(timestep_s) if root is None else root
     root.option.timestep = timestep_s
     root.option.flag.contact = "disable"
-    k_r, k_w = params.attitude_gains(attitude_bandwidth_rad_s, attitude_damping)
-    tau_max = params.max_torque_n_m
-    frames = []
-    for i in range(n_drones):
-        quad = load_quadrotor(params, name=f"drone{i}")
-        frame = root.worldbody.attach(quad)
-        frame.pos = [spacing_m * i, 0.0, 10.0]
-        frames.append(frame.add("freejoint", name="root"))
-        # drag: a world-frame force at the centre of mass through the free joint's translational dofs (a
-        # joint transmission: unlike xfrc_applied, which costs a Jacobian per body and step, it is a fixed
-        # unit moment; measured in README.md)
-        for axis, name in enumerate("xyz"):
-            gear = [0.0] * 6
-            gear[axis] = 1.0
-            root.actuator.add("general", name=f"drone{i}_drag_{name}", joint=frames[-1], gear=gear,
-                              gainprm=[1.0])
-        if not attitude_loop:
-            continue
-        target = root.worldbody.add("body", name=f"target{i}", mocap=True, pos=[spacing_m * i, 0.0, 10.0])
-        target_site = target.add("site", name=f"target{i}_frame", group=5)
-        for axis, name in enumerate(("roll", "pitch", "yaw")):
-            gear = [0.0] * 6
-            gear[3 + axis] = 1.0
-            # force = ctrl (feed-forward torque, 0) - k_R * length - k_W * velocity, clipped to the rotors'
-            root.actuator.add("general", name=f"drone{i}_att_{name}", site=quad.find("site", "imu"),
-                              refsite=target_site, gear=gear, gainprm=[1.0], biastype="affine",
-                              biasprm=[0.0, -k_r[axis], -k_w[axis]], forcelimited=True,
-                              forcerange=[-tau_max[axis], tau_max[axis]])
+    gains = params.attitude_gains(attitude_bandwidth_rad_s, attitude_damping)
+    joints = [_attach_drone(root, i, params, spacing_m, gains, attitude_loop) for i in range(n_drones)]
     model = mujoco.MjModel.from_xml_string(root.to_xml_string(), root.get_assets())
+    return Scene(model, root, n_drones, *_drone_indices(model, joints, attitude_loop), params)
+
+
+def _attach_drone(root: mjcf.RootElement, i: int, params: QuadrotorParams, spacing_m: float, gains,
+                  attitude_loop: bool):
+    """Attach drone ``i`` (its free joint, drag actuators and, with ``attitude_loop``, its attitude target and
+    actuators with ``gains`` = (k_R, k_W)) to ``root``; returns its free joint."""
+    quad = load_quadrotor(params, name=f"drone{i}")
+    frame = root.worldbody.attach(quad)
+    frame.pos = [spacing_m * i, 0.0, 10.0]
+    joint = frame.add("freejoint", name="root")
+    # drag: a world-frame force at the centre of mass through the free joint's translational dofs (a joint
+    # transmission: unlike xfrc_applied, which costs a Jacobian per body and step, it is a fixed unit moment;
+    # measured in README.md)
+    for axis, name in enumerate("xyz"):
+        gear = [0.0] * 6
+        gear[axis] = 1.0
+        root.actuator.add("general", name=f"drone{i}_drag_{name}", joint=joint, gear=gear, gainprm=[1.0])
+    if not attitude_loop:
+        return joint
+    k_r, k_w = gains
+    tau_max = params.max_torque_n_m
+    target = root.worldbody.add("body", name=f"target{i}", mocap=True, pos=[spacing_m * i, 0.0, 10.0])
+    target_site = target.add("site", name=f"target{i}_frame", group=5)
+    for axis, name in enumerate(("roll", "pitch", "yaw")):
+        gear = [0.0] * 6
+        gear[3 + axis] = 1.0
+        # force = ctrl (feed-forward torque, 0) - k_R * length - k_W * velocity, clipped to the rotors'
+        root.actuator.add("general", name=f"drone{i}_att_{name}", site=quad.find("site", "imu"),
+                          refsite=target_site, gear=gear, gainprm=[1.0], biastype="affine",
+                          biasprm=[0.0, -k_r[axis], -k_w[axis]], forcelimited=True,
+                          forcerange=[-tau_max[axis], tau_max[axis]])
+    return joint
+
+
+def _drone_indices(model: mujoco.MjModel, joints: list, attitude_loop: bool) -> tuple[np.ndarray, ...]:
+    """Scene's index arrays (qpos, qvel, body, actuator, attitude, drag, mocap) of the drones on ``joints``."""
+    n_drones = len(joints)
     qpos_index = np.zeros((n_drones, 7), dtype=int)
     qvel_index = np.zeros((n_drones, 6), dtype=int)
     body_id = np.zeros(n_drones, dtype=int)
@@ -223,8 +235,8 @@ def build_scene(n_drones: int, params: QuadrotorParams = PHANTOM4, timestep_s: f
     attitude_index = np.zeros((n_drones, 3), dtype=int)
     drag_index = np.zeros((n_drones, 3), dtype=int)
     mocap_index = np.zeros(n_drones, dtype=int)
-    for i in range(n_drones):
-        joint = model.joint(frames[i].full_identifier)
+    for i, frame_joint in enumerate(joints):
+        joint = model.joint(frame_joint.full_identifier)
         qpos_index[i] = joint.qposadr[0] + np.arange(7)
         qvel_index[i] = joint.dofadr[0] + np.arange(6)
         body_id[i] = model.body(f"drone{i}/airframe").id
@@ -233,5 +245,4 @@ def build_scene(n_drones: int, params: QuadrotorParams = PHANTOM4, timestep_s: f
         if attitude_loop:
             attitude_index[i] = [model.actuator(f"drone{i}_att_{a}").id for a in ("roll", "pitch", "yaw")]
             mocap_index[i] = model.body_mocapid[model.body(f"target{i}").id]
-    return Scene(model, root, n_drones, qpos_index, qvel_index, body_id, actuator_index, attitude_index,
-                 drag_index, mocap_index, params)
+    return qpos_index, qvel_index, body_id, actuator_index, attitude_index, drag_index, mocap_index

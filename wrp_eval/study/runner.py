@@ -100,15 +100,15 @@ def training_key(config: ExperimentConfig) -> str:
     return hashlib.sha256(json.dumps(doc, sort_keys=True).encode()).hexdigest()[:10]
 
 
-def _train(ctx: ExperimentContext, path: FlightPath, folder: Path, quiet: bool) -> dict:
+def _train(ctx: ExperimentContext, path: FlightPath, folder: Path) -> dict:
     """Campaign of ``path`` + surrogate; returns {campaign, checkpoint, trials, failed, surrogate test metrics}."""
     campaign_dir, surrogate_dir = folder / "campaign", folder / "surrogate"
     start = time.perf_counter()
     trial = ctx.trial_config
     camp = run_campaign(trial, path, campaign_dir, root_seed=ctx.campaign_seed, config_dir=ctx.config_dir,
-                        progress=not quiet, ship_mesh=ctx.ship.mesh if trial.campaign.outputs.rerun else None)
+                        ship_mesh=ctx.ship.mesh if trial.campaign.outputs.rerun else None)
     campaign_s = time.perf_counter() - start
-    trained, _, _ = train_from_campaign(ctx, campaign_dir, surrogate_dir, progress=not quiet)
+    trained, _, _ = train_from_campaign(ctx, campaign_dir, surrogate_dir)
     return {"campaign": str(campaign_dir), "checkpoint": str(surrogate_dir / CHECKPOINT_NAME), "trials": camp.done,
             "failed": camp.failed, "campaign_s": campaign_s,
             "surrogate_s": time.perf_counter() - start - campaign_s, "surrogate_test": trained.metrics["test"]}
@@ -136,7 +136,7 @@ def _path_columns(path, verdict: dict) -> dict:
             "completeness": verdict.get("completeness"), "fscore": verdict.get("fscore")}
 
 
-def run_study(ctx: ExperimentContext, *, smallest: bool = False, quiet: bool = True) -> dict:
+def run_study(ctx: ExperimentContext, *, smallest: bool = False) -> dict:
     """Every variant of ``ctx.config.study``; writes study.json and report.md under logs/<run.name>/ and returns
     the study document."""
     config = ctx.config
@@ -150,7 +150,6 @@ def run_study(ctx: ExperimentContext, *, smallest: bool = False, quiet: bool = T
     optimised: dict[tuple, tuple] = {}
     rows, figures, timings, recordings = [], [], {}, []
     for number, (variant, vctx) in enumerate(built, 1):
-        cfg = vctx.config
         start = time.perf_counter()
         log.info(f"[wrp-eval run] study {number}/{len(built)}: {variant.name} ...")
         folder = vctx.folders.study / slug(variant.name)
@@ -158,56 +157,13 @@ def run_study(ctx: ExperimentContext, *, smallest: bool = False, quiet: bool = T
         path = dataclasses.replace(result.path, metadata={**result.path.metadata, "variant": variant.name})
         path.save(folder / "plan" / "path.json")
         write_json_atomic(folder / "plan" / "plan_metrics.json", result.metrics)
-        base_cols = _plan_columns(ship, result, path, cfg.planning)
-        wrp_cols: dict = {}
-        training = None
-        measured, verdict = path, None
+        measured, verdict, wrp_cols = path, None, {}
         if variant.path != "plan":
-            key = training_key(cfg)
-            if key not in shared:
-                shared[key] = _train(vctx, path, vctx.folders.study / f"shared-{key}", quiet)
-            training = shared[key]
-            section = WrpSection.model_validate({**cfg.wrp.model_dump(), "kind": variant.path})
-            wrp_key = (key, json.dumps(section.model_dump(mode="json"), sort_keys=True))
-            if wrp_key not in optimised:   # e.g. Table 5's SWRP row and its offset rows: one optimisation
-                wrp_dir = folder / f"wrp-{variant.path}"
-                inputs = resolve_inputs(vctx, section, training["checkpoint"], training["campaign"])
-                optimised[wrp_key] = (run_optimize(vctx, section, wrp_dir, inputs, quiet=quiet), wrp_dir)
-            doc, wrp_dir = optimised[wrp_key]
-            table = doc["table3"]
-            measured = FlightPath.load(wrp_dir / "path.json")
-            verdict = table.get("oracle")
-            wrp_cols = {"threshold_m": table["threshold_m"], "offset_rate_pct": table["offset_rate_pct"],
-                        "position_offset_m": table["position_offset_m"],
-                        "rotation_offset_deg": table["rotation_offset_deg"], "wrp_time_s": table["time_s"],
-                        "surrogate_error_m": table.get("surrogate_error_m"), "e_original_m": table.get("e_original_m")}
-        box = study.random_offsets
-        pert = cfg.campaign.perturbation
-        half_m = box.position_half_width_m if box.position_half_width_m is not None else pert.position_half_width_m
-        half_deg = box.yaw_half_width_deg if box.yaw_half_width_deg is not None else pert.yaw_half_width_deg
+            measured, verdict, wrp_cols = _optimised_variant(vctx, variant, path, folder, shared, optimised)
         shown = {variant.path: measured} if variant.path != "plan" else {}   # paths drawn beside the plan
-        for rep in range(variant.repetitions):
-            row_path, row_verdict, cols = measured, verdict, dict(wrp_cols)
-            if variant.random_offsets:
-                rng = np.random.default_rng(np.random.SeedSequence(
-                    [cfg.run.seed, OFFSETS_STREAM, zlib.crc32(variant.name.encode()), rep]))
-                offsets = random_offsets(len(measured), half_m, np.radians(half_deg), rng)
-                row_path = apply_offsets(measured, offsets, {"random_offsets": {"repetition": rep + 1,
-                                                                              "position_half_width_m": half_m,
-                                                                              "yaw_half_width_deg": half_deg}})
-                row_path.save(folder / f"offsets-{rep + 1}" / "path.json")
-                shown[f"offsets-{rep + 1}"] = row_path
-                cols["position_offset_m"], cols["rotation_offset_deg"] = offset_totals(offsets)
-                cols["offset_rate_pct"], cols["wrp_time_s"] = 100.0, None   # random rows: no optimisation time
-                cols["offsets_half_width"] = {"position_m": half_m, "yaw_deg": half_deg}
-                row_verdict = None
-            if row_verdict is None:
-                row_verdict = oracle_error(vctx.scored_ship, row_path)   # built at the first row that needs it
-            ours = {**base_cols, **_path_columns(row_path, row_verdict), **cols}
-            rows.append({"variant": variant.name, "repetition": rep + 1 if variant.random_offsets else None,
-                         "path": variant.path, "random_offsets": variant.random_offsets,
-                         "overrides": variant.overrides, "ours": ours, "paper": variant.paper_row(rep),
-                         "folder": str(folder)})
+        base_cols = _plan_columns(ship, result, path, vctx.config.planning)
+        rows += _variant_rows(vctx, variant, study.random_offsets, measured, verdict, base_cols, wrp_cols, folder,
+                              shown)
         if study.figures:
             figures.append((variant.name, measured, ship, folder))
         # one rerun recording per variant (its own recording id): ship, plan, and the WRP / offset paths
@@ -218,6 +174,7 @@ def run_study(ctx: ExperimentContext, *, smallest: bool = False, quiet: bool = T
         timings[variant.name] = time.perf_counter() - start
         log.info(f"[wrp-eval run] study {number}/{len(built)}: {variant.name}: done in {timings[variant.name]:.1f} s")
     timings["total"] = time.perf_counter() - job_start
+    box = study.random_offsets
     doc = {"config": ctx.source, "run": run_name, "seed": config.run.seed, "smallest": smallest,
            "table": study.table, "title": study.title, "columns": study.columns, "rows": rows,
            "random_offsets": {"position_half_width_m": box.position_half_width_m,
@@ -229,3 +186,63 @@ def run_study(ctx: ExperimentContext, *, smallest: bool = False, quiet: bool = T
     doc["timings_s"]["total"] = time.perf_counter() - job_start
     write_json_atomic(out / "study.json", doc)
     return {**doc, "out": str(out), "report": str(report)}
+
+
+def _optimised_variant(vctx: ExperimentContext, variant, path: FlightPath, folder: Path, shared: dict,
+                       optimised: dict) -> tuple[FlightPath, dict | None, dict]:
+    """The WRP of ``variant`` (its training shared through ``shared`` by training key, its optimisation through
+    ``optimised`` by section): (the optimised path, the optimiser's oracle verdict, the WRP's table columns)."""
+    cfg = vctx.config
+    key = training_key(cfg)
+    if key not in shared:
+        shared[key] = _train(vctx, path, vctx.folders.study / f"shared-{key}")
+    training = shared[key]
+    section = WrpSection.model_validate({**cfg.wrp.model_dump(), "kind": variant.path})
+    wrp_key = (key, json.dumps(section.model_dump(mode="json"), sort_keys=True))
+    if wrp_key not in optimised:   # e.g. Table 5's SWRP row and its offset rows: one optimisation
+        wrp_dir = folder / f"wrp-{variant.path}"
+        inputs = resolve_inputs(vctx, section, training["checkpoint"], training["campaign"])
+        optimised[wrp_key] = (run_optimize(vctx, section, wrp_dir, inputs), wrp_dir)
+    doc, wrp_dir = optimised[wrp_key]
+    table = doc["table3"]
+    cols = {"threshold_m": table["threshold_m"], "offset_rate_pct": table["offset_rate_pct"],
+            "position_offset_m": table["position_offset_m"], "rotation_offset_deg": table["rotation_offset_deg"],
+            "wrp_time_s": table["time_s"], "surrogate_error_m": table.get("surrogate_error_m"),
+            "e_original_m": table.get("e_original_m")}
+    return FlightPath.load(wrp_dir / "path.json"), table.get("oracle"), cols
+
+
+def _variant_rows(vctx: ExperimentContext, variant, box, measured: FlightPath, verdict: dict | None,
+                  base_cols: dict, wrp_cols: dict, folder: Path, shown: dict) -> list[dict]:
+    """The table rows of ``variant``: one per repetition, each with its random offsets when the variant has them
+    (the study's ``box``, else the campaign's perturbation box; their paths saved under ``folder`` and added to
+    ``shown``); a row's columns are the plan's (``base_cols``),
+    the flown path's, then the WRP's or the offsets' (``wrp_cols``)."""
+    cfg = vctx.config
+    pert = cfg.campaign.perturbation
+    half_m = box.position_half_width_m if box.position_half_width_m is not None else pert.position_half_width_m
+    half_deg = box.yaw_half_width_deg if box.yaw_half_width_deg is not None else pert.yaw_half_width_deg
+    rows = []
+    for rep in range(variant.repetitions):
+        row_path, row_verdict, cols = measured, verdict, dict(wrp_cols)
+        if variant.random_offsets:
+            rng = np.random.default_rng(np.random.SeedSequence(
+                [cfg.run.seed, OFFSETS_STREAM, zlib.crc32(variant.name.encode()), rep]))
+            offsets = random_offsets(len(measured), half_m, np.radians(half_deg), rng)
+            row_path = apply_offsets(measured, offsets, {"random_offsets": {"repetition": rep + 1,
+                                                                          "position_half_width_m": half_m,
+                                                                          "yaw_half_width_deg": half_deg}})
+            row_path.save(folder / f"offsets-{rep + 1}" / "path.json")
+            shown[f"offsets-{rep + 1}"] = row_path
+            cols["position_offset_m"], cols["rotation_offset_deg"] = offset_totals(offsets)
+            cols["offset_rate_pct"], cols["wrp_time_s"] = 100.0, None   # random rows: no optimisation time
+            cols["offsets_half_width"] = {"position_m": half_m, "yaw_deg": half_deg}
+            row_verdict = None
+        if row_verdict is None:
+            row_verdict = oracle_error(vctx.scored_ship, row_path)   # built at the first row that needs it
+        ours = {**base_cols, **_path_columns(row_path, row_verdict), **cols}
+        rows.append({"variant": variant.name, "repetition": rep + 1 if variant.random_offsets else None,
+                     "path": variant.path, "random_offsets": variant.random_offsets,
+                     "overrides": variant.overrides, "ours": ours, "paper": variant.paper_row(rep),
+                     "folder": str(folder)})
+    return rows

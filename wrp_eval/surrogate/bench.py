@@ -131,30 +131,36 @@ def run_bench() -> list[BenchRecord]:
                     f"full forward passes, {s.n_views} views, batches of 3200"),
     ]
     folder = os.environ.get(BENCH_ENV)
-    if folder:
-        start = time.perf_counter()
-        ceiling = oracle_roughness(folder)
-        records.append(BenchRecord(
-            "surrogate.r2_ceiling", ceiling["r2_ceiling"], "", None, None,
-            f"oracle std {ceiling['noise_std_m'] * 1000:.2f} mm under {ceiling['position_jitter_m']} m / "
-            f"{ceiling['yaw_jitter_rad']} rad jitter ({ceiling['n_trials']} trials x {ceiling['repeats']}) vs error "
-            f"std {np.sqrt(ceiling['total_var_m2']) * 1000:.2f} mm; {time.perf_counter() - start:.0f} s"))
-        start = time.perf_counter()
-        agree = single_view_agreement(s, folder, n_moves=SINGLE_VIEW_MOVES, jitters=SINGLE_VIEW_JITTERS)
-        big = ", ".join(f"view {v}: {o * 1000:.1f} vs {p * 1000:.2f}" for v, o, p in agree["largest"][:3])
-        how = (f"{agree['n_moves']} single-view moves at the campaign's targeted scale, oracle averaged over "
-               f"{agree['jitters']} jitters (its noise per move {agree['oracle_noise_std_m'] * 1000:.3f} mm); "
-               f"change std oracle {agree['oracle_change_std_m'] * 1000:.2f} mm, surrogate "
-               f"{agree['surrogate_change_std_m'] * 1000:.2f} mm; {time.perf_counter() - start:.0f} s")
-        _TRAINED["single_view_rmse_m"] = agree["rmse_m"]
-        records += offsets_only_records(data, result, folder, agree["oracle"])
-        records += [
-            BenchRecord("surrogate.single_view_spearman", agree["spearman"], "", "issue 18 target", 0.7,
-                        f"{how}; largest oracle changes (mm, oracle vs surrogate) {big}"),
-            BenchRecord("surrogate.single_view_sign_top_decile", agree["sign_top_decile"], "", "issue 18 target",
-                        0.9, f"share of the moves the surrogate rates in its top decile of |change| whose sign the "
-                             f"oracle agrees with; {how}"),
-            BenchRecord("surrogate.single_view_rmse_mm", agree["rmse_m"] * 1000, "mm", None, None,
-                        f"the validated single-view error (the optimiser accepts a move only beyond twice it); {how}"),
-        ]
+    return records + (_oracle_records(s, data, result, folder) if folder else [])
+
+
+def _oracle_records(s, data, result, folder: str) -> list[BenchRecord]:
+    """The records against the oracle on the campaign in ``folder``: the roughness ceiling and the single-view
+    agreement (and the offsets-only comparison on the same oracle scores)."""
+    records = []
+    start = time.perf_counter()
+    ceiling = oracle_roughness(folder)
+    records.append(BenchRecord(
+        "surrogate.r2_ceiling", ceiling["r2_ceiling"], "", None, None,
+        f"oracle std {ceiling['noise_std_m'] * 1000:.2f} mm under {ceiling['position_jitter_m']} m / "
+        f"{ceiling['yaw_jitter_rad']} rad jitter ({ceiling['n_trials']} trials x {ceiling['repeats']}) vs error "
+        f"std {np.sqrt(ceiling['total_var_m2']) * 1000:.2f} mm; {time.perf_counter() - start:.0f} s"))
+    start = time.perf_counter()
+    agree = single_view_agreement(s, folder, n_moves=SINGLE_VIEW_MOVES, jitters=SINGLE_VIEW_JITTERS)
+    big = ", ".join(f"view {v}: {o * 1000:.1f} vs {p * 1000:.2f}" for v, o, p in agree["largest"][:3])
+    how = (f"{agree['n_moves']} single-view moves at the campaign's targeted scale, oracle averaged over "
+           f"{agree['jitters']} jitters (its noise per move {agree['oracle_noise_std_m'] * 1000:.3f} mm); "
+           f"change std oracle {agree['oracle_change_std_m'] * 1000:.2f} mm, surrogate "
+           f"{agree['surrogate_change_std_m'] * 1000:.2f} mm; {time.perf_counter() - start:.0f} s")
+    _TRAINED["single_view_rmse_m"] = agree["rmse_m"]
+    records += offsets_only_records(data, result, folder, agree["oracle"])
+    records += [
+        BenchRecord("surrogate.single_view_spearman", agree["spearman"], "", "issue 18 target", 0.7,
+                    f"{how}; largest oracle changes (mm, oracle vs surrogate) {big}"),
+        BenchRecord("surrogate.single_view_sign_top_decile", agree["sign_top_decile"], "", "issue 18 target",
+                    0.9, f"share of the moves the surrogate rates in its top decile of |change| whose sign the "
+                         f"oracle agrees with; {how}"),
+        BenchRecord("surrogate.single_view_rmse_mm", agree["rmse_m"] * 1000, "mm", None, None,
+                    f"the validated single-view error (the optimiser accepts a move only beyond twice it); {how}"),
+    ]
     return records

@@ -32,6 +32,7 @@ from torch.nn import functional as F
 from wrp_eval.atomic import atomic_path, write_json_atomic
 from wrp_eval.errors import InputError
 from wrp_eval.experiment import ExperimentContext
+from wrp_eval.logs import progress_shown
 from wrp_eval.surrogate.config import SurrogateSection
 from wrp_eval.surrogate.data import TrialData, load_campaign_trials, physical_variance_share, split_indices
 from wrp_eval.surrogate.diagnostics import mean_offset_baseline, single_view_agreement
@@ -113,7 +114,6 @@ def usable_rows(data: TrialData, section: SurrogateSection) -> tuple[np.ndarray,
 
 
 def train_surrogate(data: TrialData, section: SurrogateSection = SurrogateSection(), seed: int = 0,
-                    progress: bool = False,
                     split: tuple[np.ndarray, np.ndarray, np.ndarray] | None = None) -> TrainResult:
     """Fit the surrogate on ``data`` (see :class:`SurrogateSection` for every knob).
 
@@ -132,17 +132,53 @@ def train_surrogate(data: TrialData, section: SurrogateSection = SurrogateSectio
                                                      split_rng))
     else:
         tr, va, te = (np.asarray(i, dtype=np.int64) for i in split)
-
     offsets = np.asarray(data.offsets, float)
+    target = _target(data, section, error, usable)
+    meta = _untrained_meta(data, section, offsets, target, usable, tr)
+    with torch.random.fork_rng(devices=[]):
+        torch.manual_seed(seed)
+        net = ViewSequenceCNN(**meta.architecture)
+    surrogate = Surrogate(net, meta)
+    history, epoch, best_epoch, final_lr = _fit(net, surrogate, data, section, offsets, target, usable, tr, va,
+                                                seed)
+
+    metrics = {}
+    preds = {}
+    for name, idx in (("train", tr), ("val", va), ("test", te)):
+        keep = idx[usable[idx]]
+        preds[name] = (error[keep], surrogate.predict(offsets[keep], _conditions(data, keep)))
+        metrics[name] = regression_metrics(*preds[name])
+    if section.predict_failure:
+        p = surrogate.predict_failure(offsets[te], _conditions(data, te))
+        f = np.asarray(data.failed, bool)[te]
+        metrics["test"]["failure_brier"] = float(((p - f) ** 2).mean())
+    seconds = time.perf_counter() - start
+    metrics.update({"epochs_run": epoch, "best_epoch": best_epoch, "train_s": seconds, "seed": seed,
+                    "final_lr": final_lr, "n_trials": int(data.n_trials), "n_used": int(rows.size),
+                    "n_views": data.n_views, "data": data.source})
+    final_meta = SurrogateMeta(**{**meta.__dict__, "metrics": metrics,
+                                  "extra": {"seed": seed, "data": data.source}})
+    surrogate = Surrogate(net, final_meta)
+    return TrainResult(surrogate, metrics, history, {"train": tr.tolist(), "val": va.tolist(), "test": te.tolist()},
+                       preds["test"][0], preds["test"][1], seconds)
+
+
+def _target(data: TrialData, section: SurrogateSection, error: np.ndarray, usable: np.ndarray) -> np.ndarray:
+    """(N,) what the network learns per trial: the error (m) or its logarithm (NaN where not usable)."""
+    if section.target != "log_error":
+        return error
+    if np.any(error[usable] <= 0):
+        raise InputError(data.source or "surrogate data", "target log_error needs errors > 0; "
+                                                          "use surrogate.target: error")
+    with np.errstate(divide="ignore", invalid="ignore"):
+        return np.log(np.where(usable, error, np.nan))
+
+
+def _untrained_meta(data: TrialData, section: SurrogateSection, offsets: np.ndarray, target: np.ndarray,
+                    usable: np.ndarray, tr: np.ndarray) -> SurrogateMeta:
+    """The checkpoint's meta before training: the architecture and every standardisation, from the training
+    trials ``tr``."""
     off_mean, off_std = _standardise(offsets[tr].reshape(-1, 4), 0)
-    if section.target == "log_error":
-        if np.any(error[usable] <= 0):
-            raise InputError(data.source or "surrogate data", "target log_error needs errors > 0; "
-                                                              "use surrogate.target: error")
-        with np.errstate(divide="ignore", invalid="ignore"):
-            target = np.log(np.where(usable, error, np.nan))
-    else:
-        target = error
     err_train = target[tr][usable[tr]]
     if err_train.size < 2:
         raise InputError(data.source or "surrogate data", "too few training trials with a finite error")
@@ -164,24 +200,27 @@ def train_surrogate(data: TrialData, section: SurrogateSection = SurrogateSectio
         features = np.concatenate([data.views.geometry(offsets[tr]), _conditions(data, tr),
                                    np.broadcast_to(data.views.coverage(), (len(tr), data.n_views, 2))], axis=2)
         feat_mean, feat_std = (v.tolist() for v in _standardise(features.reshape(-1, features.shape[-1]), 0))
-    outputs = 2 if section.predict_failure else 1
     n_features = {"per_view": 4 + len(GEOMETRY_NAMES) + len(CONDITION_NAMES) + len(COVERAGE_NAMES), "offsets": 4}
     arch = {"in_channels": n_features[section.inputs] + (7 if section.pose_channels else 0),
             "channels": section.channels,
-            "kernel": section.kernel, "layers": section.layers, "hidden": section.hidden, "outputs": outputs}
-    meta = SurrogateMeta(n_views=data.n_views, path_digest=data.path_digest, architecture=arch,
+            "kernel": section.kernel, "layers": section.layers, "hidden": section.hidden,
+            "outputs": 2 if section.predict_failure else 1}
+    return SurrogateMeta(n_views=data.n_views, path_digest=data.path_digest, architecture=arch,
                          offset_mean=off_mean.tolist(), offset_std=off_std.tolist(), error_mean=err_mean,
                          error_std=err_std, pose_mean=pose_mean, pose_std=pose_std, planned_pose=planned,
                          offset_low=offsets[tr].reshape(-1, 4).min(0).tolist(),
                          offset_high=offsets[tr].reshape(-1, 4).max(0).tolist(), target=section.target,
                          inputs=section.inputs, views=views, feature_mean=feat_mean, feature_std=feat_std)
-    with torch.random.fork_rng(devices=[]):
-        torch.manual_seed(seed)
-        net = ViewSequenceCNN(**arch)
-    surrogate = Surrogate(net, meta)
 
+
+def _fit(net, surrogate: Surrogate, data: TrialData, section: SurrogateSection, offsets: np.ndarray,
+         target: np.ndarray, usable: np.ndarray, tr: np.ndarray, va: np.ndarray,
+         seed: int) -> tuple[dict, int, int, float]:
+    """Train ``net`` in place (Adam, seeded batches, early stopping on the validation loss; the best epoch's
+    weights are kept): (loss history, epochs run, best epoch, final learning rate)."""
+    meta = surrogate.meta
     x_all = surrogate.input_tensor(offsets, data.conditions)                # (N, n, Cin)
-    y_all = torch.as_tensor(np.nan_to_num((target - err_mean) / err_std), dtype=torch.float32)
+    y_all = torch.as_tensor(np.nan_to_num((target - meta.error_mean) / meta.error_std), dtype=torch.float32)
     w_all = torch.as_tensor(usable, dtype=torch.float32)                     # error-loss mask
     f_all = torch.as_tensor(np.asarray(data.failed, bool), dtype=torch.float32)
 
@@ -189,7 +228,7 @@ def train_surrogate(data: TrialData, section: SurrogateSection = SurrogateSectio
         out = net(x_all[idx])
         w = w_all[idx]
         loss = ((out[:, 0] - y_all[idx]) ** 2 * w).sum() / w.sum().clamp(min=1.0)
-        if outputs == 2:
+        if section.predict_failure:
             loss = loss + F.binary_cross_entropy_with_logits(out[:, 1], f_all[idx])
         return loss
 
@@ -203,25 +242,16 @@ def train_surrogate(data: TrialData, section: SurrogateSection = SurrogateSectio
     gen = torch.Generator().manual_seed(seed)
     tr_t, va_t = torch.as_tensor(tr), torch.as_tensor(va)
     best, best_state, best_epoch, stale = float("inf"), copy.deepcopy(net.state_dict()), 0, 0
-    history = {"train_loss": [], "val_loss": []}
-    bar = _Progress(section.epochs, progress)
+    history: dict[str, list] = {"train_loss": [], "val_loss": []}
+    bar = _Progress(section.epochs, progress_shown())
     epoch = 0
     try:
         for epoch in range(1, section.epochs + 1):
-            net.train()
-            perm = tr_t[torch.randperm(tr_t.numel(), generator=gen)]
-            total = 0.0
-            for i in range(0, perm.numel(), section.batch_size):
-                idx = perm[i:i + section.batch_size]
-                opt.zero_grad(set_to_none=True)
-                loss = loss_of(idx)
-                loss.backward()
-                opt.step()
-                total += float(loss.detach()) * idx.numel()
+            history["train_loss"].append(_epoch(net, opt, loss_of, tr_t[torch.randperm(tr_t.numel(), generator=gen)],
+                                                section.batch_size))
             net.eval()
             with torch.no_grad():
                 val = float(loss_of(va_t))
-            history["train_loss"].append(total / perm.numel())
             history["val_loss"].append(val)
             if scheduler is not None:
                 scheduler.step(val)
@@ -237,27 +267,21 @@ def train_surrogate(data: TrialData, section: SurrogateSection = SurrogateSectio
         bar.close()
     net.load_state_dict(best_state)
     net.eval()
+    return history, epoch, best_epoch, float(opt.param_groups[0]["lr"])
 
-    metrics = {}
-    preds = {}
-    for name, idx in (("train", tr), ("val", va), ("test", te)):
-        keep = idx[usable[idx]]
-        preds[name] = (error[keep], surrogate.predict(offsets[keep], _conditions(data, keep)))
-        metrics[name] = regression_metrics(*preds[name])
-    if outputs == 2:
-        p = surrogate.predict_failure(offsets[te], _conditions(data, te))
-        f = np.asarray(data.failed, bool)[te]
-        metrics["test"]["failure_brier"] = float(((p - f) ** 2).mean())
-    seconds = time.perf_counter() - start
-    metrics.update({"epochs_run": epoch, "best_epoch": best_epoch, "train_s": seconds, "seed": seed,
-                    "final_lr": float(opt.param_groups[0]["lr"]),
-                    "n_trials": int(data.n_trials), "n_used": int(rows.size), "n_views": data.n_views,
-                    "data": data.source})
-    final_meta = SurrogateMeta(**{**meta.__dict__, "metrics": metrics,
-                                  "extra": {"seed": seed, "data": data.source}})
-    surrogate = Surrogate(net, final_meta)
-    return TrainResult(surrogate, metrics, history, {"train": tr.tolist(), "val": va.tolist(), "test": te.tolist()},
-                       preds["test"][0], preds["test"][1], seconds)
+
+def _epoch(net, opt, loss_of, perm: torch.Tensor, batch_size: int) -> float:
+    """One pass over the training trials ``perm`` in batches; returns the mean training loss."""
+    net.train()
+    total = 0.0
+    for i in range(0, perm.numel(), batch_size):
+        idx = perm[i:i + batch_size]
+        opt.zero_grad(set_to_none=True)
+        loss = loss_of(idx)
+        loss.backward()
+        opt.step()
+        total += float(loss.detach()) * idx.numel()
+    return total / perm.numel()
 
 
 def fold_splits(data: TrialData, section: SurrogateSection, seed: int, folds: int) -> list[tuple]:
@@ -277,20 +301,20 @@ def fold_splits(data: TrialData, section: SurrogateSection, seed: int, folds: in
     return splits
 
 
-def train_in_parallel(data: TrialData, section: SurrogateSection, seed: int, splits: list, workers: int = 1,
-                      progress: bool = False) -> list[TrainResult]:
+def train_in_parallel(data: TrialData, section: SurrogateSection, seed: int, splits: list,
+                      workers: int = 1) -> list[TrainResult]:
     """:func:`train_surrogate` once per entry of ``splits`` (an explicit (train, val, test) split, or None for
     the seeded default split), ``workers`` at a time in spawned processes (each with ``section.threads`` torch
     threads). Each training is seeded the same way wherever it runs: the results equal the serial ones.
-    ``progress`` shows the trainings run in this process (serial), not those of pool processes."""
+    Progress (:mod:`wrp_eval.logs`) shows for the trainings run in this process, not for pool processes."""
     if workers < 1:
         raise InputError("surrogate training", f"workers must be >= 1, got {workers}")
     if workers == 1 or len(splits) == 1:
-        return [train_surrogate(data, section, seed=seed, progress=progress, split=split) for split in splits]
+        return [train_surrogate(data, section, seed=seed, split=split) for split in splits]
     # spawn, not fork: no forked copy of torch's thread pool; the data travel to each process once per job
     with ProcessPoolExecutor(max_workers=min(workers, len(splits)),
                              mp_context=multiprocessing.get_context("spawn")) as pool:
-        jobs = [pool.submit(train_surrogate, data, section, seed, False, split) for split in splits]
+        jobs = [pool.submit(train_surrogate, data, section, seed, split) for split in splits]
         return [job.result() for job in jobs]
 
 
@@ -324,21 +348,21 @@ def cross_validate(data: TrialData, section: SurrogateSection = SurrogateSection
     return fold_summary(results, seed, time.perf_counter() - start, min(workers, folds))
 
 
-def train_with_folds(data: TrialData, section: SurrogateSection, seed: int, folds: int = 0, workers: int = 1,
-                     progress: bool = False) -> tuple[TrainResult, dict | None]:
+def train_with_folds(data: TrialData, section: SurrogateSection, seed: int, folds: int = 0,
+                     workers: int = 1) -> tuple[TrainResult, dict | None]:
     """The model on the seeded default split and, with ``folds`` >= 2, ``folds``-fold cross-validation, all
     trained together ``workers`` at a time (:func:`train_in_parallel`). Returns (model, the
     :func:`cross_validate` document or None); ``seconds`` there is the wall time of every training."""
     start = time.perf_counter()
     splits = fold_splits(data, section, seed, folds) if folds else []
-    results = train_in_parallel(data, section, seed, [None, *splits], workers, progress=progress)
+    results = train_in_parallel(data, section, seed, [None, *splits], workers)
     cv = (fold_summary(results[1:], seed, time.perf_counter() - start, min(workers, len(results)))
           if folds else None)
     return results[0], cv
 
 
 def train_from_campaign(ctx: ExperimentContext, campaign_dir: str | Path | None = None,
-                        out_dir: str | Path | None = None, progress: bool = False, folds: int = 0,
+                        out_dir: str | Path | None = None, folds: int = 0,
                         workers: int = 1) -> tuple[TrainResult, TrialData, dict | None]:
     """The training job of an experiment: its ``surrogate:`` section fitted on a campaign folder's trials
     (default ``surrogate.campaign_dir`` or the run's campaign; seed ``surrogate.seed``, else ``run.seed``),
@@ -350,7 +374,7 @@ def train_from_campaign(ctx: ExperimentContext, campaign_dir: str | Path | None 
     section = ctx.config.surrogate
     folder = campaign_dir if campaign_dir is not None else ctx.training_campaign_dir
     data = load_campaign_trials(folder, config_dir=ctx.config_dir)
-    result, cv = train_with_folds(data, section, section.seed_or(ctx.run_seed), folds, workers, progress=progress)
+    result, cv = train_with_folds(data, section, section.seed_or(ctx.run_seed), folds, workers)
     result.metrics["physical_variance_share"] = physical_variance_share(data)
     result.metrics["baseline"] = mean_offset_baseline(data, result.split, usable_rows(data, section)[0])
     if section.validation_moves > 0 and data.views is not None:

@@ -199,98 +199,24 @@ def read_mean_wind(path: str | Path, lat_deg: float, lon_deg: float, heading_deg
     time: ISO time (None = the first output); time_interpolation: "nearest" or "linear".
     """
     path = Path(path)
-    ds = _open(path)
-    try:
-        missing = [n for n in layout.required() if n not in ds.variables]
-        if missing:
-            raise InputError(path, f"missing variable(s) {missing} needed to read a {layout.name} file")
-        t_dim, k_dim = layout.time_dim, layout.level_dim
-        j_dim, i_dim = layout.south_north_dim, layout.west_east_dim
-        for d in (t_dim, k_dim, j_dim, i_dim):
-            if d not in ds.sizes:
-                raise InputError(path, f"missing dimension {d!r} of a {layout.name} file")
-        sizes = {d: int(ds.sizes[d]) for d in (k_dim, j_dim, i_dim)}
-        if min(sizes[j_dim], sizes[i_dim]) < 2 or sizes[k_dim] < 2:
-            raise InputError(path, f"grid {sizes} is too small (need >= 2 points along each axis)")
-        d3, d2 = (t_dim, k_dim, j_dim, i_dim), (t_dim, j_dim, i_dim)
-        times = _file_times(ds, layout, path)
-        picks = select_times(times, time, time_interpolation, str(path))
-
-        u = _checked(ds, layout.u, d3, sizes, path)
-        v = _checked(ds, layout.v, d3, sizes, path)
-        w = _checked(ds, layout.w, d3, sizes, path)
-        if layout.geopotential:
-            ph = _checked(ds, layout.geopotential[0], d3, sizes, path)
-            phb = _checked(ds, layout.geopotential[1], d3, sizes, path)
-            z_asl = (ph + phb) / GRAVITY_MPS2   # destaggered above = mean of the two w-levels
-        else:
-            z_asl = _checked(ds, layout.height, d3, sizes, path)
-        terrain = _checked(ds, layout.terrain, d2, sizes, path, optional_time=True)
-        u10 = _checked(ds, layout.u10, d2, sizes, path)
-        v10 = _checked(ds, layout.v10, d2, sizes, path)
-        lat = _checked(ds, layout.lat, d2, sizes, path, optional_time=True)[0]
-        lon = _checked(ds, layout.lon, d2, sizes, path, optional_time=True)[0]
-        has_alpha = bool(layout.cos_alpha and layout.sin_alpha and layout.cos_alpha in ds.variables
-                         and layout.sin_alpha in ds.variables)
-        if has_alpha:
-            cos_a = _checked(ds, layout.cos_alpha, d2, sizes, path, optional_time=True)[0]
-            sin_a = _checked(ds, layout.sin_alpha, d2, sizes, path, optional_time=True)[0]
-    finally:
-        ds.close()
-    n_times = u.shape[0]
-    for name, arr in ((layout.u10, u10), (layout.v10, v10)):
-        if arr.shape[0] != n_times:
-            raise InputError(path, f"variable {name} has {arr.shape[0]} times, {layout.u} has {n_times}")
-    if len(times) != n_times:
-        raise InputError(path, f"variable {layout.times} has {len(times)} times, {layout.u} has {n_times}")
-
+    f = _read_fields(path, layout, time, time_interpolation)
     # (t, k, j, i) -> (t, i, j, k): x = west_east, y = south_north
-    u, v, w, z_asl = (np.transpose(a, (0, 3, 2, 1)) for a in (u, v, w, z_asl))
-    terrain, u10, v10 = (np.transpose(a, (0, 2, 1)) for a in (terrain, u10, v10))
-    lat, lon = lat.T, lon.T                                                   # (nx, ny)
-    if terrain.shape[0] not in (1, n_times):
-        raise InputError(path, f"variable {layout.terrain} has {terrain.shape[0]} times, {layout.u} has {n_times}")
-    heights = z_asl - terrain[..., None]                                      # height above the ground
-    if np.any(np.diff(heights, axis=3) == 0):
-        raise InputError(path, "level heights are not strictly monotonic")
-    if np.all(np.diff(heights, axis=3) < 0):       # top-down (MM5 sigma order): flip to bottom-up
-        heights, u, v, w = (a[..., ::-1] for a in (heights, u, v, w))
-    if np.any(np.diff(heights, axis=3) <= 0):
-        raise InputError(path, "level heights are not monotonic in some column")
-    if np.any(heights[..., 0] <= 0):
-        raise InputError(path, "the lowest model level is at or below the ground in some column")
-
-    # Ship placement in a local plane (equirectangular about the ship: fine over a few cells; see frames).
-    east, north = geographic_to_enu_equirectangular(lat, lon, ShipPose(lat_deg, lon_deg, heading_deg))
-    de_di, de_dj = np.gradient(east, axis=0), np.gradient(east, axis=1)
-    dn_di, dn_dj = np.gradient(north, axis=0), np.gradient(north, axis=1)
-    nx, ny = east.shape
-    fi = fj = None
-    ci, cj = np.unravel_index(np.argmin(east**2 + north**2), east.shape)
-    for _ in range(3):  # Newton steps on the fractional index of the ship
-        jac = np.array([[de_di[ci, cj], de_dj[ci, cj]], [dn_di[ci, cj], dn_dj[ci, cj]]])
-        step = np.linalg.solve(jac, -np.array([east[ci, cj], north[ci, cj]]))
-        fi, fj = ci + step[0], cj + step[1]
-        ci, cj = int(np.clip(round(fi), 0, nx - 1)), int(np.clip(round(fj), 0, ny - 1))
-    if not (0.0 <= fi <= nx - 1 and 0.0 <= fj <= ny - 1):
-        raise InputError(path, f"the ship at lat {lat_deg:.4f}, lon {lon_deg:.4f} is outside the grid "
-                               f"(lat {lat.min():.3f}..{lat.max():.3f}, lon {lon.min():.3f}..{lon.max():.3f})")
-    dx = float(np.hypot(de_di[ci, cj], dn_di[ci, cj]))
-    dy = float(np.hypot(de_dj[ci, cj], dn_dj[ci, cj]))
-    grid_alpha = float(np.arctan2(dn_di[ci, cj], de_di[ci, cj]))   # grid x axis, CCW from east
-    heading = np.deg2rad(heading_deg)
-    x_axis = (np.arange(nx) - fi) * dx
-    y_axis = (np.arange(ny) - fj) * dy
-    grid_yaw = grid_alpha + heading - np.pi / 2                    # grid x axis, CCW from the bow
-
+    u, v, w, z_asl = (np.transpose(a, (0, 3, 2, 1)) for a in (f.u, f.v, f.w, f.z_asl))
+    terrain, u10, v10 = (np.transpose(a, (0, 2, 1)) for a in (f.terrain, f.u10, f.v10))
+    lat, lon = f.lat.T, f.lon.T                                               # (nx, ny)
+    if terrain.shape[0] not in (1, u.shape[0]):
+        raise InputError(path, f"variable {layout.terrain} has {terrain.shape[0]} times, {layout.u} has {u.shape[0]}")
+    heights, u, v, w = _bottom_up(z_asl - terrain[..., None], u, v, w, path)  # height above the ground
+    x_axis, y_axis, grid_yaw = _ship_placement(lat, lon, lat_deg, lon_deg, heading_deg, path)
     # grid-relative -> earth: per-column rotation of the grid x axis from east
-    if has_alpha:
-        cos_a, sin_a = cos_a.T, sin_a.T
+    if f.cos_alpha is not None:
+        cos_a, sin_a = f.cos_alpha.T, f.sin_alpha.T
     else:
         dlat = np.gradient(lat, axis=0)
         dlon = wrap_180(np.gradient(lon, axis=0)) * np.cos(np.deg2rad(lat))
         alpha = np.arctan2(dlat, dlon)
         cos_a, sin_a = np.cos(alpha), np.sin(alpha)
+    heading = np.deg2rad(heading_deg)
 
     def to_ship(gu, gv):
         e = gu * cos_a[..., None] - gv * sin_a[..., None] if gu.ndim == 4 else gu * cos_a - gv * sin_a
@@ -299,7 +225,7 @@ def read_mean_wind(path: str | Path, lat_deg: float, lon_deg: float, heading_deg
 
     hgt_list, vel_list, weights = [], [], []
     fill = np.asarray([h for h in fill_heights_m if h < heights[..., 0].min() - 1.0], dtype=float)
-    for index, weight in picks:
+    for index, weight in f.picks:
         vx, vy = to_ship(u[index][None], v[index][None])
         vel = np.stack([vx[0], vy[0], w[index]], axis=-1)                   # (nx, ny, nz, 3)
         hgt = heights[index]
@@ -319,3 +245,107 @@ def read_mean_wind(path: str | Path, lat_deg: float, lon_deg: float, heading_deg
     velocity_out = sum(wt * v for wt, v in zip(weights, vel_list, strict=True))
     return WindGrid(x_axis, y_axis, heights_out, velocity_out, float(grid_yaw),
                     source=f"{path} ({layout.name})")
+
+
+@dataclass(frozen=True)
+class _Fields:
+    """A file's raw fields in its own dimension order: u, v, w, z_asl (t, k, j, i) m/s and m above sea level;
+    terrain, u10, v10 (t or 1, j, i); lat, lon (j, i) deg; cos_alpha, sin_alpha (j, i) or None; the time picks
+    (index, weight) of :func:`select_times`."""
+
+    u: np.ndarray
+    v: np.ndarray
+    w: np.ndarray
+    z_asl: np.ndarray
+    terrain: np.ndarray
+    u10: np.ndarray
+    v10: np.ndarray
+    lat: np.ndarray
+    lon: np.ndarray
+    cos_alpha: np.ndarray | None
+    sin_alpha: np.ndarray | None
+    picks: list
+
+
+def _read_fields(path: Path, layout: NetcdfLayout, time: str | None, time_interpolation: str) -> _Fields:
+    """The fields of ``layout`` from the file at ``path``, every variable, dimension and time count checked."""
+    ds = _open(path)
+    try:
+        missing = [n for n in layout.required() if n not in ds.variables]
+        if missing:
+            raise InputError(path, f"missing variable(s) {missing} needed to read a {layout.name} file")
+        t_dim, k_dim = layout.time_dim, layout.level_dim
+        j_dim, i_dim = layout.south_north_dim, layout.west_east_dim
+        for d in (t_dim, k_dim, j_dim, i_dim):
+            if d not in ds.sizes:
+                raise InputError(path, f"missing dimension {d!r} of a {layout.name} file")
+        sizes = {d: int(ds.sizes[d]) for d in (k_dim, j_dim, i_dim)}
+        if min(sizes[j_dim], sizes[i_dim]) < 2 or sizes[k_dim] < 2:
+            raise InputError(path, f"grid {sizes} is too small (need >= 2 points along each axis)")
+        d3, d2 = (t_dim, k_dim, j_dim, i_dim), (t_dim, j_dim, i_dim)
+        times = _file_times(ds, layout, path)
+        picks = select_times(times, time, time_interpolation, str(path))
+        u, v, w = (_checked(ds, name, d3, sizes, path) for name in (layout.u, layout.v, layout.w))
+        if layout.geopotential:
+            ph = _checked(ds, layout.geopotential[0], d3, sizes, path)
+            phb = _checked(ds, layout.geopotential[1], d3, sizes, path)
+            z_asl = (ph + phb) / GRAVITY_MPS2   # destaggered above = mean of the two w-levels
+        else:
+            z_asl = _checked(ds, layout.height, d3, sizes, path)
+        terrain = _checked(ds, layout.terrain, d2, sizes, path, optional_time=True)
+        u10, v10 = (_checked(ds, name, d2, sizes, path) for name in (layout.u10, layout.v10))
+        lat, lon = (_checked(ds, name, d2, sizes, path, optional_time=True)[0] for name in (layout.lat, layout.lon))
+        cos_a = sin_a = None
+        if layout.cos_alpha and layout.sin_alpha and layout.cos_alpha in ds.variables \
+                and layout.sin_alpha in ds.variables:
+            cos_a = _checked(ds, layout.cos_alpha, d2, sizes, path, optional_time=True)[0]
+            sin_a = _checked(ds, layout.sin_alpha, d2, sizes, path, optional_time=True)[0]
+    finally:
+        ds.close()
+    n_times = u.shape[0]
+    for name, arr in ((layout.u10, u10), (layout.v10, v10)):
+        if arr.shape[0] != n_times:
+            raise InputError(path, f"variable {name} has {arr.shape[0]} times, {layout.u} has {n_times}")
+    if len(times) != n_times:
+        raise InputError(path, f"variable {layout.times} has {len(times)} times, {layout.u} has {n_times}")
+    return _Fields(u, v, w, z_asl, terrain, u10, v10, lat, lon, cos_a, sin_a, picks)
+
+
+def _bottom_up(heights: np.ndarray, u: np.ndarray, v: np.ndarray, w: np.ndarray, path: Path):
+    """The level heights above the ground (t, i, j, k) m and the winds, ordered bottom-up (MM5's sigma order is
+    top-down); a column that is not strictly monotonic, or whose lowest level is not above the ground, is an
+    :class:`InputError`."""
+    if np.any(np.diff(heights, axis=3) == 0):
+        raise InputError(path, "level heights are not strictly monotonic")
+    if np.all(np.diff(heights, axis=3) < 0):
+        heights, u, v, w = (a[..., ::-1] for a in (heights, u, v, w))
+    if np.any(np.diff(heights, axis=3) <= 0):
+        raise InputError(path, "level heights are not monotonic in some column")
+    if np.any(heights[..., 0] <= 0):
+        raise InputError(path, "the lowest model level is at or below the ground in some column")
+    return heights, u, v, w
+
+
+def _ship_placement(lat: np.ndarray, lon: np.ndarray, lat_deg: float, lon_deg: float, heading_deg: float,
+                    path: Path) -> tuple[np.ndarray, np.ndarray, float]:
+    """(x axis (nx,) m, y axis (ny,) m, the grid x axis' angle CCW from the bow rad) of the grid of columns at
+    ``lat``, ``lon`` (nx, ny) deg around the ship: its fractional index by Newton steps in a local plane
+    (equirectangular about the ship: fine over a few cells; see frames)."""
+    east, north = geographic_to_enu_equirectangular(lat, lon, ShipPose(lat_deg, lon_deg, heading_deg))
+    de_di, de_dj = np.gradient(east, axis=0), np.gradient(east, axis=1)
+    dn_di, dn_dj = np.gradient(north, axis=0), np.gradient(north, axis=1)
+    nx, ny = east.shape
+    fi = fj = None
+    ci, cj = np.unravel_index(np.argmin(east**2 + north**2), east.shape)
+    for _ in range(3):  # Newton steps on the fractional index of the ship
+        jac = np.array([[de_di[ci, cj], de_dj[ci, cj]], [dn_di[ci, cj], dn_dj[ci, cj]]])
+        step = np.linalg.solve(jac, -np.array([east[ci, cj], north[ci, cj]]))
+        fi, fj = ci + step[0], cj + step[1]
+        ci, cj = int(np.clip(round(fi), 0, nx - 1)), int(np.clip(round(fj), 0, ny - 1))
+    if not (0.0 <= fi <= nx - 1 and 0.0 <= fj <= ny - 1):
+        raise InputError(path, f"the ship at lat {lat_deg:.4f}, lon {lon_deg:.4f} is outside the grid "
+                               f"(lat {lat.min():.3f}..{lat.max():.3f}, lon {lon.min():.3f}..{lon.max():.3f})")
+    dx = float(np.hypot(de_di[ci, cj], dn_di[ci, cj]))
+    dy = float(np.hypot(de_dj[ci, cj], dn_dj[ci, cj]))
+    grid_alpha = float(np.arctan2(dn_di[ci, cj], de_di[ci, cj]))   # grid x axis, CCW from east
+    return (np.arange(nx) - fi) * dx, (np.arange(ny) - fj) * dy, grid_alpha + np.deg2rad(heading_deg) - np.pi / 2

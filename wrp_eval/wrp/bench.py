@@ -22,6 +22,7 @@ import torch
 
 from wrp_eval.bench_record import BenchRecord
 from wrp_eval.surrogate.bench import bench_single_view_rmse, bench_surrogate
+from wrp_eval.wrp.config import WrpSection
 from wrp_eval.wrp.optimize import WrpParams, interval_optimise, offset_cholesky, sample_radii
 
 
@@ -44,8 +45,9 @@ def run_bench() -> list[BenchRecord]:
             ("swrp", "wrp.swrp_s", 297.169, "paper Table 3 SWRP (297.169-341.547 s)"),
             ("iswrp-t0", "wrp.iswrp_full_scan_s", 3.425, "paper Table 3 ISWRP (3.425-79.282 s)")):
         threshold = 0.0 if kind == "iswrp-t0" else 0.08 * e0
-        params = WrpParams(kind=kind[:5], threshold_m=threshold, e_original_m=e0, sample_radius_m=radius,
-                           iterations=1000, attitude_samples=50, neighbourhood_samples=16, step_m=step)
+        params = WrpParams.of(WrpSection(kind=kind[:5], acceptance="paper", iterations=1000, attitude_samples=50,
+                                         neighbourhood_samples=16), threshold_m=threshold, e_original_m=e0,
+                              sample_radius_m=radius, step_m=step)
         records.append(_timed(s, params, name, anchor, anchor_value, f"acceptance paper, {r_note}; surrogate: {what}"))
     # the product's default (issue 18): acceptance validated, neighbourhoods from the measured covariance; the
     # margin is twice the single-view error the surrogate group validated in this process (none: the whole
@@ -54,9 +56,9 @@ def run_bench() -> list[BenchRecord]:
     rmse = bench_single_view_rmse()
     margin = f"2 x {rmse * 1e3:.3f} mm" if rmse is not None else "none"
     for kind, name, limit in (("iswrp", "wrp.iswrp_validated_s", 1.0), ("swrp", "wrp.swrp_validated_s", 2.0)):
-        params = WrpParams(kind=kind, threshold_m=0.08 * e0, e_original_m=e0, sample_radius_m=radius,
-                           iterations=1000, attitude_samples=50, neighbourhood_samples=16, step_m=step,
-                           acceptance="validated", validated_error_m=rmse, neighbour_cholesky=chol)
+        params = WrpParams.of(WrpSection(kind=kind, acceptance="validated", iterations=1000, attitude_samples=50,
+                                         neighbourhood_samples=16), threshold_m=0.08 * e0, e_original_m=e0,
+                              sample_radius_m=radius, step_m=step, validated_error_m=rmse, neighbour_cholesky=chol)
         records.append(_timed(s, params, name, "issue 18 target (surrogate time, oracle confirmation apart)", limit,
                               f"acceptance validated, margin {margin}, "
                               f"{'measured' if chol is not None else 'ball'} neighbourhoods; surrogate: {what}"))

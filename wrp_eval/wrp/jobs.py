@@ -14,7 +14,6 @@ shared by both optimisations of ``evaluate``; a caller that holds them already (
 from __future__ import annotations
 
 import json
-import logging
 from dataclasses import dataclass, replace
 from pathlib import Path
 
@@ -26,6 +25,7 @@ from wrp_eval.campaign.evaluators import DEFAULT_EVALUATOR
 from wrp_eval.campaign.runner import run_campaign
 from wrp_eval.errors import InputError
 from wrp_eval.experiment import ExperimentContext, evaluated_campaign_dir, evaluated_wrp_dir
+from wrp_eval.logs import progress_log
 from wrp_eval.planning.path import FlightPath, digest_of_document
 from wrp_eval.recon.capture_io import captures_from_path
 from wrp_eval.recon.scored_ship import ScoredShip
@@ -44,8 +44,6 @@ from wrp_eval.wrp.optimize import (
     sample_radii,
 )
 from wrp_eval.wrp.placebo import placebo_offsets
-
-log = logging.getLogger(__name__)
 
 EVALUATED_PATHS = ("initial", "iswrp", "swrp")
 WRP_KINDS = EVALUATED_PATHS[1:]
@@ -150,7 +148,7 @@ def wind_free_error(ctx: ExperimentContext, inputs: WrpInputs, section: WrpSecti
 
 
 def run_optimize(ctx: ExperimentContext, section: WrpSection, out: Path, inputs: WrpInputs, *,
-                 e_original: float | None = None, use_oracle: bool = True, quiet: bool = False) -> dict:
+                 e_original: float | None = None, use_oracle: bool = True) -> dict:
     """One ISWRP / SWRP optimisation of ``inputs`` by ``section`` into ``out``; returns wrp_metrics.json."""
     torch.set_num_threads(section.threads)
     path, surrogate = inputs.path, inputs.surrogate
@@ -177,13 +175,12 @@ def run_optimize(ctx: ExperimentContext, section: WrpSection, out: Path, inputs:
     wrp_path.save(out / "path.json")
     doc = _metrics_doc(table, e0_source, inputs, params, section, seed, rounds, result)
     write_json_atomic(out / "wrp_metrics.json", doc)
-    if not quiet:
-        err = table["oracle_error_m"]
-        log.info(f"{section.kind} t={threshold:.4g} m: {table['offset_rate_pct']:.1f} % viewpoints moved, position "
-                 f"offset {table['position_offset_m']:.2f} m, rotation offset {table['rotation_offset_deg']:.1f} "
-                 f"deg, {table['time_s']:.2f} s; error: oracle "
-                 + (f"{err:.4f} m" if err is not None else "n/a") + f", surrogate {table['surrogate_error_m']:.4f} m "
-                 f"(E_original {e0:.4f} m) -> {out}")
+    err = table["oracle_error_m"]
+    progress_log.info(f"{section.kind} t={threshold:.4g} m: {table['offset_rate_pct']:.1f} % viewpoints moved, "
+                      f"position offset {table['position_offset_m']:.2f} m, rotation offset "
+                      f"{table['rotation_offset_deg']:.1f} deg, {table['time_s']:.2f} s; error: oracle "
+                      + (f"{err:.4f} m" if err is not None else "n/a")
+                      + f", surrogate {table['surrogate_error_m']:.4f} m (E_original {e0:.4f} m) -> {out}")
     return doc
 
 
@@ -192,17 +189,9 @@ def wrp_params(ctx: ExperimentContext, section: WrpSection, inputs: WrpInputs, t
     """The optimiser's parameters: the ``wrp:`` section's, with what the inputs measured (sampling radius,
     step, the surrogate's validated error, the measured neighbourhood) and the planner's flight-safety box."""
     surrogate = inputs.surrogate
-    return WrpParams(kind=section.kind, threshold_m=threshold_m, e_original_m=e_original_m,
-                     sample_radius_m=inputs.radius_m, iterations=section.iterations,
-                     attitude_samples=section.attitude_samples,
-                     yaw_range_rad=float(np.radians(section.yaw_range_deg)),
-                     neighbourhood_samples=section.neighbourhood_samples,
-                     step_m=step_from_surrogate(surrogate, section), swrp_spread=section.swrp_spread,
-                     block_iterations=section.block_iterations, stage2_batch=section.stage2_batch,
-                     acceptance=section.acceptance, min_improvement_fraction=section.min_improvement_fraction,
-                     improve_candidates=section.improve_candidates, validated_error_m=validated_error(surrogate),
-                     risk_measure=section.risk_measure, cvar_alpha=section.cvar_alpha,
-                     neighbour_cholesky=inputs.neighbour_cholesky, **safety_constraints(ctx, inputs.path))
+    return WrpParams.of(section, threshold_m=threshold_m, e_original_m=e_original_m, sample_radius_m=inputs.radius_m,
+                        step_m=step_from_surrogate(surrogate, section), validated_error_m=validated_error(surrogate),
+                        neighbour_cholesky=inputs.neighbour_cholesky, **safety_constraints(ctx, inputs.path))
 
 
 def _confirmed(ctx: ExperimentContext, section: WrpSection, inputs: WrpInputs, params: WrpParams, result, seed: int):
@@ -281,16 +270,16 @@ def with_kind(section: WrpSection, kind: str | None = None, threshold_m: float |
 
 def optimize_job(ctx: ExperimentContext, *, kind: str | None = None, threshold_m: float | None = None,
                  out: Path | None = None, checkpoint=None, campaign=None, e_original: float | None = None,
-                 use_oracle: bool = True, quiet: bool = False) -> dict:
+                 use_oracle: bool = True) -> dict:
     """``wrp-eval optimize``: the config's ``wrp:`` section with the command line's kind and threshold."""
     section = with_kind(ctx.config.wrp, kind, threshold_m)
     inputs = resolve_inputs(ctx, section, checkpoint, campaign)
     return run_optimize(ctx, section, Path(out) if out else ctx.folders.wrp(section.kind), inputs,
-                        e_original=e_original, use_oracle=use_oracle, quiet=quiet)
+                        e_original=e_original, use_oracle=use_oracle)
 
 
 def evaluate_job(ctx: ExperimentContext, out: Path | None = None, *, n_trials: int | None = None, checkpoint=None,
-                 campaign=None, e_original: float | None = None, quiet: bool = False,
+                 campaign=None, e_original: float | None = None,
                  evaluator: str | None = None, surrogate: Surrogate | None = None,
                  trials: TrialData | None = None, forecast: bool = True) -> dict:
     """``wrp-eval evaluate``: ISWRP and SWRP optimised from one set of inputs, then the initial path and both
@@ -303,7 +292,7 @@ def evaluate_job(ctx: ExperimentContext, out: Path | None = None, *, n_trials: i
     if ev.thresholds_m is not None and len(ev.thresholds_m) != 2:
         raise InputError("wrp.evaluate.thresholds_m", "give two thresholds: [iswrp, swrp]")
     inputs = resolve_inputs(ctx, section, checkpoint, campaign, surrogate=surrogate, trials=trials)
-    paths, optimised = _optimise_both(ctx, out, inputs, e_original, quiet)
+    paths, optimised = _optimise_both(ctx, out, inputs, e_original)
     flown = evaluation_trial(ctx.trial_config, n_trials or ev.n_trials)
     unmoved = [kind for kind in optimised if not optimised[kind]["table3"]["moved"]]
     # a WRP that moved nothing is the initial path: its placebos would all be the initial path too
@@ -313,9 +302,8 @@ def evaluate_job(ctx: ExperimentContext, out: Path | None = None, *, n_trials: i
     def fly(name: str, path: FlightPath, trial=flown) -> PathTrials:
         folder = evaluated_campaign_dir(out, name)
         summary = run_campaign(trial, path, folder, root_seed=ctx.campaign_seed, config_dir=ctx.config_dir,
-                               progress=not quiet, evaluator=evaluator or DEFAULT_EVALUATOR)
-        if not quiet:
-            log.info(f"{name}: {summary.done} trials in {folder} ({summary.failed} failed)")
+                               evaluator=evaluator or DEFAULT_EVALUATOR)
+        progress_log.info(f"{name}: {summary.done} trials in {folder} ({summary.failed} failed)")
         return read_trials(name, folder)
 
     flown_trials = [fly(name, path) for name, path in paths.items()]
@@ -343,20 +331,19 @@ def evaluate_job(ctx: ExperimentContext, out: Path | None = None, *, n_trials: i
     out.mkdir(parents=True, exist_ok=True)
     write_json_atomic(out / "evaluate.json", result)
     box_plot(flown_trials, out / "boxplot.png")
-    if not quiet:
-        _log_evaluation(result)
+    _log_evaluation(result)
     return result
 
 
-def _optimise_both(ctx: ExperimentContext, out: Path, inputs: WrpInputs, e_original: float | None,
-                   quiet: bool) -> tuple[dict[str, FlightPath], dict[str, dict]]:
+def _optimise_both(ctx: ExperimentContext, out: Path, inputs: WrpInputs,
+                   e_original: float | None) -> tuple[dict[str, FlightPath], dict[str, dict]]:
     """ISWRP and SWRP of ``inputs`` into ``out``: (name -> path with "initial" first, kind -> wrp_metrics)."""
     section, thresholds = ctx.config.wrp, ctx.config.wrp.evaluate.thresholds_m
     paths, optimised = {"initial": inputs.path}, {}
     for i, kind in enumerate(("iswrp", "swrp")):
         kind_section = with_kind(section, kind, thresholds[i] if thresholds is not None else None)
         folder = evaluated_wrp_dir(out, kind)
-        optimised[kind] = run_optimize(ctx, kind_section, folder, inputs, e_original=e_original, quiet=quiet)
+        optimised[kind] = run_optimize(ctx, kind_section, folder, inputs, e_original=e_original)
         paths[kind] = FlightPath.load(folder / "path.json")
     return paths, optimised
 
@@ -374,20 +361,20 @@ def evaluation_trial(trial, n_trials: int):
 
 def _log_evaluation(result: dict) -> None:
     for row in result["paths"]:
-        log.info(f"{row['path']:8s} mean {row['mean_error_m']:.4f} m  std {row['std_error_m']:.4f}  "
+        progress_log.info(f"{row['path']:8s} mean {row['mean_error_m']:.4f} m  std {row['std_error_m']:.4f}  "
                  f"p95 {row['p95_error_m']:.4f}  failed {100 * row['failure_rate']:.1f} %")
     for row in result["paired"]:
         ci = row["mean_error_diff_ci"]
-        log.info(f"{row['path']} - initial: mean error {row['mean_error_diff_m']:+.4f} m "
+        progress_log.info(f"{row['path']} - initial: mean error {row['mean_error_diff_m']:+.4f} m "
                  + (f"[{ci[0]:+.4f}, {ci[1]:+.4f}]" if ci else "") + f" over {row['both_succeeded']} pairs, "
                  f"failure rate {100 * row['failure_rate_diff']:+.1f} points")
     for kind, verdict in result["robustness"].items():
-        log.info(f"{kind}: robustness gain {1e3 * verdict['gain_m']:+.2f} mm, placebo p95 "
+        progress_log.info(f"{kind}: robustness gain {1e3 * verdict['gain_m']:+.2f} mm, placebo p95 "
                  f"{1e3 * verdict['placebo_gain_p95_m']:+.2f} mm: "
                  + ("RECOMMENDED" if verdict["recommended"] else f"not recommended ({verdict['reason']})"))
-    log.info(f"recommended path: {result['recommended_path']}")
+    progress_log.info(f"recommended path: {result['recommended_path']}")
     if "forecast" in result:
-        log.info(result["forecast"]["summary"])
+        progress_log.info(result["forecast"]["summary"])
 
 
 def forecast_config(flown, wind, n_trials: int):

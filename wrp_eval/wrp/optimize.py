@@ -34,51 +34,71 @@ import numpy as np
 
 from wrp_eval.ship.nofly import flyable
 from wrp_eval.surrogate.model import Surrogate, ViewQuery
+from wrp_eval.wrp.config import WrpSection
 
 
 @dataclass(frozen=True)
 class WrpParams:
-    """kind: 'iswrp' | 'swrp'; threshold_m: t (m of error); e_original_m: E_original (m); iterations: K;
-    attitude_samples: Alg. 4's sample count; yaw_range_rad: Y; neighbourhood_samples: M; step_m: position
-    move bound per axis (m); sample_radius_m: r_s per viewpoint (n_views,) m (the ball neighbourhood);
-    swrp_spread: 'std' | 'variance';
-    block_iterations: iterations per draw/score batch; stage2_batch: stage-1 survivors scored per batch."""
+    """The optimiser's parameters: the ``wrp:`` section's settings (:meth:`of`, the one place they are read) with
+    what the inputs measured. kind: 'iswrp' | 'swrp'; threshold_m: t (m of error); e_original_m: E_original
+    (m); sample_radius_m: r_s per viewpoint (n_views,) m (the ball neighbourhood); iterations: K;
+    attitude_samples: Alg. 4's sample count; yaw_range_rad: Y; neighbourhood_samples: M; step_m: position move
+    bound per axis (m); swrp_spread: 'std' | 'variance'; block_iterations: iterations per draw/score batch;
+    stage2_batch: stage-1 survivors scored per batch.
+
+    acceptance "paper": Alg. 3 as written (the last accepted candidate is kept); "improve": a viewpoint moves only
+    to the accepted candidate with the best neighbourhood score, and only when that beats the unmoved viewpoint's
+    own neighbourhood by min_improvement_fraction * t (with a surrogate that is flat for one-viewpoint moves,
+    Alg. 3 moves every viewpoint at random: README), looking at improve_candidates survivors; "validated": as
+    "improve", but the least gain is twice the surrogate's validated single-view error ``validated_error_m`` (m;
+    None: an unvalidated surrogate, nothing moves), and the oracle then confirms each move
+    (:mod:`wrp_eval.wrp.confirm`). risk_measure: ISWRP's neighbourhood summary, the mean or the CVaR (the mean
+    of the worst 1 - cvar_alpha share). Flight safety of the moved viewpoints (the planner's, Sec. 3.1):
+    base_positions (n, 3) m planned, min_altitude_m above the sea, no_fly_bounds (2, 3); None: unconstrained.
+    neighbour_cholesky (n, 3, 3) m: the measured neighbourhood, per viewpoint the Cholesky factor of the
+    campaign's position-offset covariance (neighbours drawn from N(candidate, L L^T)); None: the ball of r_s."""
 
     kind: str
     threshold_m: float
     e_original_m: float
     sample_radius_m: np.ndarray
-    iterations: int = 1000
-    attitude_samples: int = 50
-    yaw_range_rad: float = float(np.radians(20.0))
-    neighbourhood_samples: int = 16
-    step_m: float = 2.0
-    swrp_spread: str = "std"
-    block_iterations: int = 64
-    stage2_batch: int = 8
-    # "paper": Alg. 3 as written (the last accepted candidate is kept); "improve": a viewpoint moves only to the
-    # accepted candidate with the best neighbourhood score, and only when that beats the unmoved viewpoint's own
-    # neighbourhood by min_improvement_fraction * t (see README: with a surrogate that is flat for one-viewpoint
-    # moves, Alg. 3 moves every viewpoint at random)
-    acceptance: str = "paper"
-    min_improvement_fraction: float = 0.1
-    improve_candidates: int = 16
-    # "validated" (issue 18): as "improve", but the least gain is an absolute margin, twice the surrogate's
-    # validated single-view error (m; None: unvalidated surrogate, nothing moves); the oracle then confirms
-    # each move (wrp_eval.wrp.confirm)
-    validated_error_m: float | None = None
-    # what the neighbourhood's errors are summarised by for ISWRP's score: their mean, or the CVaR (the mean of
-    # the worst 1 - cvar_alpha share: the tail the operator fears)
-    risk_measure: str = "mean"
-    cvar_alpha: float = 0.8
-    # flight-safety constraints of the moved viewpoints (the planner's, Sec. 3.1): planned positions (n, 3) m,
-    # the lowest allowed height above the sea (m) and the no-fly box (2, 3); None: unconstrained
-    base_positions: np.ndarray | None = None
-    min_altitude_m: float = 0.0
-    no_fly_bounds: np.ndarray | None = None
-    # the measured neighbourhood (issue 18): per viewpoint the Cholesky factor (n, 3, 3) m of the campaign's
-    # position-offset covariance; neighbours are drawn from N(candidate, L L^T). None: the uniform ball of r_s
-    neighbour_cholesky: np.ndarray | None = None
+    iterations: int
+    attitude_samples: int
+    yaw_range_rad: float
+    neighbourhood_samples: int
+    step_m: float
+    swrp_spread: str
+    block_iterations: int
+    stage2_batch: int
+    acceptance: str
+    min_improvement_fraction: float
+    improve_candidates: int
+    validated_error_m: float | None
+    risk_measure: str
+    cvar_alpha: float
+    base_positions: np.ndarray | None
+    min_altitude_m: float
+    no_fly_bounds: np.ndarray | None
+    neighbour_cholesky: np.ndarray | None
+
+    @classmethod
+    def of(cls, section: WrpSection, *, threshold_m: float, e_original_m: float, sample_radius_m: np.ndarray,
+           step_m: float, validated_error_m: float | None = None, neighbour_cholesky: np.ndarray | None = None,
+           base_positions: np.ndarray | None = None, min_altitude_m: float = 0.0,
+           no_fly_bounds: np.ndarray | None = None) -> "WrpParams":
+        """The parameters of ``section`` (its settings) with the measured inputs; the keyword defaults mean
+        "not measured" (no validated error, the ball neighbourhood, no flight-safety constraint)."""
+        return cls(kind=section.kind, threshold_m=threshold_m, e_original_m=e_original_m,
+                   sample_radius_m=sample_radius_m, iterations=section.iterations,
+                   attitude_samples=section.attitude_samples, yaw_range_rad=float(np.radians(section.yaw_range_deg)),
+                   neighbourhood_samples=section.neighbourhood_samples, step_m=step_m,
+                   swrp_spread=section.swrp_spread, block_iterations=section.block_iterations,
+                   stage2_batch=section.stage2_batch, acceptance=section.acceptance,
+                   min_improvement_fraction=section.min_improvement_fraction,
+                   improve_candidates=section.improve_candidates, validated_error_m=validated_error_m,
+                   risk_measure=section.risk_measure, cvar_alpha=section.cvar_alpha, base_positions=base_positions,
+                   min_altitude_m=min_altitude_m, no_fly_bounds=no_fly_bounds,
+                   neighbour_cholesky=neighbour_cholesky)
 
     def feasible(self, view: int, offsets: np.ndarray) -> np.ndarray:
         """(B,) bool: position offsets (B, 3) of ``view`` that keep it flyable (the ship stage's one predicate,

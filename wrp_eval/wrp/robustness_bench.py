@@ -33,14 +33,14 @@ def run_bench() -> list[BenchRecord]:
     with tempfile.TemporaryDirectory(prefix="wrp-robustness-") as tmp:
         out = Path(tmp)
         start = time.perf_counter()
-        campaign_job(ctx, out_dir=out / "campaign", progress=False)
+        campaign_job(ctx, out_dir=out / "campaign")
         trained, trials, _ = train_from_campaign(ctx, out / "campaign", out / "surrogate")
         for acceptance, suffix in (("validated", ""), ("paper", "_alg3")):
             # the product's WRPs, then Alg. 3 as written (it moves viewpoints: the placebo control at work)
             wrp = ctx.config.wrp.model_copy(update={"acceptance": acceptance})
             config = ctx.config.model_copy(update={"wrp": wrp})
             run_ctx = ctx.with_config(config, f"{ctx.source} (acceptance {acceptance})")
-            doc = evaluate_job(run_ctx, out / f"evaluate-{acceptance}", campaign=out / "campaign", quiet=True,
+            doc = evaluate_job(run_ctx, out / f"evaluate-{acceptance}", campaign=out / "campaign",
                                surrogate=trained.surrogate, trials=trials)
             records += _records(doc, trained.metrics["test"]["r2"], suffix, acceptance)
         seconds = time.perf_counter() - start
