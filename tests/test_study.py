@@ -11,8 +11,8 @@ from wrp_eval.cli import main
 from wrp_eval.config import ExperimentConfig, load_experiment
 from wrp_eval.errors import InputError
 from wrp_eval.planning.path import FlightPath
+from wrp_eval.schema import parse_model
 from wrp_eval.study.runner import deep_merge, random_offsets, variant_configs
-from wrp_eval.validation import parse_model
 from wrp_eval.wrp.optimize import apply_offsets, offset_totals
 
 PAPER = Path(__file__).resolve().parents[1] / "experiments" / "paper"

@@ -2,7 +2,7 @@
 
 Each stage defines the model of its own section (``wrp_eval/<stage>/config.py``); this module composes
 them into :class:`ExperimentConfig`, the one document ``wrp-eval run CONFIG`` and the stage commands read.
-Unknown keys, wrong types and impossible values are refused with one line (see :mod:`wrp_eval.validation`).
+Unknown keys, wrong types and impossible values are refused with one line (see :mod:`wrp_eval.schema`).
 """
 
 from __future__ import annotations
@@ -16,11 +16,11 @@ from wrp_eval.envelope.config import EnvelopeSection
 from wrp_eval.export.config import ExportSection
 from wrp_eval.planning.config import PlanningSection
 from wrp_eval.recon.config import OracleSection
+from wrp_eval.schema import StrictModel, load_model
 from wrp_eval.ship.config import ShipSection
 from wrp_eval.sim.config import SimSection
 from wrp_eval.study.config import StudySection
 from wrp_eval.surrogate.config import SurrogateSection
-from wrp_eval.validation import StrictModel, load_model
 from wrp_eval.wind.config import WindSection
 from wrp_eval.wrp.config import WrpSection
 

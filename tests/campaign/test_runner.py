@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+import json
+
 import numpy as np
 import pytest
 
@@ -149,3 +151,17 @@ def test_split_batches_keeps_every_worker_busy_and_caps_the_size():
     assert np.array_equal(np.concatenate(large), np.arange(200))
     assert [len(b) for b in split_batches(3, 64, 8)] == [1, 1, 1]
     assert split_batches(0, 64, 2) == []
+
+
+def test_a_store_of_the_renamed_flight_evaluator_keeps_its_fingerprint(tmp_path, path_file, make_config, run_analytic):
+    from wrp_eval.campaign.evaluators import DEFAULT_EVALUATOR, RENAMED_EVALUATORS, resolve_factory
+    from wrp_eval.campaign.runner import fingerprint, stored_fingerprint
+
+    run_analytic(make_config(path_file, n_trials=3), tmp_path / "c")
+    meta = json.loads((tmp_path / "c" / "campaign.json").read_text())
+    (old_name,) = [old for old, new in RENAMED_EVALUATORS.items() if new == DEFAULT_EVALUATOR]
+    today = fingerprint(meta["config"], meta["path_digest"], meta["root_seed"], DEFAULT_EVALUATOR,
+                        meta.get("evaluator_options") or {})
+    assert stored_fingerprint({**meta, "evaluator": old_name}) == today          # resumable under today's name
+    assert stored_fingerprint({**meta, "evaluator": "other:factory"}) != today
+    assert resolve_factory(old_name) is resolve_factory(DEFAULT_EVALUATOR)

@@ -10,7 +10,7 @@ from wrp_eval.config import ExperimentConfig
 from wrp_eval.errors import InputError
 from wrp_eval.planning.config import PlanningSection
 from wrp_eval.planning.path import FlightPath
-from wrp_eval.validation import parse_model
+from wrp_eval.schema import parse_model
 
 
 def test_path_json_round_trip(plans, tmp_path):

@@ -9,7 +9,7 @@ from wrp_eval.errors import InputError
 from wrp_eval.recon.config import OracleSection
 from wrp_eval.recon.scored_ship import make_oracle
 from wrp_eval.recon.synthetic import SyntheticOracle
-from wrp_eval.validation import parse_model
+from wrp_eval.schema import parse_model
 
 
 def test_defaults_are_valid_and_registered():

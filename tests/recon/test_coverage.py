@@ -3,9 +3,9 @@
 import numpy as np
 
 from wrp_eval.camera import Camera, yaw_pitch_towards
-from wrp_eval.recon.base import prepare_ground_truth
 from wrp_eval.recon.config import OracleSection
 from wrp_eval.recon.coverage import view_coverage
+from wrp_eval.recon.oracle import prepare_ground_truth
 from wrp_eval.sim.captures import CaptureSet
 
 from .conftest import make_box

@@ -8,7 +8,7 @@ import pytest
 
 from wrp_eval.camera import optical_axes
 from wrp_eval.recon import fusion, synthetic
-from wrp_eval.recon.base import prepare_ground_truth
+from wrp_eval.recon.oracle import prepare_ground_truth
 from wrp_eval.recon.synthetic import (
     CANDIDATE,
     MATCHABLE,

@@ -5,7 +5,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from wrp_eval.recon.base import prepare_ground_truth
+from wrp_eval.recon.oracle import prepare_ground_truth
 from wrp_eval.recon.render import SEA_RGB, SKY_RGB, SolidTexture, render_views
 
 from .conftest import ring_views

@@ -7,10 +7,10 @@ from hypothesis import strategies as st
 
 from wrp_eval.config import ExperimentConfig, load_experiment
 from wrp_eval.errors import InputError
+from wrp_eval.schema import parse_model
 from wrp_eval.ship.config import ShipSection
 from wrp_eval.ship.particulars import ShipType
 from wrp_eval.ship.resolve import resolve_particulars
-from wrp_eval.validation import parse_model
 
 from .conftest import type1, type5
 

@@ -7,13 +7,13 @@ import pytest
 from scipy.spatial.transform import Rotation
 
 from wrp_eval.errors import InputError
+from wrp_eval.schema import parse_model
 from wrp_eval.ship.motion import (
     WMO_HS_UPPER_M,
     ShipMotionSection,
     sea_state_figures,
     ship_motion,
 )
-from wrp_eval.validation import parse_model
 
 FT = 0.3048
 # Lu & Liu 2019 (Int. J. Aerospace Eng. 6917393), Table 2: (heave ft, roll deg, pitch deg) per sea state and

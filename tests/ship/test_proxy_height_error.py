@@ -5,9 +5,9 @@ import pytest
 
 from wrp_eval.config import ExperimentConfig
 from wrp_eval.errors import InputError
+from wrp_eval.schema import parse_model
 from wrp_eval.ship.config import ShipSection
 from wrp_eval.ship.resolve import resolve_ship_full
-from wrp_eval.validation import parse_model
 
 
 def test_only_the_proxy_height_changes(tmp_path):

@@ -12,6 +12,7 @@ from pydantic import ValidationError
 from scipy.signal import lfilter
 
 from wrp_eval.errors import InputError
+from wrp_eval.schema import parse_model
 from wrp_eval.sim.navigation import (
     EKF2_GPS_DELAY_S,
     FILTER_ACCEL_PSD,
@@ -26,7 +27,6 @@ from wrp_eval.sim.navigation import (
     near_hull_taper,
     px4_plugin_gm,
 )
-from wrp_eval.validation import parse_model
 
 DT = 0.05  # the simulator's control chunk (20 Hz)
 

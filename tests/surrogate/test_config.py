@@ -2,7 +2,7 @@ import pytest
 
 from wrp_eval.config import ExperimentConfig
 from wrp_eval.errors import InputError
-from wrp_eval.validation import parse_model
+from wrp_eval.schema import parse_model
 
 
 def test_sections_have_working_defaults():

@@ -6,9 +6,9 @@ import numpy as np
 import pytest
 
 from wrp_eval.errors import InputError
+from wrp_eval.schema import parse_model
 from wrp_eval.ship.particulars import ShipParticulars
 from wrp_eval.ship.proxy import build_proxy
-from wrp_eval.validation import parse_model
 from wrp_eval.wind.air_wake import ShipAirWake, cavity_length, wake_height, wilson_scale_length
 from wrp_eval.wind.config import WindSection
 from wrp_eval.wind.field import build_wind_field

@@ -6,8 +6,8 @@ import numpy as np
 import pytest
 
 from wrp_eval.errors import InputError
+from wrp_eval.schema import parse_model
 from wrp_eval.ship.particulars import ShipParticulars
-from wrp_eval.validation import parse_model
 from wrp_eval.wind.base import WindModel
 from wrp_eval.wind.config import WindSection
 from wrp_eval.wind.dryden import severity_w20_mps

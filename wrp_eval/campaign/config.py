@@ -15,9 +15,9 @@ from typing import Annotated, Literal, Union
 from pydantic import Discriminator, Field, Tag, model_validator
 
 from wrp_eval.recon.config import OracleSection
+from wrp_eval.schema import StrictModel, reading_stored, renamed_keys
 from wrp_eval.ship.config import ShipSection
 from wrp_eval.sim.config import SimSection
-from wrp_eval.validation import StrictModel, reading_stored, renamed_keys
 from wrp_eval.wind.config import WindSection
 
 

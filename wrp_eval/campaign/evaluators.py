@@ -5,7 +5,7 @@ An evaluator is built once per worker process by a *factory* named ``"module:fun
 seed), and has ``evaluate(batch: list[TrialInputs]) -> list[TrialOutcome]``. Results must depend only on
 each trial's inputs (not on the batch it shares), so that backends, batch sizes and resumes agree.
 
-* ``wrp_eval.campaign.flight:make_flight_evaluator`` (the default): MuJoCo flights + reconstruction oracle.
+* ``wrp_eval.campaign.flight_evaluator:make_flight_evaluator`` (the default): MuJoCo flights + reconstruction oracle.
 * ``wrp_eval.campaign.evaluators:make_analytic_evaluator``: a closed-form stand-in (no flight, no oracle) for
   testing and timing the campaign machinery itself -- it is NOT a model of the UAV.
 """
@@ -27,8 +27,11 @@ from wrp_eval.frames import wind_velocity
 from wrp_eval.planning.path import FlightPath
 from wrp_eval.ship.resolve import resolve_particulars
 
-DEFAULT_EVALUATOR = "wrp_eval.campaign.flight:make_flight_evaluator"
+DEFAULT_EVALUATOR = "wrp_eval.campaign.flight_evaluator:make_flight_evaluator"
 ANALYTIC_EVALUATOR = "wrp_eval.campaign.evaluators:make_analytic_evaluator"
+# evaluator names campaign folders stored before their module was renamed -> today's name (a stored campaign's
+# fingerprint holds its evaluator's name: read through this, its trials stay resumable)
+RENAMED_EVALUATORS = {"wrp_eval.campaign.flight:make_flight_evaluator": DEFAULT_EVALUATOR}
 
 
 @dataclass(frozen=True)
@@ -57,7 +60,7 @@ class TrialEvaluator(Protocol):
 
 def resolve_factory(name: str):
     """Import ``"module:function"``; a bad name is an :class:`InputError`."""
-    module_name, _, attr = name.partition(":")
+    module_name, _, attr = RENAMED_EVALUATORS.get(name, name).partition(":")
     try:
         return getattr(importlib.import_module(module_name), attr)
     except (ImportError, AttributeError, ValueError) as err:

@@ -21,6 +21,7 @@ from wrp_eval.campaign import backends
 from wrp_eval.campaign.config import CampaignSection, TrialConfig
 from wrp_eval.campaign.evaluators import (
     DEFAULT_EVALUATOR,
+    RENAMED_EVALUATORS,
     CampaignContext,
     resolve_factory,
 )
@@ -99,7 +100,8 @@ def stored_fingerprint(meta: dict) -> str | None:
         if "mission" not in meta["config"]["sim"]:
             return None
         doc = TrialConfig.from_stored(meta["config"]).model_dump(mode="json")
-        return fingerprint(doc, meta["path_digest"], meta["root_seed"], meta.get("evaluator", DEFAULT_EVALUATOR),
+        evaluator = meta.get("evaluator", DEFAULT_EVALUATOR)
+        return fingerprint(doc, meta["path_digest"], meta["root_seed"], RENAMED_EVALUATORS.get(evaluator, evaluator),
                            meta.get("evaluator_options") or {})
     except (KeyError, TypeError, ValueError):   # pydantic's ValidationError is a ValueError
         return None

@@ -23,7 +23,7 @@ from wrp_eval.envelope.jobs import envelope_job, envelope_lines, job_forecast
 from wrp_eval.errors import InputError
 from wrp_eval.experiment import ExperimentContext
 from wrp_eval.planning.path import FlightPath
-from wrp_eval.validation import parse_model
+from wrp_eval.schema import parse_model
 
 
 def _speeds(text: str) -> tuple[float, ...]:

@@ -10,7 +10,7 @@ from itertools import pairwise
 
 from pydantic import Field, field_validator, model_validator
 
-from wrp_eval.validation import StrictModel
+from wrp_eval.schema import StrictModel
 
 
 class EnvelopeGrid(StrictModel):

@@ -17,7 +17,7 @@ from typing import Literal
 
 from pydantic import Field, model_validator
 
-from wrp_eval.validation import StrictModel
+from wrp_eval.schema import StrictModel
 
 _FINITE = {"allow_inf_nan": False}
 

@@ -11,7 +11,7 @@ from typing import Literal
 from pydantic import Field, model_validator
 
 from wrp_eval.camera import Camera
-from wrp_eval.validation import StrictModel
+from wrp_eval.schema import StrictModel
 
 
 class PlanningSection(StrictModel):

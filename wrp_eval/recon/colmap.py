@@ -46,8 +46,8 @@ import open3d as o3d
 from scipy.spatial import cKDTree
 
 from wrp_eval.errors import InputError
-from wrp_eval.recon.base import GroundTruth, MeshOracle, Surfels, mesh_key
 from wrp_eval.recon.config import OracleSection
+from wrp_eval.recon.oracle import GroundTruth, MeshOracle, Surfels, mesh_key
 from wrp_eval.recon.render import SolidTexture, render_views
 from wrp_eval.sim.captures import CaptureSet
 

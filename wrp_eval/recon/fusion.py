@@ -37,7 +37,7 @@ the rays happen to hit, and every random draw is attached to a sample or a view 
 
 Scoring (:func:`score_fused`): the samples more likely reconstructed than not (e_s >= 0.5; a fixed subset of
 ``ICP_POINTS``) are aligned to the truth as the paper aligns (ICP with scale,
-:func:`wrp_eval.recon.base.align_to_ground_truth`); then each visible ground-truth
+:func:`wrp_eval.recon.oracle.align_to_ground_truth`); then each visible ground-truth
 sample contributes e_s |n_s . (aligned estimate - truth)| (the accuracy part: the distance to the fused
 surface) + (1 - e_s) h_s (the hole part: the distance to the nearest reconstructed patch, each reconstructed
 sample standing for a disc of the area it represents in its tangent plane, a partly reconstructed neighbour j
@@ -55,7 +55,6 @@ import open3d as o3d
 from scipy.spatial import cKDTree
 
 from wrp_eval.compiled import kernel
-from wrp_eval.recon.base import GroundTruth, Scores, align_to_ground_truth
 from wrp_eval.recon.config import OracleSection
 from wrp_eval.recon.image_effects import (
     INCIDENCE_RAMP_DEG,
@@ -66,6 +65,7 @@ from wrp_eval.recon.image_effects import (
     patch_match_probability,
     pixel_noise_px,
 )
+from wrp_eval.recon.oracle import GroundTruth, Scores, align_to_ground_truth
 from wrp_eval.sim.captures import CaptureSet
 
 OCCLUSION_OFFSET_M = 0.01    # occlusion rays start this far off the surface (no self-hits on shared edges)

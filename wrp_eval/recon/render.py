@@ -23,7 +23,7 @@ import open3d as o3d
 from scipy.ndimage import convolve1d
 
 from wrp_eval.camera import Camera
-from wrp_eval.recon.base import GroundTruth
+from wrp_eval.recon.oracle import GroundTruth
 from wrp_eval.sim.captures import CaptureSet
 
 SEA_RGB = np.array([0.10, 0.20, 0.30])

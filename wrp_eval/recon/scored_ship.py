@@ -22,7 +22,7 @@ SEED_MODULUS = 2**31 - 1      # the oracles' RNGs take 31-bit seeds; campaign se
 
 
 def make_oracle(section=None, kind: str | None = None):
-    """The oracle (:class:`wrp_eval.recon.base.Oracle`) named by ``kind`` (default ``section.kind``),
+    """The oracle (:class:`wrp_eval.recon.oracle.Oracle`) named by ``kind`` (default ``section.kind``),
     configured by ``section`` (an :class:`wrp_eval.recon.config.OracleSection`; default its defaults)."""
     section = OracleSection() if section is None else section
     kind = kind or section.kind
@@ -36,7 +36,7 @@ def make_oracle(section=None, kind: str | None = None):
 @dataclass(frozen=True)
 class ScoredShip:
     """particulars (ShipParticulars), mesh (the true ship, trimesh.Trimesh, metres) and oracle
-    (:class:`wrp_eval.recon.base.Oracle`)."""
+    (:class:`wrp_eval.recon.oracle.Oracle`)."""
 
     particulars: object
     mesh: object

@@ -29,11 +29,11 @@ from wrp_eval.atomic import atomic_path, write_text_atomic
 from wrp_eval.camera import Camera, yaw_pitch_towards
 from wrp_eval.errors import InputError
 from wrp_eval.planning.path import FlightPath
-from wrp_eval.recon.base import ReconResult
 from wrp_eval.recon.calibration import colmap_equivalent
 from wrp_eval.recon.capture_io import captures_from_path
 from wrp_eval.recon.colmap import ColmapOracle
 from wrp_eval.recon.config import OracleSection
+from wrp_eval.recon.oracle import ReconResult
 from wrp_eval.recon.scenarios import orbit_capture_set
 from wrp_eval.recon.synthetic import SyntheticOracle
 from wrp_eval.sim.captures import CaptureSet

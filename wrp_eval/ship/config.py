@@ -19,9 +19,9 @@ from typing import Any, Literal
 
 from pydantic import Field, field_validator, model_validator
 
+from wrp_eval.schema import StrictModel
 from wrp_eval.ship.motion import ShipMotionSection
 from wrp_eval.ship.particulars import ShipType
-from wrp_eval.validation import StrictModel
 
 _METRES = {"allow_inf_nan": False}
 

@@ -45,9 +45,9 @@ from typing import Annotated, Literal
 import numpy as np
 from pydantic import Field
 
+from wrp_eval.schema import StrictModel
 from wrp_eval.ship.particulars import ShipParticulars
 from wrp_eval.streams import flight_generators
-from wrp_eval.validation import StrictModel
 
 MAX_SEA_STATE = 6
 DOF_NAMES = ("heave", "roll", "pitch", "yaw")   # the column order of every (..., 4) array here

@@ -32,7 +32,7 @@ import numpy as np
 from pydantic import Field
 
 from wrp_eval.compiled import kernel
-from wrp_eval.validation import StrictModel
+from wrp_eval.schema import StrictModel
 
 STOP, FLY_THROUGH = "stop", "fly-through"
 SMOOTH_TRANSITION = "smoothTransition"

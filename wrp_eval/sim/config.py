@@ -6,12 +6,12 @@ from typing import Literal
 
 from pydantic import Field, model_validator
 
+from wrp_eval.schema import StrictModel
 from wrp_eval.sim.capture_mode import CaptureSection
 from wrp_eval.sim.gimbal import GimbalSection
 from wrp_eval.sim.mission import MissionSection
 from wrp_eval.sim.navigation import NavigationSection
 from wrp_eval.sim.power import BatterySection
-from wrp_eval.validation import StrictModel
 
 
 class SimSection(StrictModel):

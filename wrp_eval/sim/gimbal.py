@@ -32,7 +32,7 @@ import numpy as np
 from pydantic import Field, model_validator
 
 from wrp_eval.compiled import as_rows, kernel
-from wrp_eval.validation import StrictModel
+from wrp_eval.schema import StrictModel
 
 
 class GimbalSection(StrictModel):

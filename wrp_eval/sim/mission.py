@@ -33,8 +33,8 @@ import numpy as np
 from pydantic import Field
 
 from wrp_eval.compiled import kernel
+from wrp_eval.schema import StrictModel
 from wrp_eval.sim.power import straight_home_energy_j
-from wrp_eval.validation import StrictModel
 
 # DJI Phantom 4 RTK spec sheet: max horizontal speed 50 km/h (P-mode) = 13.9 m/s
 P4_RTK_TOP_SPEED_M_S = 50.0 / 3.6

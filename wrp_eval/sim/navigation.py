@@ -48,8 +48,8 @@ from pydantic import Field
 from scipy.linalg import solve_discrete_are
 
 from wrp_eval.compiled import as_rows, kernel
+from wrp_eval.schema import StrictModel
 from wrp_eval.streams import BlockNormals, flight_generators
-from wrp_eval.validation import StrictModel
 
 # 95 % radius of a 2-D isotropic Gaussian (Rayleigh): P(r <= k sigma) = 1 - exp(-k^2/2) = 0.95
 K95_2D = math.sqrt(-2.0 * math.log(0.05))           # 2.4477

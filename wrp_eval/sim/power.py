@@ -28,7 +28,7 @@ import numpy as np
 from pydantic import Field, ValidationInfo, field_validator
 
 from wrp_eval.compiled import kernel
-from wrp_eval.validation import StrictModel
+from wrp_eval.schema import StrictModel
 
 if TYPE_CHECKING:
     from wrp_eval.sim.vehicle import QuadrotorParams

@@ -28,7 +28,7 @@ from typing import Any, Literal
 
 from pydantic import Field, field_validator, model_validator
 
-from wrp_eval.validation import StrictModel
+from wrp_eval.schema import StrictModel
 
 # column -> (header, kind): kind "int", "num" (3-4 significant digits) or "text". Units in the header.
 COLUMNS: dict[str, tuple[str, str]] = {

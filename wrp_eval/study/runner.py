@@ -33,10 +33,10 @@ from wrp_eval.experiment import ExperimentContext
 from wrp_eval.planning.path import KIND_TRANSITION, FlightPath
 from wrp_eval.planning.rerun_log import save_plan_recording
 from wrp_eval.recording import merge_recordings
+from wrp_eval.schema import parse_model
 from wrp_eval.ship.rerun_log import save_ship_recording
 from wrp_eval.study.report import write_study_report
 from wrp_eval.surrogate.train import CHECKPOINT_NAME, train_from_campaign
-from wrp_eval.validation import parse_model
 from wrp_eval.wrp.config import WrpSection
 from wrp_eval.wrp.jobs import oracle_error, resolve_inputs, run_optimize
 from wrp_eval.wrp.optimize import apply_offsets, offset_totals

@@ -6,7 +6,7 @@ from typing import Literal
 
 from pydantic import Field, model_validator
 
-from wrp_eval.validation import StrictModel
+from wrp_eval.schema import StrictModel
 
 
 class SurrogateSection(StrictModel):

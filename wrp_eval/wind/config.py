@@ -14,7 +14,7 @@ from typing import Literal
 
 from pydantic import Field, model_validator
 
-from wrp_eval.validation import StrictModel, renamed_keys
+from wrp_eval.schema import StrictModel, renamed_keys
 
 
 class WindGridSection(StrictModel):

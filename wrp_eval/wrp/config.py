@@ -7,7 +7,7 @@ from typing import Literal
 
 from pydantic import Field
 
-from wrp_eval.validation import StrictModel
+from wrp_eval.schema import StrictModel
 
 
 class EvaluateSection(StrictModel):

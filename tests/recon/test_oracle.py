@@ -6,7 +6,13 @@ import numpy as np
 import pytest
 import trimesh
 
-from wrp_eval.recon.base import Surfels, apply_similarity, prepare_ground_truth, score_reconstruction, surfel_distances
+from wrp_eval.recon.oracle import (
+    Surfels,
+    apply_similarity,
+    prepare_ground_truth,
+    score_reconstruction,
+    surfel_distances,
+)
 
 from .conftest import make_box
 

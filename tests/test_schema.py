@@ -4,7 +4,7 @@ import pytest
 from pydantic import Field
 
 from wrp_eval.errors import InputError
-from wrp_eval.validation import StrictModel, load_model, parse_model, read_yaml
+from wrp_eval.schema import StrictModel, load_model, parse_model, read_yaml
 
 
 class Inner(StrictModel):
@@ -67,7 +67,7 @@ def test_an_old_m_s_key_is_read_as_the_new_one_with_one_deprecation_line(caplog)
 
     from wrp_eval.campaign.config import TurbulenceSpec
     from wrp_eval.config import ExperimentConfig
-    from wrp_eval.validation import _warn_renamed
+    from wrp_eval.schema import _warn_renamed
     _warn_renamed.cache_clear()
     with caplog.at_level(logging.WARNING, logger="wrp_eval"):
         cfg = ExperimentConfig.model_validate({"wind": {"speed_10m_mps": 9.0, "turbulence": {"sigma_w_mps": 1.5},
