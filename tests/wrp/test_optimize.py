@@ -249,3 +249,17 @@ def test_cvar_is_the_mean_of_the_worst_tail():
     np.testing.assert_allclose(neighbourhood_score(e, p), [5.0, 10.0])
     with pytest.raises(ValueError):
         wrp_params("iswrp", 0.1, 1.0, np.full(2, 0.5), risk_measure="var")
+
+
+def test_the_table3_row_is_typed_and_round_trips_as_stored(surrogate):
+    from wrp_eval.wrp.optimize import Table3Row
+
+    r = interval_optimise(surrogate, params_for(surrogate, "iswrp", 0.004), seed=2)
+    row = r.table3()
+    assert isinstance(row, Table3Row) and row.viewpoints == surrogate.n_views
+    assert row.moved == int(r.moved.sum()) and row.offset_rate_pct == pytest.approx(100.0 * r.moved.mean())
+    doc = row.to_json_dict()
+    assert "oracle" not in doc and "oracle_confirm_s" not in doc and doc["oracle_error_m"] is None
+    assert Table3Row.from_json_dict(doc) == row
+    scored = replace(row, oracle_error_m=0.02, oracle={"error_m": 0.02}, oracle_confirm_s=1.5)
+    assert Table3Row.from_json_dict(scored.to_json_dict()) == scored

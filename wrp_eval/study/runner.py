@@ -39,7 +39,7 @@ from wrp_eval.study.report import write_study_report
 from wrp_eval.surrogate.train import CHECKPOINT_NAME, train_from_campaign
 from wrp_eval.wrp.config import WrpSection
 from wrp_eval.wrp.jobs import oracle_error, resolve_inputs, run_optimize
-from wrp_eval.wrp.optimize import apply_offsets, offset_totals
+from wrp_eval.wrp.optimize import Table3Row, apply_offsets, offset_totals
 
 log = logging.getLogger(__name__)
 
@@ -204,12 +204,12 @@ def _optimised_variant(vctx: ExperimentContext, variant, path: FlightPath, folde
         inputs = resolve_inputs(vctx, section, training["checkpoint"], training["campaign"])
         optimised[wrp_key] = (run_optimize(vctx, section, wrp_dir, inputs), wrp_dir)
     doc, wrp_dir = optimised[wrp_key]
-    table = doc["table3"]
-    cols = {"threshold_m": table["threshold_m"], "offset_rate_pct": table["offset_rate_pct"],
-            "position_offset_m": table["position_offset_m"], "rotation_offset_deg": table["rotation_offset_deg"],
-            "wrp_time_s": table["time_s"], "surrogate_error_m": table.get("surrogate_error_m"),
-            "e_original_m": table.get("e_original_m")}
-    return FlightPath.load(wrp_dir / "path.json"), table.get("oracle"), cols
+    table = Table3Row.from_json_dict(doc["table3"])
+    cols = {"threshold_m": table.threshold_m, "offset_rate_pct": table.offset_rate_pct,
+            "position_offset_m": table.position_offset_m, "rotation_offset_deg": table.rotation_offset_deg,
+            "wrp_time_s": table.time_s, "surrogate_error_m": table.surrogate_error_m,
+            "e_original_m": table.e_original_m}
+    return FlightPath.load(wrp_dir / "path.json"), table.oracle, cols
 
 
 def _variant_rows(vctx: ExperimentContext, variant, box, measured: FlightPath, verdict: dict | None,

@@ -71,6 +71,6 @@ def _timed(s, params: WrpParams, name: str, anchor: str, anchor_value: float, no
     return BenchRecord(
         name, r.seconds, "s", anchor, anchor_value,
         f"{s.n_views} views, t={params.threshold_m:.4g} m, E0 {params.e_original_m:.4f} m (surrogate), offset rate "
-        f"{t['offset_rate_pct']:.1f} %, position offset {t['position_offset_m']:.1f} m, rotation offset "
-        f"{t['rotation_offset_deg']:.0f} deg, {t['queries']} queries in {t['forward_calls']} passes, step "
+        f"{t.offset_rate_pct:.1f} %, position offset {t.position_offset_m:.1f} m, rotation offset "
+        f"{t.rotation_offset_deg:.0f} deg, {t.queries} queries in {t.forward_calls} passes, step "
         f"{params.step_m:.2f} m, {note}")

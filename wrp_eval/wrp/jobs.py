@@ -36,6 +36,7 @@ from wrp_eval.wrp.config import WrpSection
 from wrp_eval.wrp.confirm import CONFIRM_ROUNDS, confirm_moves
 from wrp_eval.wrp.evaluate import PathTrials, box_plot, forecast_verdict, read_trials, summarise
 from wrp_eval.wrp.optimize import (
+    Table3Row,
     WrpParams,
     WrpResult,
     apply_offsets,
@@ -162,25 +163,22 @@ def run_optimize(ctx: ExperimentContext, section: WrpSection, out: Path, inputs:
         result, rounds = _confirmed(ctx, section, inputs, params, result, seed)
     table = result.table3()
     if rounds:
-        table["oracle_confirm_s"] = sum(r["seconds"] for r in rounds)
+        table = replace(table, oracle_confirm_s=sum(r["seconds"] for r in rounds))
     wrp_path = apply_offsets(path, result.offsets, {"wrp": {"kind": section.kind, "threshold_m": threshold,
                                                             "seed": seed}})
     if use_oracle and section.oracle_error:
         verdict = oracle_error(ctx.scored_ship, wrp_path)
-        table["oracle_error_m"] = verdict["error_m"]
-        table["oracle"] = verdict
-    else:
-        table["oracle_error_m"] = None
+        table = replace(table, oracle_error_m=verdict["error_m"], oracle=verdict)
     out.mkdir(parents=True, exist_ok=True)
     wrp_path.save(out / "path.json")
     doc = _metrics_doc(table, e0_source, inputs, params, section, seed, rounds, result)
     write_json_atomic(out / "wrp_metrics.json", doc)
-    err = table["oracle_error_m"]
-    progress_log.info(f"{section.kind} t={threshold:.4g} m: {table['offset_rate_pct']:.1f} % viewpoints moved, "
-                      f"position offset {table['position_offset_m']:.2f} m, rotation offset "
-                      f"{table['rotation_offset_deg']:.1f} deg, {table['time_s']:.2f} s; error: oracle "
+    err = table.oracle_error_m
+    progress_log.info(f"{section.kind} t={threshold:.4g} m: {table.offset_rate_pct:.1f} % viewpoints moved, "
+                      f"position offset {table.position_offset_m:.2f} m, rotation offset "
+                      f"{table.rotation_offset_deg:.1f} deg, {table.time_s:.2f} s; error: oracle "
                       + (f"{err:.4f} m" if err is not None else "n/a")
-                      + f", surrogate {table['surrogate_error_m']:.4f} m (E_original {e0:.4f} m) -> {out}")
+                      + f", surrogate {table.surrogate_error_m:.4f} m (E_original {e0:.4f} m) -> {out}")
     return doc
 
 
@@ -209,12 +207,13 @@ def _confirmed(ctx: ExperimentContext, section: WrpSection, inputs: WrpInputs, p
     return result, rounds
 
 
-def _metrics_doc(table: dict, e0_source: str, inputs: WrpInputs, params: WrpParams, section: WrpSection, seed: int,
+def _metrics_doc(table: Table3Row, e0_source: str, inputs: WrpInputs, params: WrpParams, section: WrpSection, seed: int,
                  rounds: list[dict], result) -> dict:
     """wrp_metrics.json: the Table 3 row, the settings used and every viewpoint's move."""
     surrogate = inputs.surrogate
     margin = params.improvement_margin_m()
-    return {"table3": table, "e_original_source": e0_source, "sample_radius_source": inputs.radius_source,
+    return {"table3": table.to_json_dict(), "e_original_source": e0_source,
+            "sample_radius_source": inputs.radius_source,
             "sample_radius_m": inputs.radius_m.tolist(), "step_m": params.step_m, "seed": seed,
             "yaw_range_deg": section.yaw_range_deg, "iterations": params.iterations,
             "attitude_samples": params.attitude_samples, "neighbourhood_samples": params.neighbourhood_samples,
@@ -294,7 +293,7 @@ def evaluate_job(ctx: ExperimentContext, out: Path | None = None, *, n_trials: i
     inputs = resolve_inputs(ctx, section, checkpoint, campaign, surrogate=surrogate, trials=trials)
     paths, optimised = _optimise_both(ctx, out, inputs, e_original)
     flown = evaluation_trial(ctx.trial_config, n_trials or ev.n_trials)
-    unmoved = [kind for kind in optimised if not optimised[kind]["table3"]["moved"]]
+    unmoved = [kind for kind in optimised if not Table3Row.from_json_dict(optimised[kind]["table3"]).moved]
     # a WRP that moved nothing is the initial path: its placebos would all be the initial path too
     placebo_paths, infeasible = placebo_paths_of(ctx, {k: p for k, p in paths.items() if k not in unmoved},
                                                  ev.placebos)

@@ -28,7 +28,7 @@ Every random number of viewpoint i comes from ``SeedSequence(seed, spawn_key=(i,
 from __future__ import annotations
 
 import time
-from dataclasses import dataclass, field, replace
+from dataclasses import dataclass, field, fields, replace
 
 import numpy as np
 
@@ -200,17 +200,55 @@ class WrpResult:
     iterations_scored: int = 0
     extra: dict = field(default_factory=dict)
 
-    def table3(self) -> dict:
-        """The paper's Table 3 columns (without the oracle's error): offset rate (% of viewpoints moved),
-        total position offset (m, sum of |dp|), total rotation offset (deg, sum of |dyaw|), time (s)."""
-        return {"kind": self.params.kind, "threshold_m": self.params.threshold_m,
-                "offset_rate_pct": 100.0 * float(self.moved.mean()),
-                "position_offset_m": offset_totals(self.offsets)[0],
-                "rotation_offset_deg": offset_totals(self.offsets)[1],
-                "time_s": self.seconds, "viewpoints": int(self.moved.size), "moved": int(self.moved.sum()),
-                "surrogate_error_m": self.predicted_error_m, "e_original_m": self.params.e_original_m,
-                "forward_calls": self.forward_calls, "queries": self.queries,
-                "iterations_scored": self.iterations_scored}
+    def table3(self) -> "Table3Row":
+        """The paper's Table 3 row of this optimisation (without the oracle's error)."""
+        position_m, rotation_deg = offset_totals(self.offsets)
+        return Table3Row(kind=self.params.kind, threshold_m=float(self.params.threshold_m),
+                         offset_rate_pct=100.0 * float(self.moved.mean()), position_offset_m=position_m,
+                         rotation_offset_deg=rotation_deg, time_s=float(self.seconds),
+                         viewpoints=int(self.moved.size), moved=int(self.moved.sum()),
+                         surrogate_error_m=float(self.predicted_error_m), e_original_m=float(self.params.e_original_m),
+                         forward_calls=int(self.forward_calls), queries=int(self.queries),
+                         iterations_scored=int(self.iterations_scored))
+
+
+@dataclass(frozen=True)
+class Table3Row:
+    """The paper's Table 3 columns of one optimisation and what was measured beside them: kind; threshold_m t
+    (m); offset_rate_pct (% of viewpoints moved); position_offset_m (sum of |dp|, m); rotation_offset_deg (sum
+    of |dyaw|, deg); time_s (the optimiser's own, s); viewpoints, moved (counts); surrogate_error_m (the moved
+    path's predicted error, m); e_original_m (m); forward_calls, queries, iterations_scored (the surrogate's
+    work); oracle_confirm_s (s; None: no oracle confirmation ran); oracle_error_m (m; None: not scored);
+    oracle (the oracle's verdict on the moved path; None: not scored). wrp_metrics.json's ``table3``."""
+
+    kind: str
+    threshold_m: float
+    offset_rate_pct: float
+    position_offset_m: float
+    rotation_offset_deg: float
+    time_s: float
+    viewpoints: int
+    moved: int
+    surrogate_error_m: float
+    e_original_m: float
+    forward_calls: int
+    queries: int
+    iterations_scored: int
+    oracle_confirm_s: float | None = None
+    oracle_error_m: float | None = None
+    oracle: dict | None = None
+
+    def to_json_dict(self) -> dict:
+        """The row as stored (no oracle_confirm_s / oracle key where there is none)."""
+        doc = {f.name: getattr(self, f.name) for f in fields(self)}
+        for optional in ("oracle_confirm_s", "oracle"):
+            if doc[optional] is None:
+                del doc[optional]
+        return doc
+
+    @classmethod
+    def from_json_dict(cls, doc: dict) -> "Table3Row":
+        return cls(**{f.name: doc[f.name] for f in fields(cls) if f.name in doc})
 
 
 def stage_one(query: ViewQuery, view: int, params: WrpParams, seed: int, block: int):
