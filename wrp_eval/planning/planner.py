@@ -9,6 +9,7 @@ from __future__ import annotations
 
 import time
 from dataclasses import dataclass
+from typing import NamedTuple
 
 import numpy as np
 from scipy.spatial import cKDTree
@@ -158,17 +159,14 @@ def plan(proxy: Proxy, complexity: np.ndarray, section: PlanningSection, rng: np
         return plan_oblique(proxy, section)
     timings = {}
     t0 = time.perf_counter()
-    camera = section.camera()
-    distance = section.planned_distance_m()
-    d_max = section.max_view_distance_factor * distance
-    max_inc = np.radians(section.max_incidence_deg)
+    geometry = _ViewGeometry.of(section)
+    camera, distance, d_max, max_inc = geometry
     r0 = base_radius_m(camera, distance, section.sample_overlap)
     ours = section.method == "ours"
     radii = r0 / relative_complexity(complexity, section.max_radius_factor) if ours else np.full(5, r0)
     thr_face = face_thresholds(complexity, section)
 
-    samples, candidates, raycaster, visible = _candidates_seen(proxy, section, radii, rng, d_max, max_inc, timings,
-                                                               t0)
+    samples, candidates, raycaster, visible = _candidates_seen(proxy, section, geometry, radii, rng, timings, t0)
     thr_asked = thr_face[samples.face]
     active, h, thr, set_doc = _min_max(samples, candidates, visible, thr_asked, radii, d_max, section, timings)
     t4 = time.perf_counter()
@@ -206,18 +204,34 @@ def plan(proxy: Proxy, complexity: np.ndarray, section: PlanningSection, rng: np
     return PlanResult(path, metrics, samples, candidates, chosen, visible, thr, h)
 
 
-def _candidates_seen(proxy: Proxy, section: PlanningSection, radii: np.ndarray, rng: np.random.Generator,
-                     d_max: float, max_inc: float, timings: dict, t0: float):
+class _ViewGeometry(NamedTuple):
+    """What the views are planned and judged with: the camera, the planned distance (m), the view range d_max (m)
+    and the incidence limit (rad) of the visibility test."""
+
+    camera: Camera
+    distance_m: float
+    d_max_m: float
+    max_incidence_rad: float
+
+    @classmethod
+    def of(cls, section: PlanningSection) -> "_ViewGeometry":
+        distance = section.planned_distance_m()
+        return cls(section.camera(), distance, section.max_view_distance_factor * distance,
+                   float(np.radians(section.max_incidence_deg)))
+
+
+def _candidates_seen(proxy: Proxy, section: PlanningSection, geometry: _ViewGeometry, radii: np.ndarray,
+                     rng: np.random.Generator, timings: dict, t0: float):
     """The Poisson-disk samples, the candidate views, the proxy raycaster and the visibility (candidates x
     samples) bool matrix; sampling_s and visibility_s (from ``t0``) into ``timings``."""
     samples = poisson_samples(proxy, radii, rng)
     t1 = time.perf_counter()
     timings["sampling_s"] = t1 - t0
-    candidates = candidate_views(samples, proxy, section.planned_distance_m(), tilt_rad=np.radians(section.tilt_deg),
+    candidates = candidate_views(samples, proxy, geometry.distance_m, tilt_rad=np.radians(section.tilt_deg),
                                  n_tilts=section.n_tilts, min_altitude_m=section.min_altitude_m)
     raycaster = ProxyRaycaster(proxy)
     visible = visibility(samples.points, samples.normals, candidates.positions, candidates.yaw,
-                         candidates.pitch, section.camera(), raycaster, d_max, max_inc)
+                         candidates.pitch, geometry.camera, raycaster, geometry.d_max_m, geometry.max_incidence_rad)
     timings["visibility_s"] = time.perf_counter() - t1
     return samples, candidates, raycaster, visible
 
