@@ -165,3 +165,50 @@ def test_compiled_move_scans_pick_the_moves_the_numpy_scans_picked():
                 if i < 0:
                     break
                 current = _or_opt_move(current, cost, neighbours)
+
+
+def _or_opt_applied_numpy(order, i, j, length, reverse):
+    """The Or-opt move as first written in numpy: the run taken out, put back after order[j]."""
+    n = len(order)
+    run_idx = (i + np.arange(length)) % n
+    run = order[run_idx][::-1] if reverse else order[run_idx]
+    rest = np.delete(order, run_idx)
+    after = int(np.flatnonzero(rest == order[j])[0])
+    return np.concatenate([rest[:after + 1], run, rest[after + 1:]])
+
+
+def test_compiled_descent_makes_the_moves_of_the_move_by_move_descent():
+    from wrp_eval.planning.tour import _best_or_opt, _two_opt_move, local_search, neighbour_lists
+
+    rng = np.random.default_rng(7)
+    for trial in range(60):
+        n = int(rng.integers(4, 60))
+        pts = rng.random((n, 3)) * 50
+        if trial % 3 == 0:
+            pts = np.round(pts / 10)   # ties
+        cost = np.linalg.norm(pts[:, None] - pts[None], axis=-1)
+        neighbours = neighbour_lists(cost)
+        order = rng.permutation(n)
+        expected = order
+        while True:     # one move at a time, Or-opt applied by the numpy reference
+            new = _two_opt_move(expected, cost, neighbours)
+            if new is None:
+                _, i, j, length, reverse = _best_or_opt(expected, cost, 3, neighbours)
+                if i < 0:
+                    break
+                new = _or_opt_applied_numpy(expected, i, j, length, reverse)
+            expected = new
+        assert np.array_equal(local_search(order, cost, neighbours), expected)
+
+
+def test_multistart_tour_does_not_depend_on_the_thread_count(monkeypatch):
+    from wrp_eval.planning import tour
+
+    rng = np.random.default_rng(3)
+    pts = rng.random((70, 3)) * 100
+    cost = np.linalg.norm(pts[:, None] - pts[None], axis=-1)
+    tours = []
+    for cores in (1, 3):
+        monkeypatch.setattr(tour.os, "cpu_count", lambda cores=cores: cores)
+        tours.append(tour.solve_multistart(cost, np.random.default_rng(11), random_starts=5, kicks=10))
+    assert np.array_equal(tours[0], tours[1])

@@ -8,13 +8,17 @@ two corner points of such a detour so that the path can include them.
 
 Solvers: ``multistart`` (default; deterministic for a seeded generator): the OR-Tools greedy-descent tour
 and random tours, each taken to a 2-opt / Or-opt local optimum (the best move found by a compiled scan of
-all moves, :mod:`wrp_eval.compiled`), then iterated
-local search from the best; ``ortools``: OR-Tools routing with guided local search under a time limit;
+all moves, :mod:`wrp_eval.compiled`; a whole descent is one compiled call, and the random tours' descents run on
+the other cores while OR-Tools solves: the same optima on any number of cores), then iterated local search
+from the best; ``ortools``: OR-Tools routing with guided local search under a time limit;
 ``ga``: a seeded genetic algorithm in the paper's spirit (order crossover + inversion mutation, elitism,
 tournament selection).
 """
 
 from __future__ import annotations
+
+import os
+from concurrent.futures import ThreadPoolExecutor
 
 import numpy as np
 from ortools.constraint_solver import pywrapcp, routing_enums_pb2
@@ -132,6 +136,12 @@ def _two_opt_move(order: np.ndarray, cost: np.ndarray, neighbours: np.ndarray) -
     delta, i, j = _best_two_opt(order, cost, neighbours)
     if delta >= -1e-9:
         return None
+    return _two_opt_applied(order, i, j)
+
+
+@kernel
+def _two_opt_applied(order: np.ndarray, i: int, j: int) -> np.ndarray:
+    """A copy of ``order`` with order[i+1 .. j] reversed."""
     new = order.copy()
     new[i + 1:j + 1] = order[i + 1:j + 1][::-1]
     return new
@@ -192,24 +202,66 @@ def _or_opt_move(order: np.ndarray, cost: np.ndarray, neighbours: np.ndarray,
     _, i, j, length, reverse = _best_or_opt(order, cost, max_len, neighbours)
     if i < 0:
         return None
-    run_idx = (i + np.arange(length)) % n
-    run = order[run_idx][::-1] if reverse else order[run_idx]
-    rest = np.delete(order, run_idx)
-    after = int(np.flatnonzero(rest == order[j])[0])
-    return np.concatenate([rest[:after + 1], run, rest[after + 1:]])
+    return _or_opt_applied(order, i, j, length, reverse)
+
+
+@kernel
+def _or_opt_applied(order: np.ndarray, i: int, j: int, length: int, reverse: bool) -> np.ndarray:
+    """A copy of ``order`` with the run order[i .. i+length-1] (cyclic; reversed if ``reverse``) moved to just
+    after order[j] (j outside the run); the other views keep their order."""
+    n = len(order)
+    run = np.empty(length, dtype=order.dtype)
+    in_run = np.zeros(n, dtype=np.bool_)
+    for k in range(length):
+        run[k] = order[(i + k) % n]
+        in_run[(i + k) % n] = True
+    if reverse:
+        run = run[::-1].copy()
+    new = np.empty_like(order)
+    w = 0
+    for k in range(n):
+        if in_run[k]:
+            continue
+        new[w] = order[k]
+        w += 1
+        if k == j:
+            new[w:w + length] = run
+            w += length
+    return new
+
+
+@kernel
+def _descend(order: np.ndarray, cost: np.ndarray, neighbours: np.ndarray) -> np.ndarray:
+    """2-opt and Or-opt (runs of up to 3) best-improvement descent of a closed tour to a local optimum, in one
+    compiled call (no Python between moves, the GIL released): each step takes the best 2-opt move, or when
+    none improves the best Or-opt move, exactly as :func:`_two_opt_move` / :func:`_or_opt_move` choose them."""
+    if len(order) < 4:
+        return order
+    while True:
+        delta, i, j = _best_two_opt(order, cost, neighbours)
+        if delta < -1e-9:
+            order = _two_opt_applied(order, i, j)
+            continue
+        _, i, j, length, reverse = _best_or_opt(order, cost, 3, neighbours)
+        if i < 0:
+            return order
+        order = _or_opt_applied(order, i, j, length, reverse)
+
+
+@kernel
+def _descend_rows(tours: np.ndarray, cost: np.ndarray, neighbours: np.ndarray) -> np.ndarray:
+    """:func:`_descend` of each row of ``tours`` (k, n), in one compiled call: (k, n)."""
+    out = np.empty_like(tours)
+    for row in range(tours.shape[0]):
+        out[row] = _descend(tours[row].copy(), cost, neighbours)
+    return out
 
 
 def local_search(order: np.ndarray, cost: np.ndarray, neighbours: np.ndarray | None = None) -> np.ndarray:
-    """2-opt and Or-opt best-improvement descent to a local optimum (compiled move scans). ``neighbours``:
+    """2-opt and Or-opt best-improvement descent to a local optimum (:func:`_descend`). ``neighbours``:
     :func:`neighbour_lists` of ``cost`` (computed here when not given)."""
     neighbours = neighbour_lists(cost) if neighbours is None else neighbours
-    while True:
-        new = _two_opt_move(order, cost, neighbours)
-        if new is None:
-            new = _or_opt_move(order, cost, neighbours)
-            if new is None:
-                return order
-        order = new
+    return _descend(np.asarray(order, dtype=np.int64), np.asarray(cost, dtype=float), neighbours)
 
 
 _KICK_SPAN = 12        # views spanned by a local kick: local kicks suit tours that sweep face after face
@@ -263,8 +315,14 @@ def solve_multistart(cost: np.ndarray, rng: np.random.Generator, random_starts: 
     if n <= 3:
         return np.arange(n)
     neighbours = neighbour_lists(cost)
-    starts = [solve_ortools(cost)] + [rng.permutation(n) for _ in range(random_starts)]
-    optima = [local_search(s, cost, neighbours) for s in starts]
+    random_tours = np.array([rng.permutation(n) for _ in range(random_starts)], dtype=np.int64).reshape(-1, n)
+    # the random tours' descents (compiled, GIL released) run on the other cores while OR-Tools solves here;
+    # each descent is deterministic, so the optima do not depend on the threads
+    groups = np.array_split(random_tours, min(len(random_tours), os.cpu_count() or 1) or 1)
+    with ThreadPoolExecutor(max_workers=len(groups)) as pool:
+        descents = pool.map(lambda tours: _descend_rows(tours, cost, neighbours), groups)
+        first = local_search(solve_ortools(cost), cost, neighbours)
+        optima = [first] + [tour for group in descents for tour in group]
     best = min(optima, key=lambda o: tour_length(o, cost))
     return iterated_local_search(best, cost, kicks, rng, neighbours)
 
