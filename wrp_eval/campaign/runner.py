@@ -93,7 +93,7 @@ def stored_fingerprint(meta: dict) -> str | None:
     """The fingerprint of a stored campaign (campaign.json) recomputed by today's code: its stored config is
     validated again, so that a setting added since (whose default keeps the old behaviour, the rule for every
     new setting) and a change in which sections count do not orphan the stored trials. None when the stored
-    inputs no longer validate, and for a store flown before ``sim.mission`` existed (issue 26: battery swaps,
+    inputs no longer validate, and for a store flown before ``sim.mission`` existed (battery swaps,
     the headway rule and the wind rules changed what ends a flight, so its trials cannot be extended by today's
     flights; the store still loads for reading)."""
     try:

@@ -3,7 +3,7 @@
 The controller flies on :meth:`NavigationEstimator.estimate` (once per 20 Hz control chunk); captures happen
 at the true state. Two estimators (``NavigationSection.estimator``):
 
-* ``fused`` (default, issue 26): a GNSS + IMU navigation filter like PX4's EKF2 or DJI's flight controller.
+* ``fused`` (default): a GNSS + IMU navigation filter like PX4's EKF2 or DJI's flight controller.
   The filter is linear in its errors, so only its **error state** is simulated (the truth cancels): per axis
   (position error, velocity error), driven between fixes by the IMU's white acceleration error (the preset's
   ``accel_noise_density``) and corrected at every GNSS fix by the filter's steady-state Kalman gain
@@ -16,8 +16,8 @@ at the true state. Two estimators (``NavigationSection.estimator``):
   EKF2_HEAD_NOISE 0.3 rad); the compass biases pass it. The filter starts from the first fix (EKF2 resets
   position and velocity to the GNSS when it starts fusing it). Fix delays up to EKF2_GPS_DELAY are
   compensated (fusion on a delayed horizon).
-* ``raw-fix`` (the model before issue 26): the estimate is the truth plus the last fix's errors, held between
-  fixes: the controller sees a step at every fix.
+* ``raw-fix``: the estimate is the truth plus the last fix's errors, held between fixes: the controller sees a
+  step at every fix (a receiver's raw output fed to the loop without a filter; kept as the comparison).
 
 GNSS / compass error model per flight (all SI, radians), the same for both:
 
@@ -136,7 +136,7 @@ _COMPASS = {"compass_bias_deg": 2.0, "compass_noise_deg": 0.3, "near_hull_bias_d
 _BARO_CONSUMER_M_PER_MIN = 1.0 * M_PER_HPA / 180.0
 
 
-# The fused estimator (issue 26): PX4 EKF2 defaults (PX4/PX4-Autopilot src/modules/ekf2/module.yaml and
+# The fused estimator: PX4 EKF2 defaults (PX4/PX4-Autopilot src/modules/ekf2/module.yaml and
 # params_gnss.yaml): EKF2_ACC_NOISE 0.35 m/s^2 and EKF2_GYR_NOISE 0.015 rad/s ("noise for covariance
 # prediction"), applied as a variance (noise * dt)^2 per prediction step (EKF/covariance.cpp) of
 # EKF2_PREDICT_US = 10000 us: a white rate error of power spectral density noise^2 * 0.01 s.
@@ -252,7 +252,7 @@ class NavigationSection(StrictModel):
                                                                          "this distance, m; None: preset")
     estimator: Literal["fused", "raw-fix"] = Field(
         "fused", description="fused: GNSS + IMU navigation filter (EKF2-like, steady-state gains); raw-fix: the "
-                             "last fix's errors held between fixes (the model before issue 26)")
+                             "last fix's errors held between fixes (no filter; the comparison)")
     accel_noise_density: float | None = _sigma("white acceleration error of the IMU driving the fused estimate, "
                                                "m/s^2/sqrt(Hz)")
     gyro_noise_density_deg_s: float | None = _sigma("white rate error of the gyro driving the fused heading, "

@@ -36,7 +36,7 @@ from wrp_eval.surrogate.features import (
 )
 
 CHECKPOINT_FORMAT = "wrp-eval-surrogate"
-CHECKPOINT_VERSION = 2    # 2: input sets and per-view inputs (issue 18); version 1 checkpoints are refused
+CHECKPOINT_VERSION = 2    # 2: input sets and per-view inputs; version 1 checkpoints are refused
 VARIABLE_CHANNELS = {"offsets": 4, "per_view": 4 + len(GEOMETRY_NAMES)}   # channels a candidate move changes
 N_GEOMETRY, N_VARYING = len(GEOMETRY_NAMES), len(GEOMETRY_NAMES) + len(CONDITION_NAMES)  # feature layout
 
