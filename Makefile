@@ -3,6 +3,8 @@
 # make bench: set-up + the benchmarks (JSON under logs/bench/)
 SHELL := /bin/bash
 PY ?= python3
+# pytest-xdist processes for `make test` (a test file stays in one process: its module fixtures are built once)
+TEST_WORKERS ?= 2
 VENV := .venv
 BIN := $(VENV)/bin
 STAMP := $(VENV)/.installed
@@ -28,7 +30,7 @@ run: setup
 test: setup
 	$(BIN)/lint-imports --no-cache
 	$(BIN)/ruff check wrp_eval tests scripts
-	$(BIN)/python -m pytest -q -p no:cacheprovider
+	$(BIN)/python -m pytest -q -p no:cacheprovider -n $(TEST_WORKERS) --dist loadfile
 
 bench: setup
 	$(BIN)/wrp-eval bench --out logs/bench/
