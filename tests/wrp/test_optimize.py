@@ -150,6 +150,23 @@ def test_draws_respect_radii_and_ranges():
         assert d.yaw.shape == (30, 7) and d.neighbour_yaw.shape == (30, 50, 7)
 
 
+
+def test_draws_are_the_stream_in_its_documented_order():
+    """neighbour_yaw is drawn on first use: the same numbers as one eager pass over the block's stream."""
+    p = wrp_params("iswrp", 0.1, 1.0, np.array([0.3, 2.0]), attitude_samples=7, neighbourhood_samples=5,
+                   step_m=1.2, block_iterations=4)
+    d = iteration_draws(3, 1, 2, p)
+    rng = np.random.default_rng(np.random.SeedSequence(3, spawn_key=(1, 2)))
+    y = p.yaw_range_rad
+    position, yaw = rng.uniform(-1.2, 1.2, size=(4, 3)), rng.uniform(-y, y, size=(4, 7))
+    rng.normal(size=(4, 5, 3))
+    rng.uniform(size=(4, 5, 1))                                   # the ball's radii
+    neighbour_yaw = rng.uniform(-y, y, size=(4, 5, 7))
+    np.testing.assert_array_equal(d.position, position)
+    np.testing.assert_array_equal(d.yaw, yaw)
+    np.testing.assert_array_equal(d.neighbour_yaw, neighbour_yaw)
+    assert d.neighbour_yaw is d.neighbour_yaw                      # drawn once
+
 def test_sample_radii_quantile():
     dev = np.zeros((5, 2, 4))
     dev[:, 0, 0] = [0.1, 0.2, 0.3, 0.4, 0.5]

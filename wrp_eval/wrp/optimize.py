@@ -29,6 +29,7 @@ from __future__ import annotations
 
 import time
 from dataclasses import dataclass, field, fields, replace
+from functools import cached_property
 
 import numpy as np
 
@@ -129,16 +130,23 @@ class WrpParams:
         return self.min_improvement_fraction * self.threshold_m
 
 
-@dataclass(frozen=True)
 class IterationDraws:
     """The random numbers of one block of iterations of one viewpoint (B = block_iterations, A = attitude
     samples, M = neighbourhood samples): position (B, 3) m; yaw (B, A) rad; neighbour_offset (B, M, 3) m
-    (already scaled by r_s); neighbour_yaw (B, M, A) rad."""
+    (already scaled by r_s); neighbour_yaw (B, M, A) rad.
 
-    position: np.ndarray
-    yaw: np.ndarray
-    neighbour_offset: np.ndarray
-    neighbour_yaw: np.ndarray
+    neighbour_yaw is the stream's last draw and the largest (B M A numbers), and only the few candidates that
+    reach stage 2 read it: it is drawn on first use, the same numbers as drawn at once."""
+
+    def __init__(self, position: np.ndarray, yaw: np.ndarray, neighbour_offset: np.ndarray,
+                 rng: np.random.Generator, yaw_range_rad: float, attitudes: int):
+        self.position, self.yaw, self.neighbour_offset = position, yaw, neighbour_offset
+        self._rng, self._yaw_range_rad, self._attitudes = rng, yaw_range_rad, attitudes
+
+    @cached_property
+    def neighbour_yaw(self) -> np.ndarray:
+        y = self._yaw_range_rad
+        return self._rng.uniform(-y, y, size=self.neighbour_offset.shape[:2] + (self._attitudes,))
 
 
 def iteration_draws(seed: int, view: int, block: int, params: WrpParams) -> IterationDraws:
@@ -154,8 +162,7 @@ def iteration_draws(seed: int, view: int, block: int, params: WrpParams) -> Iter
     else:
         direction /= np.linalg.norm(direction, axis=-1, keepdims=True)
         neighbour = direction * params.sample_radius_m[view] * rng.uniform(size=(b, m, 1)) ** (1.0 / 3.0)  # ball
-    neighbour_yaw = rng.uniform(-y, y, size=(b, m, a))
-    return IterationDraws(position, yaw, neighbour, neighbour_yaw)
+    return IterationDraws(position, yaw, neighbour, rng, y, a)
 
 
 def best_attitude(query: ViewQuery, view: int, positions: np.ndarray,
