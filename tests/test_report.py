@@ -9,6 +9,8 @@ import numpy as np
 
 from wrp_eval.envelope.result import CellResult, DirectionBoundary, Envelope, ForecastWind
 from wrp_eval.report import EARTH_FRAME_WARNING, envelope_section, risk_section, robustness_section, wrp_section
+from wrp_eval.wrp.evaluation import EvaluationResult
+from wrp_eval.wrp.optimize import Table3Row
 from wrp_eval.wrp.risk import ViewRisk
 
 
@@ -49,18 +51,21 @@ def test_the_first_page_gives_the_verdict_the_boundaries_and_the_earth_frame_war
         "## Go / no-go: **no forecast**")
 
 
-def _ev(recommended: bool) -> dict:
-    row = {"trials": 16, "mean_error_m": 0.0253, "mean_error_m_ci": [0.025, 0.0256], "std_error_m": 0.0005,
-           "p95_error_m": 0.0261, "failure_rate": 0.0, "p_meets_spec": 1.0, "p_meets_spec_ci": [0.8, 1.0],
-           "spec_error_m": 0.0277, "spec_completeness": 0.95}
-    return {"confidence": 0.95, "paths": [{**row, "path": "initial"}, {**row, "path": "iswrp"}],
-            "paired": [{"path": "iswrp", "mean_error_diff_m": -0.0004, "mean_error_diff_ci": [-0.0006, -0.0002],
-                        "both_succeeded": 16, "failure_rate_diff": 0.0}],
-            "windfree_error_m": {"initial": 0.0252, "iswrp": 0.0250},
-            "robustness": {"iswrp": {"gain_m": 0.0004, "gain_ci_m": [0.0002, 0.0006], "placebo_gain_p95_m": 0.0001,
-                                     "placebo_gains_m": [0.0, 0.0001], "recommended": recommended,
-                                     "reason": "its gain's CI includes 0"}},
-            "recommended_path": "iswrp" if recommended else "initial"}
+def _ev(recommended: bool) -> EvaluationResult:
+    row = {"trials": 16, "succeeded": 16, "failure_rate": 0.0, "failure_rate_ci": [0.0, 0.0], "mean_error_m": 0.0253,
+           "mean_error_m_ci": [0.025, 0.0256], "std_error_m": 0.0005, "std_error_m_ci": None, "p95_error_m": 0.0261,
+           "p95_error_m_ci": None, "spec_error_m": 0.0277, "spec_completeness": 0.95, "p_meets_spec": 1.0,
+           "p_meets_spec_ci": [0.8, 1.0]}
+    return EvaluationResult.from_json_dict({
+        "confidence": 0.95, "bootstrap_resamples": 200, "paths": [{**row, "path": "initial"}, {**row, "path": "iswrp"}],
+        "paired": [{"path": "iswrp", "versus": "initial", "paired_trials": 16, "both_succeeded": 16,
+                    "mean_error_diff_m": -0.0004, "mean_error_diff_ci": [-0.0006, -0.0002], "wins": 12, "losses": 4,
+                    "failure_rate_diff": 0.0, "failure_rate_diff_ci": None}],
+        "windfree_error_m": {"initial": 0.0252, "iswrp": 0.0250},
+        "robustness": {"iswrp": {"gain_m": 0.0004, "gain_ci_m": [0.0002, 0.0006], "paired_trials": 16,
+                                 "placebos_flown": 2, "placebo_gains_m": [0.0, 0.0001], "placebo_gain_p95_m": 0.0001,
+                                 "recommended": recommended, "reason": "its gain's CI includes 0"}},
+        "recommended_path": "iswrp" if recommended else "initial"})
 
 
 def test_the_robustness_table_states_each_verdict_and_the_path_to_fly():
@@ -80,8 +85,9 @@ def test_the_risk_table_lists_the_riskiest_views_first():
 
 
 def test_the_table3_rows_carry_ours_and_the_papers():
-    row = {"threshold_m": 0.3, "offset_rate_pct": 10.0, "position_offset_m": 4.0, "rotation_offset_deg": 12.0,
-           "time_s": 0.5, "oracle_error_m": 0.0251}
+    row = Table3Row(kind="iswrp", threshold_m=0.3, offset_rate_pct=10.0, position_offset_m=4.0,
+                    rotation_offset_deg=12.0, time_s=0.5, viewpoints=46, moved=5, surrogate_error_m=0.025,
+                    e_original_m=0.025, forward_calls=10, queries=1000, iterations_scored=100, oracle_error_m=0.0251)
     lines = wrp_section({"iswrp": row, "swrp": row})
     assert lines[-2].startswith("| ISWRP | 0.3 | 10 | 4 | 12 | 0.5 | 0.0251 | 28.57 /")
     assert lines[-1].startswith("| SWRP |")

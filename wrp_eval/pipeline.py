@@ -13,6 +13,7 @@ from __future__ import annotations
 
 import logging
 import time
+from dataclasses import replace
 
 from wrp_eval.atomic import write_json_atomic
 from wrp_eval.campaign.jobs import campaign_job
@@ -54,7 +55,8 @@ class Step:
 
 
 def run_pipeline(ctx: ExperimentContext, *, smallest: bool = False) -> dict:
-    """Run every stage of the experiment; returns the run summary (also run_summary.json).
+    """Run every stage of the experiment; returns the run summary (also run_summary.json; its ``evaluate`` is the
+    :class:`~wrp_eval.wrp.evaluation.EvaluationResult`, written as its JSON document).
 
     A config with a ``study:`` section runs its variants instead (:mod:`wrp_eval.study.runner`: each variant
     through the stages it needs) and returns the study document; ``smallest`` applies the study's
@@ -80,7 +82,7 @@ def run_pipeline(ctx: ExperimentContext, *, smallest: bool = False) -> dict:
         summary["timings_s"] = timings
         report = write_report(ctx, path, summary, trials, risk, envelope)
     timings["total"] = time.perf_counter() - job_start
-    write_json_atomic(out / "run_summary.json", summary)
+    write_json_atomic(out / "run_summary.json", {**summary, "evaluate": summary["evaluate"].to_json_dict()})
     summary["report"] = str(report)
     return summary
 
@@ -122,8 +124,10 @@ def _flights(ctx: ExperimentContext, path: FlightPath, summary: dict, timings: d
         summary["evaluate"] = evaluate_job(ctx, folders.evaluate, checkpoint=folders.surrogate / CHECKPOINT_NAME,
                                            campaign=campaign_dir, surrogate=trained.surrogate,
                                            trials=trials, forecast=config.envelope.run_grid is None)
-        if camp.stress_note and summary["evaluate"].get("forecast"):
-            summary["evaluate"]["forecast"]["stress_notes"] = [f"**Stress test**: {camp.stress_note}.", ""]
+        evaluation = summary["evaluate"]
+        if camp.stress_note and evaluation.forecast is not None:
+            notes = (f"**Stress test**: {camp.stress_note}.", "")
+            summary["evaluate"] = replace(evaluation, forecast=replace(evaluation.forecast, stress_notes=notes))
     return trials, _envelope(ctx, path, summary, timings)
 
 
@@ -132,7 +136,7 @@ def _envelope(ctx: ExperimentContext, path: FlightPath, summary: dict, timings: 
     grid = ctx.config.envelope.run_grid
     if grid is None:
         return None
-    chosen = summary["evaluate"]["recommended_path"]
+    chosen = summary["evaluate"].recommended_path
     with Step(timings, "envelope", f"wind envelope of the {chosen} path ({grid.directions} directions, "
                                    f"U10 up to {grid.speeds_m_s[-1]:g} m/s)"):
         fly = path if chosen == "initial" else FlightPath.load(ctx.folders.evaluated_wrp(chosen) / "path.json")

@@ -21,6 +21,8 @@ from wrp_eval.experiment import ExperimentContext
 from wrp_eval.surrogate.data import TrialData
 from wrp_eval.wind.field import sample_mean_field
 from wrp_eval.wind.outputs import quiver_png
+from wrp_eval.wrp.evaluation import EvaluationResult
+from wrp_eval.wrp.optimize import Table3Row
 from wrp_eval.wrp.risk import ViewRisk
 
 # Paper anchors (wind-resistance-aerial-path-planning, Sec. 4.1 and Tables 3, 4, 7; stylized ship).
@@ -121,35 +123,34 @@ def _design_text(design: str) -> str:
     return f"commanded offsets from the campaign's `{design}` perturbation design"
 
 
-def operator_section(ev: dict) -> list[str]:
-    """The first thing an operator reads (issue 18 item 5): go / no-go for the forecast wind, P(meets spec) with
-    its CI, views not taken and sorties, where the per-view risk is."""
-    fc = ev.get("forecast")
-    if not fc:
+def operator_section(ev: EvaluationResult) -> list[str]:
+    """The first thing an operator reads: go / no-go for the forecast wind, P(meets spec) with its CI, views not
+    taken and sorties, where the per-view risk is."""
+    fc = ev.forecast
+    if fc is None:
         return []
-    ci = fc.get("p_meets_spec_ci")
-    sorties_ci = fc.get("expected_sorties_ci")
+    row = fc.row
     return [
-        f"## Go / no-go: **{'GO' if fc['go'] else 'NO-GO'}** (path `{fc['path']}`)",
+        f"## Go / no-go: **{'GO' if fc.go else 'NO-GO'}** (path `{row.path}`)",
         "",
-        f"In the forecast wind ({fc['wind_speed_10m_mps']:g} m/s at 10 m from {fc['wind_direction_deg']:g} deg, "
-        f"turbulence as the campaign draws it), {fc['trials']} simulated flights of the path to fly:",
+        f"In the forecast wind ({fc.wind_speed_10m_mps:g} m/s at 10 m from {fc.wind_direction_deg:g} deg, "
+        f"turbulence as the campaign draws it), {row.trials} simulated flights of the path to fly:",
         "",
         "| P(meets spec) | CI | views not taken (mean) | P(completed) | P(one sortie) | expected sorties | CI | "
         "mission time (s) |",
         "|---|---|---|---|---|---|---|---|",
-        f"| {fmt(fc.get('p_meets_spec'), 3)} | {_ci(ci)} | {fmt(fc.get('mean_views_not_taken'), 2)} | "
-        f"{fmt(fc.get('p_completed'), 3)} | {fmt(fc.get('p_one_sortie'), 3)} | {fmt(fc.get('expected_sorties'), 3)} | "
-        f"{_ci(sorties_ci)} | {fmt(fc.get('mean_mission_time_s'), 4)} |",
+        f"| {fmt(row.p_meets_spec, 3)} | {_ci(row.p_meets_spec_ci)} | {fmt(row.mean_views_not_taken, 2)} | "
+        f"{fmt(row.p_completed, 3)} | {fmt(row.p_one_sortie, 3)} | {fmt(row.expected_sorties, 3)} | "
+        f"{_ci(row.expected_sorties_ci)} | {fmt(row.mean_mission_time_s, 4)} |",
         "",
         "Sorties: after a return home on energy the operator swaps the battery and resumes at the breakpoint "
         "(`sim.mission`: up to max_sorties, swap_time_s on deck). P(completed): the mission flown to its end; "
         "P(one sortie): completed on one battery; sorties and mission time (swaps included) are those of the "
         "completed missions.",
         "",
-        *fc.get("stress_notes", []),
-        f"Spec: error <= {fmt(fc.get('spec_error_m'), 4)} m and completeness >= {fmt(fc.get('spec_completeness'), 2)}. "
-        f"GO needs the lower {ev['confidence']:.0%} bound of P(meets spec) >= {fc['go_probability']:g}. Where the "
+        *fc.stress_notes,
+        f"Spec: error <= {fmt(row.spec_error_m, 4)} m and completeness >= {fmt(row.spec_completeness, 2)}. "
+        f"GO needs the lower {ev.confidence:.0%} bound of P(meets spec) >= {fc.go_probability:g}. Where the "
         "error's spread comes from: the per-view risk map below (and `risk/viewpoints` in run.rrd).",
         "",
     ]
@@ -219,7 +220,7 @@ def write_report(ctx: ExperimentContext, path, summary: dict, trials: TrialData,
     lines = [*header_section(config.run.name, summary["config"], config.run.seed, ctx.ship), *first_page,
              *ship_section(ctx.ship.complexity, path, summary["plan"]), *WIND_SECTION,
              *campaign_section(summary["campaign"], config.campaign.perturbation.design, summary["surrogate"]),
-             *surrogate_section(summary["surrogate"]), *wrp_section(ev["wrp"]), *robustness_section(ev),
+             *surrogate_section(summary["surrogate"]), *wrp_section(ev.wrp or {}), *robustness_section(ev),
              *(risk_section(risk) if risk is not None else []),
              *missions_section(summary["missions"], out), *timings_section(summary["timings_s"], out)]
     return write_text_atomic(out / "report.md", "\n".join(lines))
@@ -290,7 +291,7 @@ def surrogate_section(sur: dict) -> list[str]:
             "![parity](surrogate/parity.png)", ""]
 
 
-def wrp_section(wrp: dict) -> list[str]:
+def wrp_section(wrp: dict[str, Table3Row]) -> list[str]:
     """The ISWRP and SWRP rows of the paper's Table 3 (ours, the paper's at threshold 0.30 beside)."""
     lines = ["## ISWRP and SWRP (paper Table 3 columns; paper at threshold 0.30)", "",
              "| path | threshold (m) | offset rate (%) | position offset (m) | rotation offset (deg) | time (s) | "
@@ -298,28 +299,28 @@ def wrp_section(wrp: dict) -> list[str]:
              "|---|---|---|---|---|---|---|---|"]
     for kind in ("iswrp", "swrp"):
         row, p = wrp[kind], PAPER[f"{kind}_t030"]
-        lines.append(f"| {kind.upper()} | {fmt(row['threshold_m'])} | {fmt(row['offset_rate_pct'])} | "
-                     f"{fmt(row['position_offset_m'])} | {fmt(row['rotation_offset_deg'])} | "
-                     f"{fmt(row['time_s'])} | {fmt(row.get('oracle_error_m'))} | {p['offset_rate_pct']} / "
+        lines.append(f"| {kind.upper()} | {fmt(row.threshold_m)} | {fmt(row.offset_rate_pct)} | "
+                     f"{fmt(row.position_offset_m)} | {fmt(row.rotation_offset_deg)} | "
+                     f"{fmt(row.time_s)} | {fmt(row.oracle_error_m)} | {p['offset_rate_pct']} / "
                      f"{p['position_offset_m']} / {p['rotation_offset_deg']} / {p['time_s']} / {p['error']} |")
     return lines
 
 
-def robustness_section(ev: dict) -> list[str]:
+def robustness_section(ev: EvaluationResult) -> list[str]:
     """The three paths under the same winds (paper Tables 4/5 analogue), the paired differences and, with a
     placebo control, every WRP's verdict and the path to fly."""
     lines = ["", "## Robustness: the three paths under the same winds (paper Tables 4/5 analogue)", "",
-             f"Common random numbers: {ev.get('common_random_numbers', '')}. Bootstrap {ev['confidence']:.0%} "
+             f"Common random numbers: {ev.common_random_numbers or ''}. Bootstrap {ev.confidence:.0%} "
              "intervals.", "", "| path | trials | mean error (m) | CI | std | 95th pct | failure rate |",
              "|---|---|---|---|---|---|---|"]
-    lines += [f"| {row['path']} | {row['trials']} | {fmt(row['mean_error_m'], 4)} | "
-              f"{_ci(row.get('mean_error_m_ci'))} | {fmt(row['std_error_m'])} | {fmt(row['p95_error_m'], 4)} | "
-              f"{100 * row['failure_rate']:.1f} % |" for row in ev["paths"]]
+    lines += [f"| {row.path} | {row.trials} | {fmt(row.mean_error_m, 4)} | "
+              f"{_ci(row.mean_error_m_ci)} | {fmt(row.std_error_m)} | {fmt(row.p95_error_m, 4)} | "
+              f"{100 * row.failure_rate:.1f} % |" for row in ev.paths]
     lines += ["", "| paired vs initial | mean error difference (m) | CI | pairs | failure-rate difference |",
               "|---|---|---|---|---|"]
-    lines += [f"| {row['path']} | {row['mean_error_diff_m']:+.4f} | {_ci(row.get('mean_error_diff_ci'))} | "
-              f"{row['both_succeeded']} | {100 * row['failure_rate_diff']:+.1f} points |" for row in ev["paired"]]
-    if "robustness" in ev:
+    lines += [f"| {pair.path} | {pair.mean_error_diff_m:+.4f} | {_ci(pair.mean_error_diff_ci)} | "
+              f"{pair.both_succeeded} | {100 * pair.failure_rate_diff:+.1f} points |" for pair in ev.paired]
+    if ev.robustness is not None:
         lines += _verdict_lines(ev)
     return lines + [
         "", f"Paper anchor: mean error of the no-WRP path under random offsets "
@@ -328,26 +329,27 @@ def robustness_section(ev: dict) -> list[str]:
         "![error distributions](evaluate/boxplot.png)", ""]
 
 
-def _verdict_lines(ev: dict) -> list[str]:
+def _verdict_lines(ev: EvaluationResult) -> list[str]:
     lines = ["", "| path | wind-free error (m) | P(meets spec) | CI | views not taken (mean) | expected sorties | "
                  "mission time (s) |", "|---|---|---|---|---|---|---|"]
-    lines += [f"| {row['path']} | {fmt(ev['windfree_error_m'].get(row['path']), 4)} | "
-              f"{fmt(row.get('p_meets_spec'), 3)} | {_ci(row.get('p_meets_spec_ci'))} | "
-              f"{fmt(row.get('mean_views_not_taken'), 2)} | {fmt(row.get('expected_sorties'), 3)} "
-              f"{_ci(row.get('expected_sorties_ci'))} | {fmt(row.get('mean_mission_time_s'), 4)} |"
-              for row in ev["paths"]]
-    spec = ev["paths"][0]
-    lines += ["", f"Spec: error <= {fmt(spec.get('spec_error_m'), 4)} m and completeness >= "
-                  f"{fmt(spec.get('spec_completeness'), 2)}.", "",
+    windfree = ev.windfree_error_m or {}
+    lines += [f"| {row.path} | {fmt(windfree.get(row.path), 4)} | "
+              f"{fmt(row.p_meets_spec, 3)} | {_ci(row.p_meets_spec_ci)} | "
+              f"{fmt(row.mean_views_not_taken, 2)} | {fmt(row.expected_sorties, 3)} "
+              f"{_ci(row.expected_sorties_ci)} | {fmt(row.mean_mission_time_s, 4)} |"
+              for row in ev.paths]
+    spec = ev.paths[0]
+    lines += ["", f"Spec: error <= {fmt(spec.spec_error_m, 4)} m and completeness >= "
+                  f"{fmt(spec.spec_completeness, 2)}.", "",
               "| WRP | robustness gain (mm) | CI | placebo 95th pct (mm) | placebos | verdict |",
               "|---|---|---|---|---|---|"]
-    for kind, v in ev["robustness"].items():
-        ci = v.get("gain_ci_m")
-        lines.append(f"| {kind} | {1e3 * v['gain_m']:+.2f} | "
+    for kind, v in (ev.robustness or {}).items():
+        ci = v.gain_ci_m
+        lines.append(f"| {kind} | {1e3 * v.gain_m:+.2f} | "
                      + (f"[{1e3 * ci[0]:+.2f}, {1e3 * ci[1]:+.2f}]" if ci else "-")
-                     + f" | {1e3 * v['placebo_gain_p95_m']:+.2f} | {len(v['placebo_gains_m'])} | "
-                     + ("**recommended**" if v["recommended"] else f"not recommended: {v['reason']}") + " |")
-    return lines + ["", f"**Path to fly: {ev['recommended_path']}.** Robustness gain = [E_wind - E_windfree](initial) "
+                     + f" | {1e3 * v.placebo_gain_p95_m:+.2f} | {len(v.placebo_gains_m)} | "
+                     + ("**recommended**" if v.recommended else f"not recommended: {v.reason}") + " |")
+    return lines + ["", f"**Path to fly: {ev.recommended_path}.** Robustness gain = [E_wind - E_windfree](initial) "
                         "- [E_wind - E_windfree](WRP) per paired trial; a WRP is recommended only when its gain's CI "
                         "excludes 0 and exceeds the 95th percentile of its placebo paths' gains (as many viewpoints "
                         "moved by the same magnitudes, chosen at random, flown under the same winds)."]

@@ -12,6 +12,7 @@ from wrp_eval.wrp.evaluate import (
     robustness_verdict,
     summarise,
 )
+from wrp_eval.wrp.evaluation import EvaluationResult
 
 from .conftest import helpers
 
@@ -19,11 +20,11 @@ from .conftest import helpers
 def test_path_summary_hand_computed():
     p = PathTrials("a", np.arange(5), np.array([1.0, 2.0, 3.0, 4.0, 99.0]), np.array([0, 0, 0, 0, 1], bool))
     s = path_summary(p, np.random.default_rng(0), 200, 0.9)
-    assert s["mean_error_m"] == pytest.approx(2.5)                       # the failed trial is left out
-    assert s["std_error_m"] == pytest.approx(np.std([1, 2, 3, 4], ddof=1))
-    assert s["p95_error_m"] == pytest.approx(np.percentile([1, 2, 3, 4], 95))
-    assert s["failure_rate"] == pytest.approx(0.2) and s["succeeded"] == 4
-    lo, hi = s["mean_error_m_ci"]
+    assert s.mean_error_m == pytest.approx(2.5)                       # the failed trial is left out
+    assert s.std_error_m == pytest.approx(np.std([1, 2, 3, 4], ddof=1))
+    assert s.p95_error_m == pytest.approx(np.percentile([1, 2, 3, 4], 95))
+    assert s.failure_rate == pytest.approx(0.2) and s.succeeded == 4
+    lo, hi = s.mean_error_m_ci
     assert 1.0 <= lo <= 2.5 <= hi <= 4.0
 
 
@@ -32,10 +33,10 @@ def test_paired_difference_uses_common_trials():
     other = PathTrials("iswrp", np.array([1, 2, 3, 4]), np.array([0.5, 1.0, 4.0, 0.0]),
                        np.array([0, 0, 1, 0], bool))
     d = paired_difference(base, other, np.random.default_rng(0), 200, 0.9)
-    assert d["paired_trials"] == 3 and d["both_succeeded"] == 2          # ids 1, 2 (id 3 failed on iswrp)
-    assert d["mean_error_diff_m"] == pytest.approx(((0.5 - 1.0) + (1.0 - 2.0)) / 2)
-    assert d["failure_rate_diff"] == pytest.approx(1 / 3)
-    assert d["wins"] == 2 and d["losses"] == 0
+    assert d.paired_trials == 3 and d.both_succeeded == 2          # ids 1, 2 (id 3 failed on iswrp)
+    assert d.mean_error_diff_m == pytest.approx(((0.5 - 1.0) + (1.0 - 2.0)) / 2)
+    assert d.failure_rate_diff == pytest.approx(1 / 3)
+    assert d.wins == 2 and d.losses == 0
 
 
 @pytest.mark.parametrize("acceptance", ["paper", "validated"])
@@ -60,9 +61,14 @@ def test_evaluate_flies_all_paths_with_the_same_winds(tmp_path, acceptance):
         "wrp": {"iterations": 16, "attitude_samples": 3, "neighbourhood_samples": 3, "block_iterations": 8,
                 "oracle_error": False, "threshold_m": 0.2, "acceptance": acceptance,
                 "evaluate": {"n_trials": 6, "bootstrap": 200, "placebos": 2, "forecast_trials": 4}}})
-    doc = evaluate_job(ExperimentContext(config, tmp_path), tmp_path / "ev", checkpoint=str(tmp_path / "s.pt"),
+    result = evaluate_job(ExperimentContext(config, tmp_path), tmp_path / "ev", checkpoint=str(tmp_path / "s.pt"),
                        campaign=str(camp),
                        e_original=1.45, evaluator=ANALYTIC_EVALUATOR)   # the known function's scale
+    written = json.loads((tmp_path / "ev" / "evaluate.json").read_text())
+    assert json.dumps(result.to_json_dict()) == json.dumps(written)      # the file is the typed result, key order too
+    assert json.dumps(EvaluationResult.from_json_dict(written).to_json_dict()) == json.dumps(written)
+    assert result.path("initial").trials == 6 and result.forecast.row.path == result.recommended_path
+    doc = written
     assert [p["path"] for p in doc["paths"]] == ["initial", "iswrp", "swrp"]
     assert all(p["trials"] == 6 for p in doc["paths"])
     winds = [TrialStore(tmp_path / "ev" / f"campaign-{n}").read_table(["trial_id", "wind_seed",
@@ -101,8 +107,8 @@ def test_summarise_is_seeded():
          for k, n in enumerate(("initial", "iswrp"))]
     first, again, other = summarise(p, 1, 200, 0.95), summarise(p, 1, 200, 0.95), summarise(p, 2, 200, 0.95)
     assert first == again
-    assert [r["mean_error_m"] for r in first["paths"]] == [r["mean_error_m"] for r in other["paths"]]
-    assert first["paths"][0]["mean_error_m_ci"] != other["paths"][0]["mean_error_m_ci"]
+    assert [r.mean_error_m for r in first.paths] == [r.mean_error_m for r in other.paths]
+    assert first.paths[0].mean_error_m_ci != other.paths[0].mean_error_m_ci
 
 
 def test_robustness_gain_is_the_wind_loss_saved_against_the_same_winds():
@@ -118,14 +124,14 @@ def test_a_wrp_is_recommended_only_beyond_zero_and_beyond_its_placebos():
     strong = np.full(40, 0.004) + rng.normal(0, 0.001, 40)
     placebos = rng.normal(0.0, 0.001, 20)
     yes = robustness_verdict(strong, placebos, np.random.default_rng(1), 500, 0.95)
-    assert yes["recommended"] and yes["gain_ci_m"][0] > 0 and yes["gain_m"] > yes["placebo_gain_p95_m"]
+    assert yes.recommended and yes.gain_ci_m[0] > 0 and yes.gain_m > yes.placebo_gain_p95_m
     noisy = robustness_verdict(rng.normal(0.0, 0.002, 40), placebos, np.random.default_rng(1), 500, 0.95)
-    assert not noisy["recommended"] and "does not exclude 0" in noisy["reason"]
+    assert not noisy.recommended and "does not exclude 0" in noisy.reason
     like_placebo = robustness_verdict(np.full(40, 0.002) + rng.normal(0, 1e-4, 40), np.linspace(0, 0.003, 20),
                                       np.random.default_rng(1), 500, 0.95)
-    assert not like_placebo["recommended"] and "placebo 95th percentile" in like_placebo["reason"]
+    assert not like_placebo.recommended and "placebo 95th percentile" in like_placebo.reason
     alone = robustness_verdict(strong, np.array([]), np.random.default_rng(1), 500, 0.95)
-    assert not alone["recommended"] and "no placebo" in alone["reason"]
+    assert not alone.recommended and "no placebo" in alone.reason
 
 
 def test_summary_recommends_nothing_when_no_wrp_beats_its_placebos():
@@ -136,16 +142,16 @@ def test_summary_recommends_nothing_when_no_wrp_beats_its_placebos():
     doc = summarise([base, wrp], 0, 300, 0.9, (0.035, 0.9), {"initial": 0.025, "iswrp": 0.025,
                                                              **{f"p{k}": 0.025 for k in range(5)}},
                     {"iswrp": placebo})
-    assert doc["recommended_path"] == "initial" and not doc["robustness"]["iswrp"]["recommended"]
-    assert doc["paths"][0]["p_meets_spec"] == 1.0      # no completeness recorded: the error alone decides
+    assert doc.recommended_path == "initial" and not doc.robustness["iswrp"].recommended
+    assert doc.paths[0].p_meets_spec == 1.0      # no completeness recorded: the error alone decides
 
 
 def test_expected_sorties_cover_the_views_flights_leave():
     p = PathTrials("a", np.arange(4), np.full(4, 0.03), np.zeros(4, bool), np.full(4, 0.97),
                    np.array([0.0, 10.0, 20.0, 10.0]), 40)
     s = path_summary(p, np.random.default_rng(0), 200, 0.9)
-    assert s["mean_views_not_taken"] == 10.0
-    assert s["expected_sorties"] == pytest.approx(40 / 30)      # a flight takes 30 of 40 views on average
+    assert s.mean_views_not_taken == 10.0
+    assert s.expected_sorties == pytest.approx(40 / 30)      # a flight takes 30 of 40 views on average
 
 
 def test_sorties_and_mission_time_are_those_of_the_completed_missions():
@@ -157,13 +163,13 @@ def test_sorties_and_mission_time_are_those_of_the_completed_missions():
     p = PathTrials("a", np.arange(6), np.full(6, 0.03), ~completed, np.full(6, 0.97), np.zeros(6), 40, sorties,
                    time_s, completed)
     s = path_summary(p, np.random.default_rng(0), 200, 0.9)
-    assert s["p_completed"] == 0.5 and s["p_one_sortie"] == pytest.approx(2 / 6)
-    assert s["expected_sorties"] == pytest.approx(4 / 3) and s["mean_mission_time_s"] == pytest.approx(1522 / 3)
-    assert s["p_one_sortie_ci"][0] < 2 / 6 < s["p_one_sortie_ci"][1]
+    assert s.p_completed == 0.5 and s.p_one_sortie == pytest.approx(2 / 6)
+    assert s.expected_sorties == pytest.approx(4 / 3) and s.mean_mission_time_s == pytest.approx(1522 / 3)
+    assert s.p_one_sortie_ci[0] < 2 / 6 < s.p_one_sortie_ci[1]
     none_done = PathTrials("b", np.arange(3), np.full(3, np.nan), np.ones(3, bool), np.zeros(3), np.full(3, 30.0),
                            40, np.ones(3), np.full(3, 90.0), np.zeros(3, bool))
     s = path_summary(none_done, np.random.default_rng(0), 200, 0.9)
-    assert s["p_completed"] == 0.0 and s["p_one_sortie"] == 0.0 and np.isnan(s["expected_sorties"])
+    assert s.p_completed == 0.0 and s.p_one_sortie == 0.0 and np.isnan(s.expected_sorties)
 
 
 def test_forecast_verdict_goes_only_when_the_ci_clears_the_bar():
@@ -176,13 +182,13 @@ def test_forecast_verdict_goes_only_when_the_ci_clears_the_bar():
     good = PathTrials("initial", np.arange(60), errors, np.zeros(60, bool), np.full(60, 0.99), np.zeros(60), 40)
     ev = EvaluateSection(go_probability=0.8, bootstrap=500)
     v = forecast_verdict(good, ev, (0.03, 0.95), 0, wind)
-    assert v["p_meets_spec"] == pytest.approx(0.95) and v["p_meets_spec_ci"][0] >= 0.8 and v["go"]
-    assert "GO" in v["summary"] and v["wind_speed_10m_mps"] == 7.0 and v["expected_sorties"] == 1.0
+    assert v.row.p_meets_spec == pytest.approx(0.95) and v.row.p_meets_spec_ci[0] >= 0.8 and v.go
+    assert "GO" in v.summary and v.wind_speed_10m_mps == 7.0 and v.row.expected_sorties == 1.0
     marginal = PathTrials("initial", np.arange(60), np.r_[np.full(50, 0.02), np.full(10, 0.05)],
                           np.zeros(60, bool), np.full(60, 0.99), np.zeros(60), 40)
     m = forecast_verdict(marginal, ev, (0.03, 0.95), 0, wind)
-    assert m["p_meets_spec"] == pytest.approx(50 / 60) and m["p_meets_spec_ci"][0] < 0.8 and not m["go"]
-    assert "NO-GO" in m["summary"]
+    assert m.row.p_meets_spec == pytest.approx(50 / 60) and m.row.p_meets_spec_ci[0] < 0.8 and not m.go
+    assert "NO-GO" in m.summary
 
 
 def test_forecast_config_flies_every_trial_in_the_forecast_wind():
@@ -206,4 +212,4 @@ def test_five_perfect_forecast_flights_are_not_enough_to_go():
                       np.zeros(5), 40)
     v = forecast_verdict(five, EvaluateSection(go_probability=0.8), (0.03, 0.95), 0,
                          SimpleNamespace(speed_10m_m_s=6.0, direction_deg=270.0))
-    assert v["p_meets_spec"] == 1.0 and not v["go"]
+    assert v.row.p_meets_spec == 1.0 and not v.go

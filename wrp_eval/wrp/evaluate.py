@@ -30,7 +30,7 @@ Issue 18 adds what tells a WRP's gain from chance (``robustness`` of :func:`summ
 from __future__ import annotations
 
 from collections.abc import Collection
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from pathlib import Path
 
 import numpy as np
@@ -41,6 +41,13 @@ from wrp_eval.atomic import atomic_path
 from wrp_eval.campaign.records import column_array
 from wrp_eval.campaign.store import TrialStore
 from wrp_eval.errors import InputError
+from wrp_eval.wrp.evaluation import (
+    EvaluationResult,
+    ForecastVerdict,
+    PairedDifference,
+    PathSummary,
+    RobustnessVerdict,
+)
 
 
 @dataclass(frozen=True)
@@ -112,7 +119,7 @@ def proportion_ci(successes: int, trials: int, confidence: float) -> list | None
 
 
 def path_summary(p: PathTrials, rng: np.random.Generator, resamples: int, confidence: float,
-                 spec: tuple[float, float] | None = None) -> dict:
+                 spec: tuple[float, float] | None = None) -> PathSummary:
     """mean / std / p95 of the error over trials that did not fail, failure rate; with ``spec`` (error m,
     completeness) the probability of meeting it; the mean views not taken; each with its CI."""
     ok = p.error_m[~p.failed & np.isfinite(p.error_m)]
@@ -144,7 +151,7 @@ def path_summary(p: PathTrials, rng: np.random.Generator, resamples: int, confid
                                              resamples, confidence) if taken.size > 2 and taken.min() > 0 else None
     if p.sorties is not None and p.completed is not None:
         out.update(mission_summary(p, rng, resamples, confidence))
-    return out
+    return PathSummary(**out)
 
 
 def mission_summary(p: PathTrials, rng: np.random.Generator, resamples: int, confidence: float) -> dict:
@@ -177,7 +184,7 @@ def robustness_gains(base: PathTrials, other: PathTrials, windfree_base_m: float
 
 
 def robustness_verdict(gains: np.ndarray, placebo_means: np.ndarray, rng: np.random.Generator, resamples: int,
-                       confidence: float) -> dict:
+                       confidence: float) -> RobustnessVerdict:
     """A WRP's gain against its placebos: mean gain and CI, the placebos' mean gains and 95th percentile, and
     whether the WRP is recommended (CI lower bound > 0 and mean > the placebo 95th percentile), with why."""
     mean = lambda x, axis: x.mean(axis=axis)  # noqa: E731
@@ -199,15 +206,13 @@ def robustness_verdict(gains: np.ndarray, placebo_means: np.ndarray, rng: np.ran
     elif not gain > p95:
         reasons.append(f"the gain {1e3 * gain:+.2f} mm does not exceed the placebo 95th percentile "
                        f"{1e3 * p95:+.2f} mm ({placebo.size} placebos)")
-    return {"gain_m": gain, "gain_ci_m": ci, "paired_trials": int(gains.size),
-            "placebos_flown": flown, "placebo_gains_m": [float(x) for x in placebo], "placebo_gain_p95_m": p95,
-            "recommended": not reasons, "reason": "; ".join(reasons) or
-            f"the gain {1e3 * gain:+.2f} mm is above 0 at {100 * confidence:g} % and beyond every placebo but "
-            f"the top 5 %"}
+    return RobustnessVerdict(gain, ci, int(gains.size), flown, tuple(float(x) for x in placebo), p95, not reasons,
+                             "; ".join(reasons) or f"the gain {1e3 * gain:+.2f} mm is above 0 at {100 * confidence:g} "
+                                                   f"% and beyond every placebo but the top 5 %")
 
 
 def paired_difference(base: PathTrials, other: PathTrials, rng: np.random.Generator, resamples: int,
-                      confidence: float) -> dict:
+                      confidence: float) -> PairedDifference:
     """other - base on the same trial ids: mean error (trials where both succeeded) and failure rate."""
     common, ib, io = np.intersect1d(base.trial_id, other.trial_id, return_indices=True)
     if common.size == 0:
@@ -216,13 +221,12 @@ def paired_difference(base: PathTrials, other: PathTrials, rng: np.random.Genera
     d_err = other.error_m[io][both] - base.error_m[ib][both]
     d_fail = other.failed[io].astype(float) - base.failed[ib].astype(float)
     mean = lambda x, axis: x.mean(axis=axis)  # noqa: E731
-    return {"path": other.name, "versus": base.name, "paired_trials": int(common.size),
-            "both_succeeded": int(both.sum()),
-            "mean_error_diff_m": float(d_err.mean()) if d_err.size else float("nan"),
-            "mean_error_diff_ci": _ci((d_err,), mean, rng, resamples, confidence) if d_err.size > 2 else None,
-            "wins": int((d_err < 0).sum()), "losses": int((d_err > 0).sum()),
-            "failure_rate_diff": float(d_fail.mean()),
-            "failure_rate_diff_ci": _ci((d_fail,), mean, rng, resamples, confidence)}
+    return PairedDifference(
+        other.name, base.name, int(common.size), int(both.sum()),
+        float(d_err.mean()) if d_err.size else float("nan"),
+        _ci((d_err,), mean, rng, resamples, confidence) if d_err.size > 2 else None,
+        int((d_err < 0).sum()), int((d_err > 0).sum()), float(d_fail.mean()),
+        _ci((d_fail,), mean, rng, resamples, confidence))
 
 
 def box_plot(paths: list[PathTrials], file: Path) -> None:
@@ -242,17 +246,17 @@ def box_plot(paths: list[PathTrials], file: Path) -> None:
 
 def summarise(paths: list[PathTrials], seed: int, resamples: int, confidence: float,
               spec: tuple[float, float] | None = None, windfree_m: dict[str, float] | None = None,
-              placebos: dict[str, list[PathTrials]] | None = None, unmoved: Collection[str] = ()) -> dict:
+              placebos: dict[str, list[PathTrials]] | None = None, unmoved: Collection[str] = ()) -> EvaluationResult:
     """Tables 4/5 analogues: per-path summaries and paired differences against the first path; with
     ``windfree_m`` (path name -> wind-free error, placebos included) and ``placebos`` (WRP name -> its placebo
     paths' trials) the robustness gain of every other path and its verdict (module docstring). A path named in
     ``unmoved`` (a WRP that moved no viewpoint: the first path again) is never recommended, for that reason."""
     rng = np.random.default_rng(np.random.SeedSequence(seed, spawn_key=(7,)))
-    out = {"confidence": confidence, "bootstrap_resamples": resamples,
-           "paths": [path_summary(p, rng, resamples, confidence, spec) for p in paths],
-           "paired": [paired_difference(paths[0], p, rng, resamples, confidence) for p in paths[1:]]}
+    result = EvaluationResult(confidence, resamples,
+                              tuple(path_summary(p, rng, resamples, confidence, spec) for p in paths),
+                              tuple(paired_difference(paths[0], p, rng, resamples, confidence) for p in paths[1:]))
     if windfree_m is None:
-        return out
+        return result
     base = paths[0]
     robustness = {}
     for p in paths[1:]:
@@ -260,31 +264,30 @@ def summarise(paths: list[PathTrials], seed: int, resamples: int, confidence: fl
         placebo_gains = [robustness_gains(base, q, windfree_m[base.name], windfree_m[q.name])
                          for q in (placebos or {}).get(p.name, [])]
         placebo_means = [g.mean() if g.size else np.nan for g in placebo_gains]
-        robustness[p.name] = robustness_verdict(gains, np.array(placebo_means), rng, resamples, confidence)
-        robustness[p.name]["windfree_error_m"] = windfree_m[p.name]
+        verdict = replace(robustness_verdict(gains, np.array(placebo_means), rng, resamples, confidence),
+                          windfree_error_m=windfree_m[p.name])
         if p.name in unmoved:
-            robustness[p.name].update(recommended=False, reason="it moved no viewpoint: it is the initial path")
-    out["windfree_error_m"] = {k: v for k, v in windfree_m.items()}
-    out["robustness"] = robustness
-    recommended = [k for k, v in robustness.items() if v["recommended"]]
-    out["recommended_path"] = max(recommended, key=lambda k: robustness[k]["gain_m"]) if recommended else base.name
-    return out
+            verdict = replace(verdict, recommended=False, reason="it moved no viewpoint: it is the initial path")
+        robustness[p.name] = verdict
+    recommended = [k for k, v in robustness.items() if v.recommended]
+    return replace(result, windfree_error_m=dict(windfree_m), robustness=robustness,
+                   recommended_path=max(recommended, key=lambda k: robustness[k].gain_m) if recommended
+                   else base.name)
 
 
-def forecast_verdict(trials: PathTrials, ev, spec: tuple[float, float], seed: int, wind) -> dict:
+def forecast_verdict(trials: PathTrials, ev, spec: tuple[float, float], seed: int, wind) -> ForecastVerdict:
     """What the operator reads (issue 18 item 5): the chosen path in the forecast wind (``wind``: the config's
     ``wind:`` section), P(meets spec) with its CI, views not taken and sorties, and GO when the CI's lower bound
     reaches ``ev.go_probability`` (``ev``: the ``wrp.evaluate`` section, for its bootstrap and confidence)."""
     go_probability = ev.go_probability
     rng = np.random.default_rng(np.random.SeedSequence(seed, spawn_key=(8,)))
     row = path_summary(trials, rng, ev.bootstrap, ev.confidence, spec)
-    ci = row.get("p_meets_spec_ci")
+    ci = row.p_meets_spec_ci
     low = ci[0] if ci else float("nan")
     go = bool(np.isfinite(low) and low >= go_probability)
     summary = (f"forecast wind {wind.speed_10m_m_s:g} m/s from {wind.direction_deg:g} deg, path {trials.name}: "
-               f"P(meets spec) {row['p_meets_spec']:.2f}"
+               f"P(meets spec) {row.p_meets_spec:.2f}"
                + (f" [{ci[0]:.2f}, {ci[1]:.2f}]" if ci else "")
-               + f" over {row['trials']} flights -> {'GO' if go else 'NO-GO'} (needs the CI's lower bound >= "
+               + f" over {row.trials} flights -> {'GO' if go else 'NO-GO'} (needs the CI's lower bound >= "
                f"{go_probability:g})")
-    return {**row, "go": go, "go_probability": go_probability, "wind_speed_10m_mps": float(wind.speed_10m_m_s),
-            "wind_direction_deg": float(wind.direction_deg), "summary": summary}
+    return ForecastVerdict(row, go, go_probability, float(wind.speed_10m_m_s), float(wind.direction_deg), summary)

@@ -35,6 +35,7 @@ from wrp_eval.surrogate.model import Surrogate
 from wrp_eval.wrp.config import WrpSection
 from wrp_eval.wrp.confirm import CONFIRM_ROUNDS, confirm_moves
 from wrp_eval.wrp.evaluate import PathTrials, box_plot, forecast_verdict, read_trials, summarise
+from wrp_eval.wrp.evaluation import EvaluationResult, PlaceboControl
 from wrp_eval.wrp.optimize import (
     Table3Row,
     WrpParams,
@@ -280,9 +281,10 @@ def optimize_job(ctx: ExperimentContext, *, kind: str | None = None, threshold_m
 def evaluate_job(ctx: ExperimentContext, out: Path | None = None, *, n_trials: int | None = None, checkpoint=None,
                  campaign=None, e_original: float | None = None,
                  evaluator: str | None = None, surrogate: Surrogate | None = None,
-                 trials: TrialData | None = None, forecast: bool = True) -> dict:
+                 trials: TrialData | None = None, forecast: bool = True) -> EvaluationResult:
     """``wrp-eval evaluate``: ISWRP and SWRP optimised from one set of inputs, then the initial path and both
-    WRPs flown as campaigns with the same seed (common random numbers); returns the evaluate.json document.
+    WRPs flown as campaigns with the same seed (common random numbers); returns the evaluate.json document
+    (written as its ``to_json_dict``).
     ``evaluator``: the campaign's trial evaluator ("module:function"; default the MuJoCo flight + oracle);
     ``surrogate`` / ``trials``: already loaded by the caller (the checkpoint and campaign are then not read);
     ``forecast`` False: no forecast flights (``wrp-eval run`` reads the go / no-go off its envelope instead)."""
@@ -315,20 +317,21 @@ def evaluate_job(ctx: ExperimentContext, out: Path | None = None, *, n_trials: i
             ev.spec_completeness)
     result = summarise(flown_trials, ctx.campaign_seed, ev.bootstrap, ev.confidence, spec, windfree, placebo_trials,
                        unmoved)
-    result["placebos"] = {"per_wrp": ev.placebos, "not_flown_for": unmoved,
-                          "moves_without_a_flyable_direction": infeasible,
-                          "how": "as many viewpoints as the WRP moved, chosen at random, moved by the WRP's move "
-                                 "magnitudes in random directions with its yaw offsets (wrp/placebo.py)"}
+    placebos = PlaceboControl(ev.placebos, tuple(unmoved), infeasible,
+                              "as many viewpoints as the WRP moved, chosen at random, moved by the WRP's move "
+                              "magnitudes in random directions with its yaw offsets (wrp/placebo.py)")
+    verdict = None
     if forecast and ev.forecast_trials > 0:
-        chosen = result["recommended_path"]
+        chosen = result.recommended_path
         fly("forecast", paths[chosen], forecast_config(flown, ctx.config.wind, ev.forecast_trials))
-        result["forecast"] = forecast_verdict(read_trials(chosen, evaluated_campaign_dir(out, "forecast")), ev, spec,
-                                              ctx.campaign_seed, ctx.config.wind)
-    result["wrp"] = {kind: d["table3"] for kind, d in optimised.items()}
-    result["common_random_numbers"] = (f"every path flown with campaign seed {ctx.campaign_seed}: trial k of every "
-                                       "path draws the same wind")
+        verdict = forecast_verdict(read_trials(chosen, evaluated_campaign_dir(out, "forecast")), ev, spec,
+                                   ctx.campaign_seed, ctx.config.wind)
+    result = replace(result, placebos=placebos, forecast=verdict,
+                     wrp={kind: Table3Row.from_json_dict(d["table3"]) for kind, d in optimised.items()},
+                     common_random_numbers=f"every path flown with campaign seed {ctx.campaign_seed}: trial k of "
+                                           "every path draws the same wind")
     out.mkdir(parents=True, exist_ok=True)
-    write_json_atomic(out / "evaluate.json", result)
+    write_json_atomic(out / "evaluate.json", result.to_json_dict())
     box_plot(flown_trials, out / "boxplot.png")
     _log_evaluation(result)
     return result
@@ -358,22 +361,22 @@ def evaluation_trial(trial, n_trials: int):
     return trial.model_copy(update={"campaign": type(trial.campaign).model_validate(doc)})
 
 
-def _log_evaluation(result: dict) -> None:
-    for row in result["paths"]:
-        progress_log.info(f"{row['path']:8s} mean {row['mean_error_m']:.4f} m  std {row['std_error_m']:.4f}  "
-                 f"p95 {row['p95_error_m']:.4f}  failed {100 * row['failure_rate']:.1f} %")
-    for row in result["paired"]:
-        ci = row["mean_error_diff_ci"]
-        progress_log.info(f"{row['path']} - initial: mean error {row['mean_error_diff_m']:+.4f} m "
-                 + (f"[{ci[0]:+.4f}, {ci[1]:+.4f}]" if ci else "") + f" over {row['both_succeeded']} pairs, "
-                 f"failure rate {100 * row['failure_rate_diff']:+.1f} points")
-    for kind, verdict in result["robustness"].items():
-        progress_log.info(f"{kind}: robustness gain {1e3 * verdict['gain_m']:+.2f} mm, placebo p95 "
-                 f"{1e3 * verdict['placebo_gain_p95_m']:+.2f} mm: "
-                 + ("RECOMMENDED" if verdict["recommended"] else f"not recommended ({verdict['reason']})"))
-    progress_log.info(f"recommended path: {result['recommended_path']}")
-    if "forecast" in result:
-        progress_log.info(result["forecast"]["summary"])
+def _log_evaluation(result: EvaluationResult) -> None:
+    for row in result.paths:
+        progress_log.info(f"{row.path:8s} mean {row.mean_error_m:.4f} m  std {row.std_error_m:.4f}  "
+                          f"p95 {row.p95_error_m:.4f}  failed {100 * row.failure_rate:.1f} %")
+    for pair in result.paired:
+        ci = pair.mean_error_diff_ci
+        progress_log.info(f"{pair.path} - initial: mean error {pair.mean_error_diff_m:+.4f} m "
+                          + (f"[{ci[0]:+.4f}, {ci[1]:+.4f}]" if ci else "") + f" over {pair.both_succeeded} pairs, "
+                          f"failure rate {100 * pair.failure_rate_diff:+.1f} points")
+    for kind, verdict in (result.robustness or {}).items():
+        progress_log.info(f"{kind}: robustness gain {1e3 * verdict.gain_m:+.2f} mm, placebo p95 "
+                          f"{1e3 * verdict.placebo_gain_p95_m:+.2f} mm: "
+                          + ("RECOMMENDED" if verdict.recommended else f"not recommended ({verdict.reason})"))
+    progress_log.info(f"recommended path: {result.recommended_path}")
+    if result.forecast is not None:
+        progress_log.info(result.forecast.summary)
 
 
 def forecast_config(flown, wind, n_trials: int):

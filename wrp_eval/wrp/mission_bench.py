@@ -23,6 +23,7 @@ from wrp_eval.campaign.capture_bench import SPEEDS, quickstart_campaign, quickst
 from wrp_eval.campaign.store import TrialStore
 from wrp_eval.wrp.config import EvaluateSection
 from wrp_eval.wrp.evaluate import path_summary, read_trials
+from wrp_eval.wrp.evaluation import PathSummary
 from wrp_eval.wrp.jobs import SPEC_ERROR_FACTOR, windfree_error
 
 
@@ -33,27 +34,27 @@ def _endings(folder: Path) -> dict[str, int]:
     return dict(zip(names.tolist(), counts.tolist(), strict=True))
 
 
-def _ci(row: dict, key: str) -> str:
-    ci = row.get(key + "_ci")
+def _ci(row: PathSummary, key: str) -> str:
+    ci = getattr(row, key + "_ci")
     return f"[{ci[0]:.3g}, {ci[1]:.3g}]" if ci else "[n/a]"
 
 
-def speed_records(speed: float, row: dict, endings: dict[str, int]) -> list[BenchRecord]:
+def speed_records(speed: float, row: PathSummary, endings: dict[str, int]) -> list[BenchRecord]:
     """The mission records of one wind speed from its path summary ``row`` and its ending counts."""
     tag = f"u{speed:g}"
-    note = (f"quickstart path, physical design, U10 {speed:g} m/s, turbulence from the mean wind, {row['trials']} "
+    note = (f"quickstart path, physical design, U10 {speed:g} m/s, turbulence from the mean wind, {row.trials} "
             f"flights; endings {endings}; P(meets spec) {_ci(row, 'p_meets_spec')}, sorties "
             f"{_ci(row, 'expected_sorties')}, "
             f"mission time {_ci(row, 'mean_mission_time_s')} s (completed missions), P(completed) "
             f"{_ci(row, 'p_completed')}, P(one sortie) {_ci(row, 'p_one_sortie')} (95 % CIs); "
-            f"spec: error <= {row['spec_error_m'] * 1e3:.2f} mm, completeness >= {row['spec_completeness']:g}")
+            f"spec: error <= {row.spec_error_m * 1e3:.2f} mm, completeness >= {row.spec_completeness:g}")
     return [
-        BenchRecord(f"mission.p_completed.{tag}", row.get("p_completed"), "probability", note=note),
-        BenchRecord(f"mission.p_one_sortie.{tag}", row.get("p_one_sortie"), "probability", note=note),
-        BenchRecord(f"mission.mean_sorties.{tag}", row.get("expected_sorties"), "sorties", note=note),
-        BenchRecord(f"mission.mission_time_s.{tag}", row.get("mean_mission_time_s"), "s", note=note),
-        BenchRecord(f"mission.p_meets_spec.{tag}", row.get("p_meets_spec"), "probability", note=note),
-        BenchRecord(f"mission.views_not_taken.{tag}", row.get("mean_views_not_taken"), "views", note=note),
+        BenchRecord(f"mission.p_completed.{tag}", row.p_completed, "probability", note=note),
+        BenchRecord(f"mission.p_one_sortie.{tag}", row.p_one_sortie, "probability", note=note),
+        BenchRecord(f"mission.mean_sorties.{tag}", row.expected_sorties, "sorties", note=note),
+        BenchRecord(f"mission.mission_time_s.{tag}", row.mean_mission_time_s, "s", note=note),
+        BenchRecord(f"mission.p_meets_spec.{tag}", row.p_meets_spec, "probability", note=note),
+        BenchRecord(f"mission.views_not_taken.{tag}", row.mean_views_not_taken, "views", note=note),
     ]
 
 

@@ -22,6 +22,7 @@ from wrp_eval.bench_record import BenchRecord
 from wrp_eval.campaign.jobs import campaign_job
 from wrp_eval.experiment import ExperimentContext
 from wrp_eval.surrogate.train import train_from_campaign
+from wrp_eval.wrp.evaluation import EvaluationResult
 from wrp_eval.wrp.jobs import evaluate_job
 
 CONFIG = Path(__file__).resolve().parents[2] / "experiments" / "quickstart.yaml"
@@ -46,26 +47,26 @@ def run_bench() -> list[BenchRecord]:
         seconds = time.perf_counter() - start
     records.append(BenchRecord("wrp.evaluate_s", seconds, "s", None, None,
                                f"campaign {ctx.config.campaign.n_trials} trials + training + for each acceptance "
-                               f"ISWRP/SWRP + {len(doc['paths'])} paths and their placebos flown"))
+                               f"ISWRP/SWRP + {len(doc.paths)} paths and their placebos flown"))
     return records
 
 
-def _records(doc: dict, r2: float, suffix: str, acceptance: str) -> list[BenchRecord]:
+def _records(doc: EvaluationResult, r2: float, suffix: str, acceptance: str) -> list[BenchRecord]:
     records = []
-    for name, v in doc["robustness"].items():
+    for name, v in (doc.robustness or {}).items():
         kind = name + suffix
-        table = doc["wrp"][name]
-        note = (f"quickstart, acceptance {acceptance}, {doc['paths'][0]['trials']} winds per path, "
-                f"{len(v['placebo_gains_m'])} placebos; {table['offset_rate_pct']:.0f} % of the viewpoints moved; "
-                f"surrogate held-out R^2 {r2:.3f}; verdict: {'recommended' if v['recommended'] else v['reason']}; "
-                f"path to fly: {doc['recommended_path']}")
-        ci = v["gain_ci_m"]
+        table = (doc.wrp or {})[name]
+        note = (f"quickstart, acceptance {acceptance}, {doc.paths[0].trials} winds per path, "
+                f"{len(v.placebo_gains_m)} placebos; {table.offset_rate_pct:.0f} % of the viewpoints moved; "
+                f"surrogate held-out R^2 {r2:.3f}; verdict: {'recommended' if v.recommended else v.reason}; "
+                f"path to fly: {doc.recommended_path}")
+        ci = v.gain_ci_m
         records += [
-            BenchRecord(f"wrp.robustness_gain_mm.{kind}", 1e3 * v["gain_m"], "mm", None, None, note),
+            BenchRecord(f"wrp.robustness_gain_mm.{kind}", 1e3 * v.gain_m, "mm", None, None, note),
             BenchRecord(f"wrp.robustness_gain_ci_low_mm.{kind}", 1e3 * ci[0] if ci else float("nan"), "mm",
                         "issue 18: > 0 to recommend", 0.0, note),
-            BenchRecord(f"wrp.placebo_gain_p95_mm.{kind}", 1e3 * v["placebo_gain_p95_m"], "mm",
+            BenchRecord(f"wrp.placebo_gain_p95_mm.{kind}", 1e3 * v.placebo_gain_p95_m, "mm",
                         "issue 18: the gain must exceed it", None, note),
-            BenchRecord(f"wrp.recommended.{kind}", float(v["recommended"]), "bool", None, None, note),
+            BenchRecord(f"wrp.recommended.{kind}", float(v.recommended), "bool", None, None, note),
         ]
     return records
