@@ -27,6 +27,7 @@ from wrp_eval.planning.path import FlightPath
 from wrp_eval.planning.rerun_log import save_plan_recording
 from wrp_eval.recording import merge_recordings
 from wrp_eval.report import write_report
+from wrp_eval.run_summary import CampaignRun, EnvelopeRun, RunSummary, SurrogateFit
 from wrp_eval.ship.rerun_log import save_ship_recording
 from wrp_eval.study.runner import run_study
 from wrp_eval.surrogate.train import CHECKPOINT_NAME, train_from_campaign
@@ -54,9 +55,8 @@ class Step:
         return False
 
 
-def run_pipeline(ctx: ExperimentContext, *, smallest: bool = False) -> dict:
-    """Run every stage of the experiment; returns the run summary (also run_summary.json; its ``evaluate`` is the
-    :class:`~wrp_eval.wrp.evaluation.EvaluationResult`, written as its JSON document).
+def run_pipeline(ctx: ExperimentContext, *, smallest: bool = False) -> RunSummary | dict:
+    """Run every stage of the experiment; returns the :class:`RunSummary` (also run_summary.json).
 
     A config with a ``study:`` section runs its variants instead (:mod:`wrp_eval.study.runner`: each variant
     through the stages it needs) and returns the study document; ``smallest`` applies the study's
@@ -79,12 +79,11 @@ def run_pipeline(ctx: ExperimentContext, *, smallest: bool = False) -> dict:
     with Step(timings, "report", "report.md, figures and run.rrd"):
         risk = _risk_and_recording(ctx, path, summary, envelope is not None)
         timings["total"] = time.perf_counter() - job_start
-        summary["timings_s"] = timings
-        report = write_report(ctx, path, summary, trials, risk, envelope)
+        run = RunSummary(**summary, timings_s=timings)
+        report = write_report(ctx, path, run, trials, risk, envelope)
     timings["total"] = time.perf_counter() - job_start
-    write_json_atomic(out / "run_summary.json", {**summary, "evaluate": summary["evaluate"].to_json_dict()})
-    summary["report"] = str(report)
-    return summary
+    write_json_atomic(out / "run_summary.json", run.to_json_dict())
+    return replace(run, report=str(report))
 
 
 def _ship_and_plan(ctx: ExperimentContext, summary: dict, timings: dict) -> FlightPath:
@@ -114,12 +113,11 @@ def _flights(ctx: ExperimentContext, path: FlightPath, summary: dict, timings: d
     with Step(timings, "campaign", f"{config.campaign.n_trials} perturbed flights scored by the "
                                    f"{config.campaign.oracle} oracle"):
         camp = campaign_job(ctx, out_dir=campaign_dir, path=path)
-        summary["campaign"] = {"dir": str(campaign_dir), "trials": camp.done, "failed": camp.failed,
-                               "trials_per_min": camp.trials_per_min, "turbulence_stress": camp.stress_note}
+        summary["campaign"] = CampaignRun(str(campaign_dir), camp.done, camp.failed, camp.trials_per_min,
+                                          camp.stress_note)
     with Step(timings, "surrogate", "train the CNN surrogate on the campaign"):
         trained, trials, _ = train_from_campaign(ctx, campaign_dir, folders.surrogate)
-        summary["surrogate"] = {**trained.metrics["test"],
-                                "physical_variance_share": trained.metrics.get("physical_variance_share")}
+        summary["surrogate"] = SurrogateFit.of(trained.metrics["test"], trained.metrics.get("physical_variance_share"))
     with Step(timings, "wrp", "ISWRP and SWRP, then the three paths flown under the same winds"):
         summary["evaluate"] = evaluate_job(ctx, folders.evaluate, checkpoint=folders.surrogate / CHECKPOINT_NAME,
                                            campaign=campaign_dir, surrogate=trained.surrogate,
@@ -134,6 +132,7 @@ def _flights(ctx: ExperimentContext, path: FlightPath, summary: dict, timings: d
 def _envelope(ctx: ExperimentContext, path: FlightPath, summary: dict, timings: dict):
     """The wind envelope of the recommended path on ``envelope.run_grid`` (None when that is off)."""
     grid = ctx.config.envelope.run_grid
+    summary["envelope"] = None
     if grid is None:
         return None
     chosen = summary["evaluate"].recommended_path
@@ -141,9 +140,9 @@ def _envelope(ctx: ExperimentContext, path: FlightPath, summary: dict, timings: 
                                    f"U10 up to {grid.speeds_m_s[-1]:g} m/s)"):
         fly = path if chosen == "initial" else FlightPath.load(ctx.folders.evaluated_wrp(chosen) / "path.json")
         job = envelope_job(ctx, grid, path=fly)
-        summary["envelope"] = {"path": chosen, "go": job.envelope.go, "files": job.files,
-                               "boundaries_m_s": {b.direction: b.boundary_m_s for b in job.envelope.boundaries},
-                               "flights": job.envelope.flights_total}
+        summary["envelope"] = EnvelopeRun(chosen, job.envelope.go, job.files,
+                                          {b.direction: b.boundary_m_s for b in job.envelope.boundaries},
+                                          job.envelope.flights_total)
     return job.envelope
 
 

@@ -18,6 +18,7 @@ from wrp_eval.atomic import atomic_path, write_text_atomic
 from wrp_eval.envelope.jobs import boundary_text
 from wrp_eval.envelope.result import Envelope
 from wrp_eval.experiment import ExperimentContext
+from wrp_eval.run_summary import CampaignRun, RunSummary, SurrogateFit
 from wrp_eval.surrogate.data import TrialData
 from wrp_eval.wind.field import sample_mean_field
 from wrp_eval.wind.outputs import quiver_png
@@ -204,7 +205,7 @@ def envelope_section(env: Envelope, path_name: str, figure: str, risk_figure: st
     return lines + [EARTH_FRAME_WARNING, ""]
 
 
-def write_report(ctx: ExperimentContext, path, summary: dict, trials: TrialData, risk: ViewRisk | None = None,
+def write_report(ctx: ExperimentContext, path, summary: RunSummary, trials: TrialData, risk: ViewRisk | None = None,
                  envelope: Envelope | None = None) -> Path:
     """Figures under ``<run>/figures`` and ``<run>/report.md``; returns the report's path. path: the planned
     FlightPath; summary: the run summary so far; trials: the campaign's trials (as the surrogate was trained on);
@@ -212,17 +213,17 @@ def write_report(ctx: ExperimentContext, path, summary: dict, trials: TrialData,
     envelope (the first page), None: the forecast flights of the evaluation open the report instead."""
     config, out = ctx.config, ctx.folders.root
     _figures(ctx, path, trials, risk)
-    ev = summary["evaluate"]
-    first_page = (envelope_section(envelope, summary["envelope"]["path"],
+    ev = summary.evaluate
+    first_page = (envelope_section(envelope, summary.envelope.path,
                                    os.path.relpath(ctx.folders.envelope / "envelope.png", out),
                                    "figures/view_risk.png" if risk is not None else None)
                   if envelope is not None else operator_section(ev))
-    lines = [*header_section(config.run.name, summary["config"], config.run.seed, ctx.ship), *first_page,
-             *ship_section(ctx.ship.complexity, path, summary["plan"]), *WIND_SECTION,
-             *campaign_section(summary["campaign"], config.campaign.perturbation.design, summary["surrogate"]),
-             *surrogate_section(summary["surrogate"]), *wrp_section(ev.wrp or {}), *robustness_section(ev),
+    lines = [*header_section(config.run.name, summary.config, config.run.seed, ctx.ship), *first_page,
+             *ship_section(ctx.ship.complexity, path, summary.plan), *WIND_SECTION,
+             *campaign_section(summary.campaign, config.campaign.perturbation.design, summary.surrogate),
+             *surrogate_section(summary.surrogate), *wrp_section(ev.wrp or {}), *robustness_section(ev),
              *(risk_section(risk) if risk is not None else []),
-             *missions_section(summary["missions"], out), *timings_section(summary["timings_s"], out)]
+             *missions_section(summary.missions, out), *timings_section(summary.timings_s, out)]
     return write_text_atomic(out / "report.md", "\n".join(lines))
 
 
@@ -270,11 +271,11 @@ WIND_SECTION = ["## Wind (mean field; Dryden turbulence on top in every flight)"
                 "![wind field](figures/wind_field.png)", ""]
 
 
-def campaign_section(campaign: dict, design: str, surrogate: dict) -> list[str]:
+def campaign_section(campaign: CampaignRun, design: str, surrogate: SurrogateFit) -> list[str]:
     """The campaign's trials, its design, the flown offsets and the share of their variance the flights made."""
-    share = surrogate.get("physical_variance_share")
+    share = surrogate.physical_variance_share
     return ["## Monte Carlo campaign", "",
-            f"{campaign['trials']} trials ({campaign['failed']} failed) in `{campaign['dir']}`; "
+            f"{campaign.trials} trials ({campaign.failed} failed) in `{campaign.dir}`; "
             f"{_design_text(design)}, flown through sampled winds in MuJoCo, scored by the synthetic reconstruction "
             "oracle.", "", "![flown offsets](figures/offsets.png)", "",
             *([f"Share of the flown offsets' variance that the flights made (not commanded): position "
@@ -282,12 +283,12 @@ def campaign_section(campaign: dict, design: str, surrogate: dict) -> list[str]:
               if share else [])]
 
 
-def surrogate_section(sur: dict) -> list[str]:
+def surrogate_section(sur: SurrogateFit) -> list[str]:
     """The surrogate's held-out figures beside the paper's Sec. 4.1."""
     return ["## Surrogate (paper Sec. 4.1)", "", "| held-out test trials | ours | paper |", "|---|---|---|",
-            f"| R^2 | {fmt(sur['r2'], 3)} | {PAPER['surrogate_r2']} |",
-            f"| RMSE (m) | {fmt(sur['rmse'], 3)} | {PAPER['surrogate_rmse']} (on errors of ~3 m) |",
-            f"| MAE (m) | {fmt(sur['mae'], 3)} | |", f"| trials | {sur['n']} | 300 experiments in all |", "",
+            f"| R^2 | {fmt(sur.r2, 3)} | {PAPER['surrogate_r2']} |",
+            f"| RMSE (m) | {fmt(sur.rmse, 3)} | {PAPER['surrogate_rmse']} (on errors of ~3 m) |",
+            f"| MAE (m) | {fmt(sur.mae, 3)} | |", f"| trials | {sur.n} | 300 experiments in all |", "",
             "![parity](surrogate/parity.png)", ""]
 
 

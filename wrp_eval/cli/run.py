@@ -9,15 +9,19 @@ from pathlib import Path
 from wrp_eval.experiment import ExperimentContext
 from wrp_eval.pipeline import __doc__ as PIPELINE_DOC
 from wrp_eval.pipeline import run_pipeline
+from wrp_eval.run_summary import RunSummary
 
 
 def _run(args: argparse.Namespace) -> int:
     ctx = ExperimentContext.load(args.config)
     summary = run_pipeline(ctx, smallest=args.smallest)
-    out = Path(summary["out"])
-    print(f"\nwrp-eval run finished in {summary['timings_s']['total']:.0f} s.")
-    print(f"Report:    {summary['report']}")
-    if "rows" in summary:   # a study: a table, and one recording per variant
+    if isinstance(summary, RunSummary):
+        out, total, report = Path(summary.out), summary.timings_s["total"], summary.report
+    else:                   # a study's document
+        out, total, report = Path(summary["out"]), summary["timings_s"]["total"], summary["report"]
+    print(f"\nwrp-eval run finished in {total:.0f} s.")
+    print(f"Report:    {report}")
+    if not isinstance(summary, RunSummary):   # a study: a table, and one recording per variant
         print(f"Table:     {out / 'study.json'}  (the rows as JSON; per-variant paths under {out / 'study'})")
     print(f"Recording: {out / 'run.rrd'}  (open it with: rerun {out / 'run.rrd'})")
     return 0
