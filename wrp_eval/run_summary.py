@@ -5,13 +5,9 @@ order the stages ran. Frozen dataclasses with ``to_json_dict``; the evaluation i
 
 from __future__ import annotations
 
-from dataclasses import dataclass, fields
+from dataclasses import asdict, dataclass
 
 from wrp_eval.wrp.evaluation import EvaluationResult
-
-
-def _plain(obj) -> dict:
-    return {f.name: getattr(obj, f.name) for f in fields(obj)}
 
 
 @dataclass(frozen=True)
@@ -26,7 +22,7 @@ class CampaignRun:
     turbulence_stress: str | None
 
     def to_json_dict(self) -> dict:
-        return _plain(self)
+        return asdict(self)
 
 
 @dataclass(frozen=True)
@@ -66,7 +62,7 @@ class EnvelopeRun:
     flights: int
 
     def to_json_dict(self) -> dict:
-        return _plain(self)
+        return asdict(self)
 
 
 @dataclass(frozen=True)

@@ -67,7 +67,8 @@ def test_evaluate_flies_all_paths_with_the_same_winds(tmp_path, acceptance):
     written = json.loads((tmp_path / "ev" / "evaluate.json").read_text())
     assert json.dumps(result.to_json_dict()) == json.dumps(written)      # the file is the typed result, key order too
     assert json.dumps(EvaluationResult.from_json_dict(written).to_json_dict()) == json.dumps(written)
-    assert result.path("initial").trials == 6 and result.forecast.row.path == result.recommended_path
+    assert result.paths[0].path == "initial" and result.paths[0].trials == 6
+    assert result.forecast.row.path == result.recommended_path
     doc = written
     assert [p["path"] for p in doc["paths"]] == ["initial", "iswrp", "swrp"]
     assert all(p["trials"] == 6 for p in doc["paths"])

@@ -9,7 +9,7 @@ groups a path's campaign cannot give (no spec, no views-not-taken column, no sor
 
 from __future__ import annotations
 
-from dataclasses import dataclass, fields
+from dataclasses import asdict, dataclass, fields
 
 from wrp_eval.wrp.optimize import Table3Row
 
@@ -96,7 +96,7 @@ class PairedDifference:
     failure_rate_diff_ci: Interval
 
     def to_json_dict(self) -> dict:
-        return {f.name: getattr(self, f.name) for f in fields(self)}
+        return asdict(self)
 
     @classmethod
     def from_json_dict(cls, doc: dict) -> "PairedDifference":
@@ -121,7 +121,7 @@ class RobustnessVerdict:
     windfree_error_m: float | None = None
 
     def to_json_dict(self) -> dict:
-        doc = {f.name: getattr(self, f.name) for f in fields(self)}
+        doc = asdict(self)
         doc["placebo_gains_m"] = list(self.placebo_gains_m)
         if self.windfree_error_m is None:
             del doc["windfree_error_m"]
@@ -201,13 +201,6 @@ class EvaluationResult:
     forecast: ForecastVerdict | None = None
     wrp: dict[str, Table3Row] | None = None
     common_random_numbers: str | None = None
-
-    def path(self, name: str) -> PathSummary:
-        """The summary of the path called ``name`` (KeyError if none)."""
-        for row in self.paths:
-            if row.path == name:
-                return row
-        raise KeyError(name)
 
     def to_json_dict(self) -> dict:
         doc = {"confidence": self.confidence, "bootstrap_resamples": self.bootstrap_resamples,
