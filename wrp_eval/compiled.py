@@ -24,10 +24,13 @@ from __future__ import annotations
 
 import hashlib
 import os
+from collections.abc import Callable
 from pathlib import Path
+from typing import Any, TypeVar, cast
 
 import numba
 import numpy as np
+from numpy.typing import ArrayLike, DTypeLike, NDArray
 
 from wrp_eval.resources import cache_dir
 
@@ -52,10 +55,10 @@ if not os.environ.get("NUMBA_CACHE_DIR"):
     # the environment for processes started from this one (campaign workers compute the same folder), the
     # config for the kernels decorated from now on (numba reads it when a kernel is decorated)
     os.environ["NUMBA_CACHE_DIR"] = str(kernel_cache_dir())
-    numba.config.CACHE_DIR = os.environ["NUMBA_CACHE_DIR"]
+    numba.config.CACHE_DIR = os.environ["NUMBA_CACHE_DIR"]  # type: ignore[attr-defined]  # numba sets it at run time
 
 
-def as_rows(name: str, array, shape: tuple[int, ...], dtype=float) -> np.ndarray:
+def as_rows(name: str, array: ArrayLike, shape: tuple[int, ...], dtype: DTypeLike = float) -> NDArray[Any]:
     """``array`` as ``dtype`` with ``shape`` (a number or another broadcastable shape is broadcast to it), or a
     ValueError naming ``name``. A kernel does not check its indices (numba: no bounds checks), so every array
     a kernel reads or writes row by row passes through here first: a wrong shape is an error, not a silent
@@ -69,6 +72,10 @@ def as_rows(name: str, array, shape: tuple[int, ...], dtype=float) -> np.ndarray
         raise ValueError(f"{name} must have shape {shape}, got {rows.shape}") from None
 
 
-def kernel(function):
-    """``function`` compiled by numba (nopython mode) with the project's settings (module docstring)."""
-    return numba.njit(cache=True, nogil=True, error_model="numpy")(function)
+KernelFunction = TypeVar("KernelFunction", bound=Callable[..., Any])
+
+
+def kernel(function: KernelFunction) -> KernelFunction:
+    """``function`` compiled by numba (nopython mode) with the project's settings (module docstring). Typed as
+    the function it compiles: numba ships no type information, and the dispatcher takes the same arguments."""
+    return cast(KernelFunction, numba.njit(cache=True, nogil=True, error_model="numpy")(function))
