@@ -18,10 +18,12 @@ setup: $(STAMP)
 $(STAMP): pyproject.toml scripts/system_deps.sh
 	bash scripts/system_deps.sh
 	test -x $(BIN)/python || $(PY) -m venv $(VENV)
-	$(BIN)/python -m pip install -q --upgrade pip
-	# The CPU build of torch first: a bare `torch` requirement could pull a multi-GB CUDA build.
+	$(BIN)/python -m pip install -q --upgrade pip "uv==0.13.8"
+	# The CPU build of torch first, through pip: pip takes the wheel this machine keeps on disk (PIP_FIND_LINKS),
+	# uv would not look there, and a bare `torch` requirement could pull a multi-GB CUDA build.
 	$(BIN)/python -m pip install -q "torch==2.13.0"
-	$(BIN)/python -m pip install -q -e ".[test,cluster]"
+	# The rest through uv: the same versions as pip (compared with pip freeze), ~16 s instead of ~90 s here.
+	$(BIN)/uv pip install -q --python $(BIN)/python -e ".[test,cluster]"
 	touch $(STAMP)
 
 run: setup
@@ -30,6 +32,7 @@ run: setup
 test: setup
 	$(BIN)/lint-imports --no-cache
 	$(BIN)/ruff check wrp_eval tests scripts
+	$(BIN)/mypy
 	$(BIN)/python -m pytest -q -p no:cacheprovider -n $(TEST_WORKERS) --dist loadfile
 
 bench: setup

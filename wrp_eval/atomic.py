@@ -82,6 +82,6 @@ def write_text_atomic(target: str | Path, text: str) -> Path:
     return write_bytes_atomic(target, text.encode("utf-8"))
 
 
-def write_json_atomic(target: str | Path, doc) -> Path:
+def write_json_atomic(target: str | Path, doc: object) -> Path:
     """``doc`` as indented JSON (numpy scalars as floats), atomically; returns the path."""
     return write_text_atomic(target, json.dumps(doc, indent=1, default=float))

@@ -14,6 +14,7 @@ import json
 import time
 from dataclasses import asdict
 from pathlib import Path
+from typing import Any
 
 from wrp_eval.atomic import write_text_atomic
 from wrp_eval.bench_record import environment
@@ -43,14 +44,14 @@ BENCH_GROUPS: dict[str, str] = {
 
 def run_groups(groups: list[str], out_dir: Path) -> list[dict]:
     out_dir.mkdir(parents=True, exist_ok=True)
-    all_records = []
+    all_records: list[dict] = []
     for group in groups:
         start = time.perf_counter()
         run = importlib.import_module(BENCH_GROUPS[group]).run_bench
         # a group that draws figures takes the output folder
         records = run(out_dir) if "out_dir" in inspect.signature(run).parameters else run()
-        doc = {"group": group, "created_unix": time.time(), "wall_s": time.perf_counter() - start,
-               "environment": environment(), "records": [asdict(r) for r in records]}
+        doc: dict[str, Any] = {"group": group, "created_unix": time.time(), "wall_s": time.perf_counter() - start,
+                               "environment": environment(), "records": [asdict(r) for r in records]}
         write_text_atomic(out_dir / f"{group}.json", json.dumps(doc, indent=1))
         all_records.extend(doc["records"])
     return all_records

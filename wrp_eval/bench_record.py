@@ -11,6 +11,7 @@ import importlib
 import os
 import platform
 from dataclasses import dataclass
+from typing import Any
 
 import numpy
 
@@ -25,7 +26,7 @@ class BenchRecord:
     note: str = ""
 
 
-def environment() -> dict:
+def environment() -> dict[str, Any]:
     """Machine and library versions, stored with every bench file."""
     versions = {"python": platform.python_version(), "numpy": numpy.__version__}
     for mod in ("scipy", "mujoco", "open3d", "torch", "trimesh", "rerun"):

@@ -20,8 +20,10 @@ give the image size, we take a 6000 x 4000 px (24 MP, 3:2) full-frame sensor, co
 from __future__ import annotations
 
 from dataclasses import dataclass
+from typing import overload
 
 import numpy as np
+from numpy.typing import ArrayLike, NDArray
 
 from wrp_eval.compiled import kernel
 
@@ -53,7 +55,11 @@ class Camera:
         """Half vertical field of view, radians."""
         return float(np.arctan(0.5 * self.sensor_height_mm / self.focal_mm))
 
-    def gsd_m(self, distance_m: float | np.ndarray) -> float | np.ndarray:
+    @overload
+    def gsd_m(self, distance_m: float) -> float: ...
+    @overload
+    def gsd_m(self, distance_m: NDArray[np.float64]) -> NDArray[np.float64]: ...
+    def gsd_m(self, distance_m: float | NDArray[np.float64]) -> float | NDArray[np.float64]:
         """Ground sampling distance (m/px) at ``distance_m``: D * sensor_width / (f * image_width)."""
         return distance_m * self.sensor_width_mm / (self.focal_mm * self.image_width_px)
 
@@ -61,13 +67,18 @@ class Camera:
         """Distance (m) at which one pixel covers ``gsd_m`` metres."""
         return gsd_m * self.focal_mm * self.image_width_px / self.sensor_width_mm
 
-    def footprint_m(self, distance_m: float | np.ndarray) -> tuple:
+    @overload
+    def footprint_m(self, distance_m: float) -> tuple[float, float]: ...
+    @overload
+    def footprint_m(self, distance_m: NDArray[np.float64]) -> tuple[NDArray[np.float64], NDArray[np.float64]]: ...
+    def footprint_m(self, distance_m: float | NDArray[np.float64]
+                    ) -> tuple[float | NDArray[np.float64], float | NDArray[np.float64]]:
         """(width, height) in metres of the image footprint on a plane facing the camera at ``distance_m``."""
         gsd = self.gsd_m(distance_m)
         return gsd * self.image_width_px, gsd * self.image_height_px
 
 
-def optical_axes(yaw: np.ndarray, pitch: np.ndarray) -> np.ndarray:
+def optical_axes(yaw: ArrayLike, pitch: ArrayLike) -> NDArray[np.float64]:
     """Unit optical axes (n, 3) from yaw and pitch (n,) in radians."""
     yaw = np.asarray(yaw, dtype=float)
     pitch = np.asarray(pitch, dtype=float)
@@ -75,7 +86,7 @@ def optical_axes(yaw: np.ndarray, pitch: np.ndarray) -> np.ndarray:
     return np.stack([cp * np.cos(yaw), cp * np.sin(yaw), np.sin(pitch)], axis=-1)
 
 
-def yaw_pitch_towards(positions: np.ndarray, targets: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+def yaw_pitch_towards(positions: ArrayLike, targets: ArrayLike) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
     """Yaw and pitch (radians, each (n,)) that point cameras at ``positions`` (n, 3) to ``targets`` (n, 3)."""
     d = np.asarray(targets, dtype=float) - np.asarray(positions, dtype=float)
     yaw = np.arctan2(d[..., 1], d[..., 0])
@@ -84,7 +95,7 @@ def yaw_pitch_towards(positions: np.ndarray, targets: np.ndarray) -> tuple[np.nd
 
 
 @kernel
-def _level_row(yaw: float, pitch: float, rot) -> None:
+def _level_row(yaw: float, pitch: float, rot: NDArray[np.float64]) -> None:
     """Write the roll-free world-from-camera rotation of one view into ``rot`` (3, 3): columns x = (sin yaw,
     -cos yaw, 0), z = the optical axis (:func:`optical_axes`), y = z x x."""
     cp = np.cos(pitch)
@@ -96,7 +107,8 @@ def _level_row(yaw: float, pitch: float, rot) -> None:
 
 
 @kernel
-def _rotation_rows(yaw, pitch, roll):
+def _rotation_rows(yaw: NDArray[np.float64], pitch: NDArray[np.float64],
+                   roll: NDArray[np.float64]) -> NDArray[np.float64]:
     n = yaw.size
     rot = np.empty((n, 3, 3))
     for row in range(n):
@@ -110,7 +122,7 @@ def _rotation_rows(yaw, pitch, roll):
     return rot
 
 
-def camera_rotations(yaw: np.ndarray, pitch: np.ndarray, roll: np.ndarray | None = None) -> np.ndarray:
+def camera_rotations(yaw: ArrayLike, pitch: ArrayLike, roll: ArrayLike | None = None) -> NDArray[np.float64]:
     """World-from-camera rotations (n, 3, 3): columns are the camera x (right), y (down), z (optical axis).
 
     yaw, pitch (n,) rad; roll (n,) rad about the optical axis (module docstring: positive turns the camera
@@ -128,7 +140,7 @@ def camera_rotations(yaw: np.ndarray, pitch: np.ndarray, roll: np.ndarray | None
 
 
 @kernel
-def _angle_rows(rot):
+def _angle_rows(rot: NDArray[np.float64]) -> tuple[NDArray[np.float64], NDArray[np.float64], NDArray[np.float64]]:
     n = rot.shape[0]
     yaw, pitch, roll = np.empty(n), np.empty(n), np.zeros(n)
     level = np.empty((3, 3))
@@ -148,7 +160,7 @@ def _angle_rows(rot):
     return yaw, pitch, roll
 
 
-def camera_angles(rotations: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+def camera_angles(rotations: ArrayLike) -> tuple[NDArray[np.float64], NDArray[np.float64], NDArray[np.float64]]:
     """Inverse of :func:`camera_rotations`: world-from-camera rotations (n, 3, 3) -> yaw, pitch, roll (n,) rad.
 
     yaw in (-pi, pi], pitch in [-pi/2, pi/2], roll in (-pi, pi]. At pitch +-pi/2 (optical axis vertical)
@@ -158,8 +170,8 @@ def camera_angles(rotations: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.nda
     return _angle_rows(np.ascontiguousarray(np.asarray(rotations, dtype=float).reshape(-1, 3, 3)))
 
 
-def project(points: np.ndarray, positions: np.ndarray, rotations: np.ndarray,
-            camera: Camera) -> tuple[np.ndarray, np.ndarray]:
+def project(points: ArrayLike, positions: ArrayLike, rotations: NDArray[np.float64],
+            camera: Camera) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
     """Project points into every camera.
 
     points (m, 3); positions (n, 3); rotations (n, 3, 3) world-from-camera.
@@ -176,7 +188,7 @@ def project(points: np.ndarray, positions: np.ndarray, rotations: np.ndarray,
     return uv, depth
 
 
-def in_image(uv: np.ndarray, depth: np.ndarray, camera: Camera) -> np.ndarray:
+def in_image(uv: NDArray[np.float64], depth: NDArray[np.float64], camera: Camera) -> NDArray[np.bool_]:
     """Boolean mask (same leading shape as depth): in front of the camera and inside the image."""
     return ((depth > 0) & (uv[..., 0] >= 0) & (uv[..., 0] <= camera.image_width_px)
             & (uv[..., 1] >= 0) & (uv[..., 1] <= camera.image_height_px))

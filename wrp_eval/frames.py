@@ -31,9 +31,12 @@ a direction into an ENU or ship-frame velocity vector.
 
 from __future__ import annotations
 
+from collections.abc import Sequence
 from dataclasses import dataclass
+from typing import Protocol, cast
 
 import numpy as np
+from numpy.typing import ArrayLike, NDArray
 from pyproj import Geod
 
 from wrp_eval.errors import InputError
@@ -57,14 +60,30 @@ class ShipPose:
         return float(np.radians(self.heading_deg))
 
 
-def ship_pose(ship) -> ShipPose:
+class PoseLike(Protocol):
+    """Anything with a ship's ``lat_deg``, ``lon_deg`` and ``heading_deg`` (e.g. ``ShipParticulars``)."""
+
+    @property
+    def lat_deg(self) -> float: ...
+    @property
+    def lon_deg(self) -> float: ...
+    @property
+    def heading_deg(self) -> float: ...
+
+
+# what :func:`ship_pose` takes
+ShipLike = ShipPose | PoseLike | Sequence[float]
+
+
+def ship_pose(ship: ShipLike) -> ShipPose:
     """The :class:`ShipPose` of ``ship``: a ShipPose, anything with ``lat_deg``, ``lon_deg`` and
     ``heading_deg`` (e.g. the ship stage's ``ShipParticulars``), or a ``(lat_deg, lon_deg, heading_deg)``
     sequence. Anything else is an :class:`InputError`."""
     if isinstance(ship, ShipPose):
         return ship
     if hasattr(ship, "lat_deg"):
-        return ShipPose(float(ship.lat_deg), float(ship.lon_deg), float(ship.heading_deg))
+        posed = cast(PoseLike, ship)
+        return ShipPose(float(posed.lat_deg), float(posed.lon_deg), float(posed.heading_deg))
     try:
         lat, lon, heading = (float(v) for v in ship)
     except (TypeError, ValueError):
@@ -72,20 +91,23 @@ def ship_pose(ship) -> ShipPose:
     return ShipPose(lat, lon, heading)
 
 
-def ship_to_enu(x, y, heading_rad) -> tuple[np.ndarray, np.ndarray]:
+def ship_to_enu(x: float | NDArray[np.float64], y: float | NDArray[np.float64],
+                heading_rad: float | NDArray[np.float64]) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
     """Ship-frame horizontal components (any broadcastable shapes, m or m/s) -> (east, north) for a true
     heading ``heading_rad`` (clockwise from north)."""
     s, c = np.sin(heading_rad), np.cos(heading_rad)
     return x * s - y * c, x * c + y * s
 
 
-def enu_to_ship(east, north, heading_rad) -> tuple[np.ndarray, np.ndarray]:
+def enu_to_ship(east: float | NDArray[np.float64], north: float | NDArray[np.float64],
+                heading_rad: float | NDArray[np.float64]) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
     """Inverse of :func:`ship_to_enu`: (east, north) components (any broadcastable shapes) -> ship (x, y)."""
     s, c = np.sin(heading_rad), np.cos(heading_rad)
     return east * s + north * c, -east * c + north * s
 
 
-def wind_velocity(speed_mps, direction_from_rad, heading_rad=None) -> np.ndarray:
+def wind_velocity(speed_mps: float | NDArray[np.float64], direction_from_rad: float | NDArray[np.float64],
+                  heading_rad: float | NDArray[np.float64] | None = None) -> NDArray[np.float64]:
     """Velocity (..., 3) m/s of a horizontal wind of ``speed_mps`` blowing FROM the compass bearing
     ``direction_from_rad`` (radians clockwise from true north; the edges' degrees through ``np.radians``).
 
@@ -100,7 +122,8 @@ def wind_velocity(speed_mps, direction_from_rad, heading_rad=None) -> np.ndarray
     return np.stack([east, north, np.zeros_like(east)], axis=-1)
 
 
-def enu_to_geographic(east, north, pose: ShipPose) -> tuple[np.ndarray, np.ndarray]:
+def enu_to_geographic(east: ArrayLike, north: ArrayLike,
+                      pose: ShipPose) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
     """Local (east (n,), north (n,)) metres about the ship -> (lat_deg (n,), lon_deg (n,)) on WGS84, along
     the geodesic from the ship's position (azimuthal equidistant about it)."""
     east = np.asarray(east, dtype=float)
@@ -112,7 +135,8 @@ def enu_to_geographic(east, north, pose: ShipPose) -> tuple[np.ndarray, np.ndarr
     return np.asarray(lat, dtype=float), np.asarray(lon, dtype=float)
 
 
-def geographic_to_enu(lat_deg, lon_deg, pose: ShipPose) -> tuple[np.ndarray, np.ndarray]:
+def geographic_to_enu(lat_deg: ArrayLike, lon_deg: ArrayLike,
+                      pose: ShipPose) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
     """(lat, lon) degrees (n,) -> local (east (n,), north (n,)) metres about the ship; the exact inverse of
     :func:`enu_to_geographic` (``Geod.inv``)."""
     lat = np.asarray(lat_deg, dtype=float)
@@ -124,7 +148,8 @@ def geographic_to_enu(lat_deg, lon_deg, pose: ShipPose) -> tuple[np.ndarray, np.
     return distance * np.sin(az), distance * np.cos(az)
 
 
-def geographic_to_enu_equirectangular(lat_deg, lon_deg, pose: ShipPose) -> tuple[np.ndarray, np.ndarray]:
+def geographic_to_enu_equirectangular(lat_deg: ArrayLike, lon_deg: ArrayLike,
+                                      pose: ShipPose) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
     """(lat, lon) degrees (any shape) -> local (east, north) metres about the ship on the equirectangular
     plane tangent at its latitude (sphere of radius ``EARTH_RADIUS_M``):
     east = R cos(lat0) (lon - lon0), north = R (lat - lat0).
@@ -141,7 +166,7 @@ def geographic_to_enu_equirectangular(lat_deg, lon_deg, pose: ShipPose) -> tuple
     return east, north
 
 
-def ship_to_geographic(points: np.ndarray, pose: ShipPose) -> tuple[np.ndarray, np.ndarray]:
+def ship_to_geographic(points: ArrayLike, pose: ShipPose) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
     """Ship-frame points (n, 3) or (n, 2) m -> (lat_deg (n,), lon_deg (n,)) on WGS84. Heights are left to
     the caller."""
     p = np.asarray(points, dtype=float)
@@ -149,25 +174,26 @@ def ship_to_geographic(points: np.ndarray, pose: ShipPose) -> tuple[np.ndarray, 
     return enu_to_geographic(east, north, pose)
 
 
-def geographic_to_ship(lat_deg, lon_deg, pose: ShipPose) -> np.ndarray:
+def geographic_to_ship(lat_deg: ArrayLike, lon_deg: ArrayLike, pose: ShipPose) -> NDArray[np.float64]:
     """(lat, lon) degrees (n,) -> ship-frame (x, y) metres (n, 2); inverse of :func:`ship_to_geographic`."""
     east, north = geographic_to_enu(lat_deg, lon_deg, pose)
     return np.stack(enu_to_ship(east, north, pose.heading_rad), axis=-1)
 
 
-def yaw_to_compass_deg(yaw_rad, ship_heading_deg: float) -> np.ndarray:
+def yaw_to_compass_deg(yaw_rad: ArrayLike, ship_heading_deg: float) -> NDArray[np.float64]:
     """Ship-frame yaw (rad, CCW from the bow), any shape -> compass bearing (deg, CW from true north) in
     [0, 360)."""
-    return np.mod(ship_heading_deg - np.degrees(np.asarray(yaw_rad, dtype=float)), 360.0)
+    compass: NDArray[np.float64] = np.mod(ship_heading_deg - np.degrees(np.asarray(yaw_rad, dtype=float)), 360.0)
+    return compass
 
 
-def compass_to_yaw_rad(compass_deg, ship_heading_deg: float) -> np.ndarray:
+def compass_to_yaw_rad(compass_deg: ArrayLike, ship_heading_deg: float) -> NDArray[np.float64]:
     """Compass bearing (deg), any shape -> ship-frame yaw (rad, CCW from the bow) in (-pi, pi]."""
     yaw_deg = ship_heading_deg - np.asarray(compass_deg, dtype=float)
     return np.radians(wrap_180(yaw_deg))
 
 
-def wrap_180(angle_deg) -> np.ndarray:
+def wrap_180(angle_deg: ArrayLike) -> NDArray[np.float64]:
     """Angles (deg), any shape, into (-180, 180]."""
     a = np.mod(np.asarray(angle_deg, dtype=float) + 180.0, 360.0) - 180.0
     return np.where(a == -180.0, 180.0, a)

@@ -20,6 +20,7 @@ from contextlib import contextmanager
 from pathlib import Path
 
 import rerun as rr
+import rerun.blueprint as rrb
 
 from wrp_eval.atomic import atomic_path
 
@@ -28,7 +29,7 @@ APPLICATION_ID = "wrp-eval"  # one application for every stage's recording, so a
 
 @contextmanager
 def recording(target: str | Path, *, recording_id: str | None = None, application_id: str = APPLICATION_ID,
-              default_blueprint=None) -> Iterator[rr.RecordingStream]:
+              default_blueprint: rrb.BlueprintLike | None = None) -> Iterator[rr.RecordingStream]:
     """Yield a ``rerun.RecordingStream`` saving to a temporary beside ``target``; on a normal exit flush it,
     close the file and move it onto ``target`` (atomically, fsync'ed); on an exception close it, remove the
     temporary and re-raise.

@@ -8,6 +8,7 @@ from __future__ import annotations
 
 import os
 from pathlib import Path
+from typing import Any
 
 import matplotlib
 import numpy as np
@@ -27,7 +28,7 @@ from wrp_eval.wrp.optimize import Table3Row
 from wrp_eval.wrp.risk import ViewRisk
 
 # Paper anchors (wind-resistance-aerial-path-planning, Sec. 4.1 and Tables 3, 4, 7; stylized ship).
-PAPER = {
+PAPER: dict[str, Any] = {
     "views": 49, "length_m": 684.566, "flight_time_s": 159.764,
     "min_s": 2.708, "max_s": 0.236, "tsp_s": 25.537,
     "surrogate_r2": 0.98, "surrogate_rmse": 0.16,
@@ -214,10 +215,14 @@ def write_report(ctx: ExperimentContext, path, summary: RunSummary, trials: Tria
     config, out = ctx.config, ctx.folders.root
     _figures(ctx, path, trials, risk)
     ev = summary.evaluate
-    first_page = (envelope_section(envelope, summary.envelope.path,
-                                   os.path.relpath(ctx.folders.envelope / "envelope.png", out),
-                                   "figures/view_risk.png" if risk is not None else None)
-                  if envelope is not None else operator_section(ev))
+    if envelope is not None:
+        if summary.envelope is None:
+            raise ValueError("an envelope to report but none in the run summary")
+        first_page = envelope_section(envelope, summary.envelope.path,
+                                      os.path.relpath(ctx.folders.envelope / "envelope.png", out),
+                                      "figures/view_risk.png" if risk is not None else None)
+    else:
+        first_page = operator_section(ev)
     lines = [*header_section(config.run.name, summary.config, config.run.seed, ctx.ship), *first_page,
              *ship_section(ctx.ship.complexity, path, summary.plan), *WIND_SECTION,
              *campaign_section(summary.campaign, config.campaign.perturbation.design, summary.surrogate),

@@ -6,6 +6,7 @@ order the stages ran. Frozen dataclasses with ``to_json_dict``; the evaluation i
 from __future__ import annotations
 
 from dataclasses import asdict, dataclass
+from typing import Any
 
 from wrp_eval.wrp.evaluation import EvaluationResult
 
@@ -43,7 +44,7 @@ class SurrogateFit:
                    physical_variance_share, test_metrics.get("failure_brier"))
 
     def to_json_dict(self) -> dict:
-        doc = {"r2": self.r2, "rmse": self.rmse, "mae": self.mae, "n": self.n}
+        doc: dict[str, Any] = {"r2": self.r2, "rmse": self.rmse, "mae": self.mae, "n": self.n}
         if self.failure_brier is not None:
             doc["failure_brier"] = self.failure_brier
         doc["physical_variance_share"] = self.physical_variance_share

@@ -7,24 +7,34 @@ bit-identical to the same flight simulated alone, whatever the batch size, backe
 
 from __future__ import annotations
 
+from collections.abc import Sequence
+from typing import Any
+
 import numpy as np
+from numpy.typing import NDArray
+
+# what a batch's random streams may be given as (:func:`flight_generators`)
+FlightRngs = (int | np.integer[Any] | np.random.SeedSequence | np.random.Generator | None
+              | Sequence[np.random.Generator | int | np.integer[Any] | np.random.SeedSequence])
 
 
-def children(source, n: int) -> list[np.random.Generator]:
+def children(source: np.random.SeedSequence | np.random.Generator, n: int) -> list[np.random.Generator]:
     """The n Generators ``source`` (a SeedSequence or a Generator) would spawn next (``spawn``'s numbers and bit
     generator), without spawning them: the caller's object is left as it was, so passing the same object twice
     gives the same numbers twice (a caller that wants other streams spawns them itself)."""
-    generator = isinstance(source, np.random.Generator)
-    seq = source.bit_generator.seed_seq if generator else source
+    bit_generator: type[np.random.BitGenerator]
+    if isinstance(source, np.random.Generator):
+        seq, bit_generator = source.bit_generator.seed_seq, type(source.bit_generator)
+    else:
+        seq, bit_generator = source, np.random.PCG64
     if not isinstance(seq, np.random.SeedSequence):
         raise TypeError(f"children() needs a SeedSequence or a Generator seeded by one, got {type(seq).__name__}")
-    bit_generator = type(source.bit_generator) if generator else np.random.PCG64
     first = seq.n_children_spawned
     return [np.random.Generator(bit_generator(np.random.SeedSequence(
         seq.entropy, spawn_key=tuple(seq.spawn_key) + (first + i,), pool_size=seq.pool_size))) for i in range(n)]
 
 
-def flight_generators(rngs, n_flights: int) -> list[np.random.Generator]:
+def flight_generators(rngs: FlightRngs, n_flights: int) -> list[np.random.Generator]:
     """One Generator per flight: ``rngs`` is a seed / None, a SeedSequence or a Generator (its first n_flights
     children, :func:`children`), or a sequence of n_flights Generators (used as is) or seeds / SeedSequences
     (one Generator each)."""
@@ -43,14 +53,14 @@ class BlockNormals:
     gets depend only on its generator and on how many steps it has consumed, never on how the caller
     chunks the time axis."""
 
-    def __init__(self, rngs, n_flights: int, width: int, block_steps: int = 1024):
+    def __init__(self, rngs: FlightRngs, n_flights: int, width: int, block_steps: int = 1024) -> None:
         self.rngs = flight_generators(rngs, n_flights)
         self.width = int(width)
         self.block_steps = int(block_steps)
         self._block = np.empty((n_flights, 0, self.width))
         self._cursor = 0
 
-    def draw(self, n_steps: int) -> np.ndarray:
+    def draw(self, n_steps: int) -> NDArray[np.float64]:
         """The next ``n_steps`` steps of every flight's stream, (n_flights, n_steps, width)."""
         out = np.empty((len(self.rngs), n_steps, self.width))
         filled = 0

@@ -15,9 +15,10 @@ import os
 import socket
 import time
 from collections.abc import Iterator, Sequence
-from concurrent.futures import FIRST_COMPLETED, ProcessPoolExecutor, wait
+from concurrent.futures import FIRST_COMPLETED, Future, ProcessPoolExecutor, wait
 from concurrent.futures.process import BrokenProcessPool
 from contextlib import contextmanager
+from typing import Any
 
 import numpy as np
 
@@ -124,7 +125,7 @@ class TrialPool:
         crashes: dict[int, int] = {}
         while todo:
             pool = self._local_pool()
-            running = {}
+            running: dict[Future[list[dict]], int] = {}
             try:
                 while todo or running:
                     while todo and len(running) < self.workers * IN_FLIGHT_PER_WORKER:
@@ -144,7 +145,7 @@ class TrialPool:
                     else:
                         todo.append(index)
                 todo.sort(reverse=True)
-                self._pool.shutdown(wait=True, cancel_futures=True)
+                pool.shutdown(wait=True, cancel_futures=True)
                 self._pool = None
             except BaseException:
                 # an aborted run (an input error, a kill, the caller closing the generator): no batch of it may
@@ -158,7 +159,7 @@ class TrialPool:
         except ImportError:
             raise InputError("campaign.backend", "the ray backend needs Ray: pip install '.[cluster]'") from None
         if not ray.is_initialized():
-            kwargs = dict(include_dashboard=False, log_to_driver=False, configure_logging=False)
+            kwargs: dict[str, Any] = dict(include_dashboard=False, log_to_driver=False, configure_logging=False)
             if self.address:
                 ray.init(address=self.address, **kwargs)
             else:
@@ -167,7 +168,7 @@ class TrialPool:
 
     def _run_ray(self, tasks: Sequence[Task]) -> Iterator[tuple[int, list[dict]]]:
         import ray
-        refs: dict[int, object] = {}              # one object-store copy per distinct spec
+        refs: dict[int, ray.ObjectRef[dict]] = {}              # one object-store copy per distinct spec
         remote = {}
         limit = max(1, int(ray.cluster_resources().get("CPU", self.workers))) * IN_FLIGHT_PER_WORKER
         todo = list(range(len(tasks)))[::-1]

@@ -48,8 +48,8 @@ def reference_config(path_file: Path, n_trials: int, out: Path, rerun: bool, wor
 def run_bench() -> list[BenchRecord]:
 
     cores = default_workers()
-    with tempfile.TemporaryDirectory() as tmp:
-        tmp = Path(tmp)
+    with tempfile.TemporaryDirectory() as tmp_name:
+        tmp = Path(tmp_name)
         path = ExperimentContext(ExperimentConfig()).campaign_path      # the reference ship's planned path
         path_file = tmp / "path.json"
         path.save(path_file)

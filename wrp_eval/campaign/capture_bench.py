@@ -171,6 +171,8 @@ def run_bench() -> list[BenchRecord]:
             records += recs
             if speed == 4:
                 lag = lag_correlation(offsets, times)
+    if lag is None:
+        raise ValueError(f"no U10 4 m/s campaign among the speeds {SPEEDS} to take the lag correlation from")
     records.append(BenchRecord("capture.offset_lag_corr", lag, "correlation",
                                note=f"U10 4 m/s: horizontal capture errors of view pairs < {LAG_S:.0f} s apart, "
                                     f"one flight, dx with dx and dy with dy"))

@@ -10,7 +10,7 @@ Every scenario input is either a fixed value or a stated distribution::
 
 from __future__ import annotations
 
-from typing import Annotated, Literal, Union
+from typing import Annotated, Literal, TypeVar, Union, get_args
 
 from pydantic import Discriminator, Field, Tag, model_validator
 
@@ -76,14 +76,14 @@ def _fixed_or_dist(value) -> str:
     return "dist" if isinstance(value, (dict, Uniform, Normal, Choice)) else "fixed"
 
 
-def fixed_or_dist(fixed, dist):
-    """The type "a fixed ``fixed`` value, or a ``dist`` distribution ({dist: ...})"."""
-    return Annotated[Union[Annotated[fixed, Tag("fixed")], Annotated[dist, Tag("dist")]],
-                     Discriminator(_fixed_or_dist)]
+_Fixed = TypeVar("_Fixed")
+_Dist = TypeVar("_Dist")
 
-
-NumberOrDist = fixed_or_dist(float, Distribution)
-TextOrDist = fixed_or_dist(str, Choice)
+# FixedOrDist[fixed, dist]: the type "a fixed ``fixed`` value, or a ``dist`` distribution ({dist: ...})"
+FixedOrDist = Annotated[Union[Annotated[_Fixed, Tag("fixed")], Annotated[_Dist, Tag("dist")]],
+                        Discriminator(_fixed_or_dist)]
+NumberOrDist = FixedOrDist[float, Distribution]
+TextOrDist = FixedOrDist[str, Choice]
 
 
 class TurbulenceSpec(StrictModel):
@@ -91,7 +91,7 @@ class TurbulenceSpec(StrictModel):
     the trial's mean wind at 20 ft; light/moderate/severe: the presets; none), or an explicit intensity
     ``sigma_w_m_s`` (then W20 = 10 sigma_w), which wins when given."""
 
-    severity: fixed_or_dist(Severity, Choice) = "from_mean"
+    severity: FixedOrDist[Severity, Choice] = "from_mean"
     sigma_w_m_s: NumberOrDist | None = None
 
     @model_validator(mode="before")
@@ -102,7 +102,7 @@ class TurbulenceSpec(StrictModel):
     @model_validator(mode="after")
     def _known_severities(self) -> "TurbulenceSpec":
         if isinstance(self.severity, Choice):
-            bad = [v for v in self.severity.values if v not in Severity.__args__]
+            bad = [v for v in self.severity.values if v not in get_args(Severity)]
             if bad:
                 raise ValueError(f"turbulence severity choice has unknown value(s) {bad}")
         return self

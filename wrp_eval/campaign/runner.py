@@ -85,8 +85,8 @@ def fingerprint(config_doc: dict, digest: str, root_seed: int, evaluator: str, o
     for key in _NEUTRAL_KEYS:
         if not (key == "n_trials" and lhs):
             campaign.pop(key, None)
-    key = {"config": doc, "path": digest, "seed": root_seed, "evaluator": evaluator, "options": options}
-    return hashlib.sha256(json.dumps(key, sort_keys=True, default=str).encode()).hexdigest()[:16]
+    hashed = {"config": doc, "path": digest, "seed": root_seed, "evaluator": evaluator, "options": options}
+    return hashlib.sha256(json.dumps(hashed, sort_keys=True, default=str).encode()).hexdigest()[:16]
 
 
 def stored_fingerprint(meta: dict) -> str | None:

@@ -26,6 +26,7 @@ from __future__ import annotations
 import os
 import tempfile
 import time
+from collections.abc import Sequence
 from pathlib import Path
 
 import numpy as np
@@ -37,7 +38,7 @@ from wrp_eval.bench_record import BenchRecord
 from wrp_eval.camera import Camera, yaw_pitch_towards
 from wrp_eval.campaign.bench import reference_config
 from wrp_eval.campaign.jobs import campaign_job
-from wrp_eval.campaign.view_scaling import exponent, view_count_points, view_count_records
+from wrp_eval.campaign.view_scaling import exponent, target_anchor, view_count_points, view_count_records
 from wrp_eval.config import ExperimentConfig
 from wrp_eval.experiment import ExperimentContext
 from wrp_eval.planning.config import PlanningSection
@@ -117,8 +118,8 @@ def campaign_curve() -> list[tuple[int, float]]:
     """(trials, wall s) of real campaigns of the reference path."""
     counts = [n for n in (64, 128, 256, 512, 1024, 2048, 4096) if n <= MAX_TRIALS]
     out = []
-    with tempfile.TemporaryDirectory() as tmp:
-        tmp = Path(tmp)
+    with tempfile.TemporaryDirectory() as tmp_name:
+        tmp = Path(tmp_name)
         path_file = tmp / "path.json"
         ExperimentContext(ExperimentConfig()).campaign_path.save(path_file)
         for n in counts:
@@ -150,21 +151,22 @@ def scaling_figure(curves: dict, file: Path) -> None:
 
 
 def run_bench(out_dir: Path | None = None) -> list[BenchRecord]:
-    records, curves = [], {}
+    records: list[BenchRecord] = []
+    curves: dict[str, tuple[Sequence[float], Sequence[float], float]] = {}
     ships = planning_curve()
     lengths, plan_s = [s[1] for s in ships], [s[2] for s in ships]
     curves["planning"] = (lengths, plan_s, exponent(lengths, plan_s))
-    for family, length, seconds, views in ships:
-        target = ("issue 19 target (350 m container)", 2.0) if family == "container" else (None, None)
+    for family, length, seconds, n_views in ships:
+        target = target_anchor("issue 19 target (350 m container)", 2.0, family == "container")
         records += [BenchRecord(f"scaling.plan_s.{family}", seconds, "s", *target, f"{length:.0f} m proxy"),
-                    BenchRecord(f"scaling.plan_views.{family}", views, "views", None, None, f"{length:.0f} m")]
+                    BenchRecord(f"scaling.plan_views.{family}", n_views, "views", None, None, f"{length:.0f} m")]
     records.append(BenchRecord("scaling.plan_exponent", curves["planning"][2], "", None, None,
                                "planning wall ~ length^k, five ships 30-400 m"))
     oracle = oracle_curve()
     views, oracle_s = [o[0] for o in oracle], [o[1] for o in oracle]
     curves["oracle"] = (views, oracle_s, exponent(views, oracle_s))
     records += [BenchRecord(f"scaling.oracle_s.views{n}", s, "s",
-                            *(("issue 19 target", 1.0) if n == 200 else (None, None)),
+                            *target_anchor("issue 19 target", 1.0, n == 200),
                             "synthetic oracle, ring of views around the stylized ship, median of 3")
                 for n, s in oracle]
     records.append(BenchRecord("scaling.oracle_exponent", curves["oracle"][2], "", None, None,

@@ -20,6 +20,7 @@ import fcntl
 import json
 import uuid
 from pathlib import Path
+from typing import TextIO
 
 import numpy as np
 import pyarrow as pa
@@ -39,7 +40,7 @@ class TrialStore:
     def __init__(self, out_dir: str | Path):
         self.out_dir = Path(out_dir)
         self.trials_dir = self.out_dir / TRIALS_DIR
-        self._lock_fh = None
+        self._lock_fh: TextIO | None = None
         self._next_seq: int | None = None
 
     # -- writer side ------------------------------------------------------------------------------------
@@ -82,7 +83,7 @@ class TrialStore:
         """Write ``records`` as one new chunk (atomically). Returns the chunk's path."""
         if not records:
             return None
-        if self._lock_fh is None:
+        if self._lock_fh is None or self._next_seq is None:
             raise RuntimeError("TrialStore.append needs acquire() first")
         table = records_to_table(records)
         target = self.trials_dir / f"chunk-{self._next_seq:06d}-{uuid.uuid4().hex[:8]}.parquet"

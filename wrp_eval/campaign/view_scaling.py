@@ -42,6 +42,11 @@ def exponent(x, y) -> float:
     return float(np.polyfit(np.log(np.asarray(x, float)), np.log(np.asarray(y, float)), 1)[0])
 
 
+def target_anchor(target: str, value: float, applies: bool) -> tuple[str | None, float | None]:
+    """A record's (anchor, anchor_value): the target and its figure where it applies, else (None, None)."""
+    return (target, value) if applies else (None, None)
+
+
 def _at_gsd(ctx, gsd_mm: float):
     doc = ctx.config.model_dump(mode="json")
     doc["planning"]["gsd_mm"] = gsd_mm
@@ -98,13 +103,13 @@ def view_count_records(points: list[dict]) -> list[BenchRecord]:
                 + ", ".join(f"{k[:-2]} {p[k]:.2f}" for k in PLAN_STAGES) + " s")
         records += [
             BenchRecord(f"scaling.views.plan_s.{tag}", p["plan_s"], "s",
-                        *(("performance issue target (330 views)", 5.0) if 300 <= p["views"] <= 360 else (None, None)),
+                        *target_anchor("performance issue target (330 views)", 5.0, 300 <= p["views"] <= 360),
                         note),
             BenchRecord(f"scaling.views.oracle_ms_per_view.{tag}", 1e3 * p["oracle_s"] / p["views"], "ms", None, None,
                         f"synthetic oracle, path flown as planned, median of 3: {p['oracle_s']:.3f} s"),
             BenchRecord(f"scaling.views.campaign_trials_per_min.{tag}", p["trials_per_min"], "trials/min",
-                        *(("performance issue target (143 views, 2 workers)", 150.0) if 120 <= p["views"] <= 170
-                          else (None, None)),
+                        *target_anchor("performance issue target (143 views, 2 workers)", 150.0,
+                                       120 <= p["views"] <= 170),
                         f"{p['flights']} physical flights at U10 {WIND_M_S:g} m/s, 2 local workers; median "
                         "trial: flight "
                         f"{p['trial_flight_s']:.3f} s + oracle {p['trial_oracle_s']:.3f} s (trial "

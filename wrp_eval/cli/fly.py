@@ -78,10 +78,10 @@ def _fly(args: argparse.Namespace) -> int:
     if args.trials < 1:
         raise InputError("--trials", "must be >= 1")
     path = FlightPath.load(args.path)
-    section = _wind_section(args, config)
+    wind_section = _wind_section(args, config)
     dt = config.sim.timestep_s * config.sim.chunk_steps          # the wind is stepped at the controller rate
     wind_seed, flight_seed = np.random.SeedSequence(seed).spawn(2)
-    wind = build_wind_field([section] * args.trials, ctx.particulars, wind_seed, dt, config_dir)
+    wind = build_wind_field([wind_section] * args.trials, ctx.particulars, wind_seed, dt, config_dir)
     ship = ShipInScene.of(ctx.ship.mesh, config.ship.motion, ctx.particulars, wind.speed_10m_at_ship(args.trials))
     with FlightSimulator(config.sim) as sim:
         result = sim.fly(path, wind, args.trials, ship=ship, flight_rngs=flight_seed)

@@ -42,6 +42,8 @@ def _train(args: argparse.Namespace) -> int:
           f"on {m['n']} held-out trials ({result.metrics['n_used']} used of {data.n_trials}; "
           f"{result.metrics['epochs_run']} epochs, {result.seconds:.1f} s)")
     if args.cv:
+        if cv is None:
+            raise RuntimeError(f"{args.cv} cross-validation folds asked for, none came back")
         write_json_atomic(out / "cv.json", cv)
         print(f"cross-validation {out / 'cv.json'}: {args.cv} folds, test R^2 mean {cv['r2_mean']:.4f} "
               f"(min {cv['r2_min']:.4f}, max {cv['r2_max']:.4f}), pooled {cv['pooled']['r2']:.4f}, "

@@ -169,6 +169,8 @@ def ending_counts(folder: Path, flights: int) -> dict[str, int]:
 def limiting_cause(trials: PathTrials, endings: dict[str, int], spec: tuple[float, float]) -> str:
     """What kept the flights that missed the spec from meeting it, the most frequent first: the mission's ending
     when it was not completed, else the reconstruction (error above spec, completeness below it, failed)."""
+    if trials.completeness is None:
+        raise ValueError(f"{trials.name}: no completeness column to tell the reconstruction's causes apart")
     causes: Counter = Counter({name: n for name, n in endings.items() if name not in ("completed", "unknown")})
     done = trials.completed if trials.completed is not None else np.ones(trials.trial_id.size, bool)
     with np.errstate(invalid="ignore"):

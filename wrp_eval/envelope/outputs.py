@@ -7,12 +7,14 @@ import csv
 import io
 import json
 from pathlib import Path
+from typing import cast
 
 import numpy as np
 import rerun as rr
 from matplotlib import colormaps
 from matplotlib.colors import Normalize
 from matplotlib.figure import Figure
+from matplotlib.projections.polar import PolarAxes
 
 from wrp_eval.atomic import atomic_path, write_text_atomic
 from wrp_eval.envelope.result import Envelope
@@ -77,7 +79,7 @@ def polar_plot(envelope: Envelope, file: Path, ship_length_m: float, ship_breadt
     outline in the centre."""
     top = float(envelope.grid["speeds_m_s"][-1])
     fig = Figure(figsize=(6.4, 6.4))
-    ax = fig.add_subplot(projection="polar")
+    ax = cast(PolarAxes, fig.add_subplot(projection="polar"))
     ax.set_theta_zero_location("N")
     ax.set_theta_direction(-1)
     cells = envelope.cells

@@ -121,14 +121,16 @@ def _wanted(flying: _Flying, searches: dict[float, BoundarySearch], forecast: Ce
 
 def _fly_look(flying: _Flying, pool: TrialPool, cells: list[Cell]) -> None:
     """The next look of every cell of ``cells``, all flights in one set of batches; stores them and decides."""
-    n_views, seed = len(flying.path), flying.ctx.campaign_seed
+    n_views, seed, worker = len(flying.path), flying.ctx.campaign_seed, flying.worker
+    if worker is None:
+        raise RuntimeError(f"envelope {flying.out}: no worker spec (it is made when the first cell is opened)")
     jobs = []
     for cell in cells:
         stored = set(TrialStore(cell.folder).stored_ids().tolist())
         jobs += [(cell, trial_inputs(cell.trial.campaign, seed, k, n_views))
                  for k in range(cell.flights, flying.rule.next_target(cell.flights)) if k not in stored]
     chunks = [c.tolist() for c in split_batches(len(jobs), flying.base.campaign.batch_size, flying.workers)]
-    for index, records in pool.run([(flying.worker, [jobs[i][1] for i in chunk]) for chunk in chunks]):
+    for index, records in pool.run([(worker, [jobs[i][1] for i in chunk]) for chunk in chunks]):
         by_cell: dict[CellKey, list[dict]] = {}
         for i, record in zip(chunks[index], records, strict=True):
             by_cell.setdefault(jobs[i][0].key, []).append(record)
@@ -157,7 +159,10 @@ def cell_result(cell: Cell, rule: TestRule, heading_deg: float, forecast: bool =
     """What a finished cell says (result.py's :class:`CellResult`): error mean and p95 over the flights that
     did not fail; sorties and mission time over the completed missions (a mission that ended early says nothing
     of what the mission needs, as in :func:`wrp_eval.wrp.evaluate.mission_summary`)."""
-    trials = _first_flights(stored_trials(cell), cell.flights)
+    stored = stored_trials(cell)
+    if stored is None:
+        raise RuntimeError(f"envelope cell {cell.key.folder_name}: no stored flights")
+    trials = _first_flights(stored, cell.flights)
     errors = trials.error_m[~trials.failed & np.isfinite(trials.error_m)]
     done = trials.completed if trials.completed is not None else np.zeros(trials.trial_id.size, bool)
     endings = ending_counts(cell.folder, cell.flights)

@@ -13,13 +13,13 @@ The ship's position and heading come from the ``ship:`` section (AIS position re
 
 from __future__ import annotations
 
-from typing import Literal
+from typing import Any, Literal
 
 from pydantic import Field, model_validator
 
 from wrp_eval.schema import StrictModel
 
-_FINITE = {"allow_inf_nan": False}
+_FINITE: dict[str, Any] = {"allow_inf_nan": False}
 
 
 class ExportSection(StrictModel):

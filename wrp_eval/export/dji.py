@@ -22,6 +22,7 @@ from __future__ import annotations
 import io
 import xml.etree.ElementTree as ET
 import zipfile
+from collections.abc import Sequence
 from pathlib import Path
 
 import numpy as np
@@ -55,6 +56,20 @@ def _sub(parent: ET.Element, tag: str, text: object | None = None) -> ET.Element
 
 def _num(v: float, decimals: int = 4) -> str:
     return f"{v:.{decimals}f}"
+
+
+def _find(node: ET.Element | None, path: str) -> ET.Element:
+    found = None if node is None else node.find(path)
+    if found is None:
+        raise ValueError(f"missing {path}")
+    return found
+
+
+def _text(node: ET.Element | None, path: str) -> str:
+    text = _find(node, path).text
+    if text is None:
+        raise ValueError(f"empty {path}")
+    return text
 
 
 def _mission_config(doc: ET.Element, m: GeoMission) -> None:
@@ -91,7 +106,7 @@ def _action_group(parent: ET.Element, m: GeoMission, k: int) -> None:
     _sub(group, _w("actionGroupEndIndex"), k)
     _sub(group, _w("actionGroupMode"), "sequence")
     _sub(_sub(group, _w("actionTrigger")), _w("actionTriggerType"), "reachPoint")
-    actions = [
+    actions: list[tuple[str, Sequence[tuple[str, object]]]] = [
         ("gimbalRotate", [("gimbalHeadingYawBase", "north"), ("gimbalRotateMode", "absoluteAngle"),
                           ("gimbalPitchRotateEnable", 1), ("gimbalPitchRotateAngle", _num(m.gimbal_pitch_deg[k])),
                           ("gimbalRollRotateEnable", 0), ("gimbalRollRotateAngle", 0),
@@ -185,27 +200,27 @@ def read_dji_kmz(file: str | Path) -> ReadMission:
             root = ET.fromstring(kmz.read(WAYLINES_PATH))
         lat, lon, alt, heading, pitch, hold, turns, headings = [], [], [], [], [], [], set(), set()
         photos = 0
-        speed = float(root.find(f"{_k('Document')}/{_k('Folder')}/{_w('autoFlightSpeed')}").text)
+        speed = float(_text(root, f"{_k('Document')}/{_k('Folder')}/{_w('autoFlightSpeed')}"))
         modes = {v: k for k, v in TURN_MODES.items()}
         for pm in root.iter(_k("Placemark")):
-            lon_s, lat_s = pm.find(f"{_k('Point')}/{_k('coordinates')}").text.strip().split(",")[:2]
+            lon_s, lat_s = _text(pm, f"{_k('Point')}/{_k('coordinates')}").strip().split(",")[:2]
             lat.append(float(lat_s))
             lon.append(float(lon_s))
-            alt.append(float(pm.find(_w("executeHeight")).text))
-            turn = pm.find(f"{_w('waypointTurnParam')}/{_w('waypointTurnMode')}").text
+            alt.append(float(_text(pm, _w("executeHeight"))))
+            turn = _find(pm, f"{_w('waypointTurnParam')}/{_w('waypointTurnMode')}").text
             if turn not in modes:
                 raise ValueError(f"waypoint turn mode {turn!r} is neither of {sorted(modes)}")
             turns.add(modes[turn])
-            headings.add(pm.find(f"{_w('waypointHeadingParam')}/{_w('waypointHeadingMode')}").text)
+            headings.add(_text(pm, f"{_w('waypointHeadingParam')}/{_w('waypointHeadingMode')}"))
             hold.append(0.0)
             for action in pm.iter(_w("action")):
-                func = action.find(_w("actionActuatorFunc")).text
+                func = _find(action, _w("actionActuatorFunc")).text
                 params = action.find(_w("actionActuatorFuncParam"))
                 if func == "gimbalRotate":
-                    pitch.append(float(params.find(_w("gimbalPitchRotateAngle")).text))
-                    heading.append(float(params.find(_w("gimbalYawRotateAngle")).text) % 360.0)
+                    pitch.append(float(_text(params, _w("gimbalPitchRotateAngle"))))
+                    heading.append(float(_text(params, _w("gimbalYawRotateAngle"))) % 360.0)
                 elif func == "hover":
-                    hold[-1] += float(params.find(_w("hoverTime")).text)
+                    hold[-1] += float(_text(params, _w("hoverTime")))
                 elif func == "takePhoto":
                     photos += 1
         if len(turns) > 1 or len(headings) > 1:

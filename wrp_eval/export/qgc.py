@@ -124,7 +124,13 @@ def _read_items(items: list[tuple[int, int, list[float]]], home: tuple[float, fl
     """Waypoints (16 in the relative frame), the gimbal pitch set after each, the photo count, the speed set
     and the turn mode: ``fly-through`` where every waypoint holds 0 s and has an acceptance radius, else
     ``stop``. MAVLink names no heading mode (None)."""
-    lat, lon, alt, heading, pitch, hold, accept = [], [], [], [], [], [], []
+    lat: list[float] = []
+    lon: list[float] = []
+    alt: list[float] = []
+    heading: list[float] = []
+    pitch: list[float] = []
+    hold: list[float] = []
+    accept: list[float] = []
     photos, speed = 0, None
     for command, frame, p in items:
         if command == MAV_CMD_DO_CHANGE_SPEED and int(p[0]) == SPEED_TYPE_GROUND:

@@ -23,6 +23,7 @@ from __future__ import annotations
 import heapq
 from collections.abc import Callable
 from dataclasses import dataclass
+from typing import Any
 
 import numpy as np
 
@@ -43,7 +44,7 @@ class MinResult:
     threshold: np.ndarray
 
 
-def _importance(table: SlotTable, h: np.ndarray, view: int) -> float:
+def _importance(table: SlotTable, h: np.ndarray, view: int | np.integer[Any]) -> float:
     samples, _ = table.entries(view)
     if samples.size == 0:
         return 0.0
@@ -74,7 +75,7 @@ def minimise(table: SlotTable, initial: np.ndarray, thresholds: np.ndarray) -> M
     return MinResult(active, np.maximum(h, 0.0), thr)
 
 
-def removal_deltas(table: SlotTable, act: np.ndarray, view: int) -> tuple[np.ndarray, np.ndarray]:
+def removal_deltas(table: SlotTable, act: np.ndarray, view: int | np.integer[Any]) -> tuple[np.ndarray, np.ndarray]:
     """(samples, drop of h) when ``view`` leaves the set whose slots are ``act``."""
     samples, slots = table.entries(view)
     return samples, table.q_sums(samples, slots, act[samples])

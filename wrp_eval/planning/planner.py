@@ -44,6 +44,8 @@ from wrp_eval.ship.proxy import Proxy
 # Stream id of the planning stage inside the run seed (other stages spawn their own).
 PLANNING_SEED_STREAM = 3
 
+_Views = tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray]
+
 
 def planning_rng(seed: int) -> np.random.Generator:
     """The planning stage's generator for run seed ``seed``."""
@@ -157,7 +159,7 @@ def plan(proxy: Proxy, complexity: np.ndarray, section: PlanningSection, rng: np
     Every random draw (Poisson disk, genetic algorithm) comes from ``rng``."""
     if section.method == "oblique":
         return plan_oblique(proxy, section)
-    timings = {}
+    timings: dict[str, float] = {}
     t0 = time.perf_counter()
     geometry = _ViewGeometry.of(section)
     camera, distance, d_max, max_inc = geometry
@@ -291,15 +293,15 @@ def _tour(positions: np.ndarray, proxy: Proxy, section: PlanningSection,
     return open_at_longest_edge(order, cost), tour_length(order, cost)
 
 
-def _with_transitions(views: tuple[np.ndarray, ...], chosen, chosen_obs: np.ndarray, samples,
-                      scene: TransitionScene) -> tuple[tuple[np.ndarray, ...], int, int]:
+def _with_transitions(views: _Views, chosen, chosen_obs: np.ndarray, samples,
+                      scene: TransitionScene) -> tuple[_Views, int, int]:
     """(positions, yaw, pitch, face, kind) of the surface ``views`` in tour order with each segment's transition
     views after its first view (face -1, KIND_TRANSITION); the OSMC violations left and the pairs checked."""
     tr = transition_views(chosen.positions, chosen.face, chosen_obs, samples.points[chosen.sample], scene)
     return _interleaved(views, tr), tr.violations, tr.checked_pairs
 
 
-def _interleaved(views: tuple[np.ndarray, ...], tr: TransitionResult) -> tuple[np.ndarray, ...]:
+def _interleaved(views: _Views, tr: TransitionResult) -> _Views:
     """The surface ``views`` with each segment's transition views of ``tr`` after its first view."""
     pos, yaw, pitch, face, kind = views
     out = []
@@ -308,7 +310,8 @@ def _interleaved(views: tuple[np.ndarray, ...], tr: TransitionResult) -> tuple[n
         if i < len(tr.positions) and len(tr.positions[i]):
             k = len(tr.positions[i])
             out.append((tr.positions[i], tr.yaw[i], tr.pitch[i], np.full(k, -1), np.full(k, KIND_TRANSITION)))
-    return tuple(np.concatenate([o[j] for o in out]) for j in range(5))
+    pos, yaw, pitch, face, kind = (np.concatenate([o[j] for o in out]) for j in range(5))
+    return pos, yaw, pitch, face, kind
 
 
 def _per_face(proxy: Proxy, samples, candidates, chosen_idx: np.ndarray, radii: np.ndarray, thr_face: np.ndarray,

@@ -14,6 +14,7 @@ removing / adding / swapping a view updates h incrementally.
 from __future__ import annotations
 
 from dataclasses import dataclass
+from typing import Any
 
 import numpy as np
 
@@ -102,7 +103,7 @@ class SlotTable:
     def n_samples(self) -> int:
         return int(self.slot_view.shape[0])
 
-    def entries(self, view: int) -> tuple[np.ndarray, np.ndarray]:
+    def entries(self, view: int | np.integer[Any]) -> tuple[np.ndarray, np.ndarray]:
         """(samples, slots) where ``view`` sits."""
         a, b = self.view_ptr[view], self.view_ptr[view + 1]
         return self.view_sample[a:b], self.view_slot[a:b]

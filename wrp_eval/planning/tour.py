@@ -353,9 +353,9 @@ def solve_genetic(cost: np.ndarray, rng: np.random.Generator, population: int = 
             kids[i] = np.concatenate([rest[:a], middle, rest[a:]])
         mutate = rng.random(n_children) < mutation_rate
         seg = np.sort(rng.integers(0, n, size=(n_children, 2)), axis=1)
-        for i in np.flatnonzero(mutate):
-            a, b = seg[i]
-            kids[i, a:b + 1] = kids[i, a:b + 1][::-1]
+        for j in np.flatnonzero(mutate):
+            a, b = seg[j]
+            kids[j, a:b + 1] = kids[j, a:b + 1][::-1]
         children.append(kids)
         pop = np.concatenate(children)
     fitness = cost[pop, np.roll(pop, -1, axis=1)].sum(axis=1)

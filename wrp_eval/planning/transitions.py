@@ -20,6 +20,7 @@ violating pairs is kept and the violations are counted in the plan metrics.
 from __future__ import annotations
 
 from dataclasses import dataclass
+from typing import Any
 
 import numpy as np
 
@@ -142,7 +143,7 @@ def transition_views(order_positions: np.ndarray, order_faces: np.ndarray, order
     out_pos, out_yaw = list(empty), [np.zeros(0) for _ in empty]
     out_pitch, out_obs = list(out_yaw), [np.zeros((0, len(points)), dtype=bool) for _ in empty]
     sample_weights = radii[scene.sample_faces] ** 2
-    bad_of = {}
+    bad_of: dict[int | np.integer[Any], int] = {}
     todo = seg
     for factor in _REFINEMENTS:
         if todo.size == 0:

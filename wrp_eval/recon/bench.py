@@ -74,6 +74,8 @@ def run_bench(repeats: int = 7) -> list[BenchRecord]:
         start = time.perf_counter()
         result = oracle.evaluate(captures, mesh, seed=seed)
         times.append(time.perf_counter() - start)
+    if result is None:
+        raise ValueError(f"repeats must be >= 1, got {repeats}")
     note = (f"{what}, {len(mesh.faces)} faces; 50 views, 64x43 rays/view; median of {repeats} (min "
             f"{min(times):.3f} s); error {result.error_m:.4f} m, completeness {result.completeness:.3f}, "
             f"{result.registered_views}/{result.total_views} registered")

@@ -137,14 +137,14 @@ def _georeferenced_points(model, names: list[str], capture_set: CaptureSet, extr
     residuals and the rotation check go into ``extra``. ``names``: the image names in view order."""
     # georeference with the registered cameras' centres -> true capture positions
     name_to_view = {name: i for i, name in enumerate(names)}
-    centres, views, model_rot = [], [], []
+    centre_list, views, model_rot = [], [], []
     for image in model.images.values():
         if image.has_pose:
-            centres.append(np.asarray(image.projection_center()))
+            centre_list.append(np.asarray(image.projection_center()))
             views.append(name_to_view[image.name])
             pose = image.cam_from_world() if callable(image.cam_from_world) else image.cam_from_world
             model_rot.append(np.asarray(pose.rotation.matrix()).T)  # world-from-camera, model frame
-    centres, truth = np.asarray(centres), capture_set.positions[np.asarray(views, dtype=int)]
+    centres, truth = np.asarray(centre_list), capture_set.positions[np.asarray(views, dtype=int)]
     if len(centres) and capture_set.prior_positions is not None:
         # how far the model sits from the recorded positions it was held to (prior BA), before any similarity
         priors = capture_set.position_priors()[np.asarray(views, dtype=int)]
@@ -251,14 +251,14 @@ class ColmapOracle(MeshOracle):
         if c.mapper == "global":
             # global SfM (GLOMAP in pycolmap): rotation averaging + global positioning from random initial
             # positions; no pose priors, and it folded weakly chained view graphs at random (see README)
-            options = pycolmap.GlobalPipelineOptions()
-            options.random_seed = seed32
-            options.num_threads = c.num_threads
-            options.mapper.random_seed = seed32
-            options.mapper.global_positioning.use_gpu = False
-            options.mapper.bundle_adjustment.refine_focal_length = False
-            options.mapper.bundle_adjustment.refine_extra_params = False
-            return pycolmap.global_mapping(database, image_dir, out, options)
+            global_options = pycolmap.GlobalPipelineOptions()
+            global_options.random_seed = seed32
+            global_options.num_threads = c.num_threads
+            global_options.mapper.random_seed = seed32
+            global_options.mapper.global_positioning.use_gpu = False
+            global_options.mapper.bundle_adjustment.refine_focal_length = False
+            global_options.mapper.bundle_adjustment.refine_extra_params = False
+            return pycolmap.global_mapping(database, image_dir, out, global_options)
         options = pycolmap.IncrementalPipelineOptions()
         options.random_seed = seed32
         options.num_threads = c.num_threads

@@ -51,7 +51,6 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 import numpy as np
-import open3d as o3d
 from scipy.spatial import cKDTree
 
 from wrp_eval.compiled import kernel
@@ -65,7 +64,7 @@ from wrp_eval.recon.image_effects import (
     patch_match_probability,
     pixel_noise_px,
 )
-from wrp_eval.recon.oracle import GroundTruth, Scores, align_to_ground_truth
+from wrp_eval.recon.oracle import GroundTruth, Scores, align_to_ground_truth, o3d_tensor
 from wrp_eval.sim.captures import CaptureSet
 
 OCCLUSION_OFFSET_M = 0.01    # occlusion rays start this far off the surface (no self-hits on shared edges)
@@ -178,7 +177,7 @@ def observe_samples(capture_set: CaptureSet, gt: GroundTruth, registered: np.nda
     toward = -rel_k / dist_k[:, None]
     origins = gt.samples[s_idx] + OCCLUSION_OFFSET_M * toward
     rays = np.concatenate([origins, toward], axis=1).astype(np.float32)
-    t_hit = gt.occluder_scene.cast_rays(o3d.core.Tensor(rays))["t_hit"].numpy()
+    t_hit = gt.occluder_scene.cast_rays(o3d_tensor(rays))["t_hit"].numpy()
     free = t_hit >= dist_k - 2 * OCCLUSION_OFFSET_M
     s_idx, v_idx, rel_k, dist_k = s_idx[free], v_idx[free], rel_k[free], dist_k[free]
     u_k, v_k, cos_k, cam_k = u_k[free], v_k[free], cos_k[free], cam_k[free]
@@ -432,7 +431,7 @@ def score_fused(recon: FusedReconstruction, gt: GroundTruth, section: OracleSect
     tau = section.tau_m
     completeness = float(np.mean(e * (along <= tau) + (1.0 - e) * (hole <= tau)))
     to_mesh = gt.ship_scene.compute_distance(
-        o3d.core.Tensor(aligned[present].astype(np.float32))).numpy().astype(np.float64)
+        o3d_tensor(aligned[present].astype(np.float32))).numpy().astype(np.float64)
     w = e[present]
     precision = float(np.sum(w * (to_mesh <= tau)) / np.sum(w))
     fscore = 0.0 if completeness + precision == 0 else 2 * completeness * precision / (completeness + precision)

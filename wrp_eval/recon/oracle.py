@@ -182,10 +182,15 @@ def _fibonacci_sphere(count: int) -> np.ndarray:
     return np.stack([r * np.cos(phi), r * np.sin(phi), z], axis=1)
 
 
+def o3d_tensor(array: np.ndarray) -> o3d.core.Tensor:
+    """``o3d.core.Tensor(array)``: a copy of ``array`` (its dtype) on the CPU."""
+    return o3d.core.Tensor(array)  # type: ignore[call-overload]  # open3d's stubs omit the dtype and device defaults
+
+
 def _tensor_mesh(vertices: np.ndarray, faces: np.ndarray) -> o3d.t.geometry.TriangleMesh:
     tm = o3d.t.geometry.TriangleMesh()
-    tm.vertex.positions = o3d.core.Tensor(np.ascontiguousarray(vertices, dtype=np.float32))
-    tm.triangle.indices = o3d.core.Tensor(np.ascontiguousarray(faces, dtype=np.int32))
+    tm.vertex.positions = o3d_tensor(np.ascontiguousarray(vertices, dtype=np.float32))
+    tm.triangle.indices = o3d_tensor(np.ascontiguousarray(faces, dtype=np.int32))
     return tm
 
 
@@ -225,7 +230,7 @@ def prepare_ground_truth(mesh: trimesh.Trimesh, density_per_m2: float = 2.0, see
     facing = (ray_dirs * np.repeat(normals, len(dirs), axis=0)).sum(axis=1)
     # a face's back side also counts (meshes with mixed winding): offset along the ray, not the normal
     rays = np.concatenate([origins + eps * ray_dirs, ray_dirs], axis=1).astype(np.float32)
-    t_hit = ship_scene.cast_rays(o3d.core.Tensor(rays))["t_hit"].numpy()
+    t_hit = ship_scene.cast_rays(o3d_tensor(rays))["t_hit"].numpy()
     escaped = (~np.isfinite(t_hit)) & (np.abs(facing) > 0.1)
     visible = escaped.reshape(len(points), len(dirs)).any(axis=1)
     points, normals = points[visible], normals[visible]
@@ -260,6 +265,8 @@ class GroundTruthCache:
 class MeshOracle:
     """What the oracles share: their config section and the ground truth prepared per ship mesh (cached by
     content, since a campaign scores thousands of capture sets of one ship)."""
+
+    name: str
 
     def __init__(self, section):
         self.section = section
@@ -314,7 +321,7 @@ def align_to_ground_truth(points: np.ndarray, gt: GroundTruth, max_correspondenc
     for _ in range(max_iterations):
         moved = src @ transform[:3, :3].T + transform[:3, 3]
         closest = gt.ship_scene.compute_closest_points(
-            o3d.core.Tensor(moved.astype(np.float32)))["points"].numpy().astype(np.float64)
+            o3d_tensor(moved.astype(np.float32)))["points"].numpy().astype(np.float64)
         close = np.einsum("kj,kj->k", closest - moved, closest - moved) <= max_correspondence_m ** 2
         if close.sum() < 3:
             break
@@ -390,7 +397,7 @@ def score_reconstruction(surfels: Surfels, gt: GroundTruth, tau_m: float, max_co
         acc_points = acc_points[np.random.default_rng(seed).choice(len(acc_points), max_accuracy_points,
                                                                    replace=False)]
     acc = gt.ship_scene.compute_distance(
-        o3d.core.Tensor(acc_points.astype(np.float32))).numpy().astype(np.float64)
+        o3d_tensor(acc_points.astype(np.float32))).numpy().astype(np.float64)
     # error / completeness: visible ground truth -> reconstruction surfels
     comp = surfel_distances(gt.samples, aligned)
     completeness = float((comp <= tau_m).mean())

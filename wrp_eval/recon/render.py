@@ -19,11 +19,10 @@ motions the simulator's blur comes from, move the image mostly sideways; the tru
 from __future__ import annotations
 
 import numpy as np
-import open3d as o3d
 from scipy.ndimage import convolve1d
 
 from wrp_eval.camera import Camera
-from wrp_eval.recon.oracle import GroundTruth
+from wrp_eval.recon.oracle import GroundTruth, o3d_tensor
 from wrp_eval.sim.captures import CaptureSet
 
 SEA_RGB = np.array([0.10, 0.20, 0.30])
@@ -124,7 +123,7 @@ def render_views(capture_set: CaptureSet, gt: GroundTruth, width_px: int, textur
         views = np.arange(start, min(n, start + per_call))
         dirs = np.einsum("nij,rj->nri", rot[views], cam_dirs).reshape(-1, 3)
         origins = np.repeat(np.asarray(capture_set.positions, dtype=float)[views], len(cam_dirs), axis=0)
-        ans = gt.occluder_scene.cast_rays(o3d.core.Tensor(np.concatenate([origins, dirs], 1).astype(np.float32)))
+        ans = gt.occluder_scene.cast_rays(o3d_tensor(np.concatenate([origins, dirs], 1).astype(np.float32)))
         t_hit = ans["t_hit"].numpy().astype(np.float64)
         gid = ans["geometry_ids"].numpy()
         normals = ans["primitive_normals"].numpy().astype(np.float64)

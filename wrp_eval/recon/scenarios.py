@@ -8,6 +8,8 @@ looking at the nearest point of the object's axis, the shape of a well-planned o
 
 from __future__ import annotations
 
+from typing import cast
+
 import numpy as np
 import trimesh
 
@@ -36,7 +38,7 @@ def ship_like_mesh(length_m: float = 140.0, breadth_m: float = 20.0, height_m: f
     funnel = trimesh.creation.box(extents=(0.05 * length_m, 0.25 * breadth_m, 0.6 * house_h))
     funnel.apply_translation((-0.12 * length_m, 0.0, freeboard_m + 0.3 * house_h))
     # move the whole ship so that its length above water is centred on x = 0
-    mesh = trimesh.util.concatenate([hull, bow, house, funnel])
+    mesh = cast(trimesh.Trimesh, trimesh.util.concatenate([hull, bow, house, funnel]))
     mesh.apply_translation((-bow_len / 2, 0.0, 0.0))
     return mesh
 

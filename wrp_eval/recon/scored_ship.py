@@ -10,18 +10,22 @@ from __future__ import annotations
 from dataclasses import dataclass
 from pathlib import Path
 
+import trimesh
+
 from wrp_eval.errors import InputError
 from wrp_eval.recon.colmap import ColmapOracle
 from wrp_eval.recon.config import OracleSection
 from wrp_eval.recon.coverage import ViewCoverage, view_coverage
+from wrp_eval.recon.oracle import MeshOracle
 from wrp_eval.recon.synthetic import SyntheticOracle
 from wrp_eval.ship.config import ShipSection
+from wrp_eval.ship.particulars import ShipParticulars
 from wrp_eval.ship.resolve import resolve_ship_full
 
 SEED_MODULUS = 2**31 - 1      # the oracles' RNGs take 31-bit seeds; campaign seeds are 64-bit
 
 
-def make_oracle(section=None, kind: str | None = None):
+def make_oracle(section=None, kind: str | None = None) -> MeshOracle:
     """The oracle (:class:`wrp_eval.recon.oracle.Oracle`) named by ``kind`` (default ``section.kind``),
     configured by ``section`` (an :class:`wrp_eval.recon.config.OracleSection`; default its defaults)."""
     section = OracleSection() if section is None else section
@@ -38,9 +42,9 @@ class ScoredShip:
     """particulars (ShipParticulars), mesh (the true ship, trimesh.Trimesh, metres) and oracle
     (:class:`wrp_eval.recon.oracle.Oracle`)."""
 
-    particulars: object
-    mesh: object
-    oracle: object
+    particulars: ShipParticulars
+    mesh: trimesh.Trimesh
+    oracle: MeshOracle
 
     def score(self, captures, seed: int = 0):
         """The oracle's :class:`ReconResult` for ``captures`` (a CaptureSet); any int seed (reduced mod 2^31-1)."""

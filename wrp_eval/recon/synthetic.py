@@ -50,7 +50,6 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 import numpy as np
-import open3d as o3d
 import scipy.sparse as sp
 from scipy.sparse.csgraph import connected_components, minimum_spanning_tree
 
@@ -59,7 +58,7 @@ from wrp_eval.compiled import kernel
 from wrp_eval.recon.config import OracleSection, SyntheticOracleSection
 from wrp_eval.recon.fusion import FusedReconstruction, fuse
 from wrp_eval.recon.image_effects import blur_keypoint_fraction
-from wrp_eval.recon.oracle import GroundTruth, MeshOracle
+from wrp_eval.recon.oracle import GroundTruth, MeshOracle, o3d_tensor
 from wrp_eval.sim.captures import CaptureSet
 
 REGISTRATION_CALIBRATION_WIDTH_PX = 800  # the COLMAP renders min_registration_rays was calibrated on (README)
@@ -84,7 +83,7 @@ class Observations:
     normal_map: np.ndarray
 
 
-def ray_grid(camera: Camera, rays_x: int, rays_y: int) -> tuple[np.ndarray, np.ndarray]:
+def ray_grid(camera: Camera, rays_x: int, rays_y: int) -> tuple[np.ndarray, float]:
     """Camera-frame unit directions (r, 3) through the centres of a rays_x x rays_y grid (row-major),
     and the pixel spacing (px) between neighbouring rays."""
     u = (np.arange(rays_x) + 0.5) * camera.image_width_px / rays_x
@@ -106,7 +105,7 @@ def observe(capture_set: CaptureSet, gt: GroundTruth, rays_x: int, rays_y: int, 
     dirs = np.einsum("nij,rj->nri", rot, cam_dirs)
     origins = np.broadcast_to(np.asarray(capture_set.positions, dtype=float)[:, None, :], (n, r, 3))
     rays = np.concatenate([origins, dirs], axis=2).astype(np.float32).reshape(-1, 6)
-    ans = gt.occluder_scene.cast_rays(o3d.core.Tensor(rays))
+    ans = gt.occluder_scene.cast_rays(o3d_tensor(rays))
     # float32 from here on (what open3d casts in): metres to ~1e-5 at ship scale, far below the noise
     t_hit = ans["t_hit"].numpy()
     gid = ans["geometry_ids"].numpy()
@@ -243,6 +242,8 @@ def register_incremental(n_views: int, n_hits: int, hit_view: np.ndarray, hit: n
     if ray_weight is None:
         ray_weight = np.ones(n_views * rays_per_view)
         hit_ray = np.zeros(n_hits, dtype=np.int64)  # with unit weights any ray index gives weight 1
+    elif hit_ray is None:
+        raise ValueError("ray_weight needs hit_ray, each hit's own flat ray index")
     mapper = _IncrementalMapper(n_views, n_hits, hit_view, hit[mi], partner[mi], grid_index[mi], triangulates[mi],
                                 rays_per_view, ray_weight)
     seed = mapper.seed_pair(hit_ray, min_rays)

@@ -19,6 +19,7 @@ import json
 import logging
 import traceback
 from pathlib import Path
+from typing import Any, TypeGuard, cast
 
 import numpy as np
 import trimesh
@@ -141,8 +142,8 @@ def add_calibration(row: dict, synthetic: SyntheticOracle, cs: CaptureSet, mesh:
     row.update({f"synthetic_{k}": (v if np.isfinite(v) else None) for k, v in eq.items()})
     for key in ("width", "sparse"):
         ref = row.get(f"synthetic_{key}_error_m")
-        ok = _finite(ref) and _finite(col) and ref > 0
-        row[f"error_ratio_colmap_to_{key}_equivalent"] = col / ref if ok else None
+        row[f"error_ratio_colmap_to_{key}_equivalent"] = (col / ref if _finite(ref) and _finite(col) and ref > 0
+                                                          else None)
 
 
 def summarize(rows: list[dict]) -> dict:
@@ -262,7 +263,7 @@ def capture_sha(cs: CaptureSet) -> str:
     return h.hexdigest()[:16]
 
 
-def _finite(x) -> bool:
+def _finite(x: Any) -> TypeGuard[float]:
     return x is not None and not isinstance(x, bool) and np.isfinite(float(x))
 
 
@@ -332,6 +333,7 @@ def summarize_perturbed(rows: list[dict]) -> dict:
     agreement of error_m."""
     ref = next((r for r in rows if r["kind"] == "reference"), None)
     perturbed = [r for r in rows if r["kind"] not in NOISE_KINDS]
+    summary: dict[str, Any]
     summary = {"capture_sets": len(rows), "perturbed_sets": len(perturbed),
                "compared": sum(r.get("colmap_failed") is not None for r in perturbed),
                "spearman_target": SPEARMAN_TARGET,
@@ -423,10 +425,11 @@ def validate_perturbed(oracle: OracleSection, mesh: trimesh.Trimesh, sets: list[
     synthetic = SyntheticOracle(oracle)
     previous = _read_colmap_rows(reuse_colmap) if reuse_colmap is not None else None
     if previous is not None and reference_name not in previous:
-        raise InputError(reuse_colmap, f"has no {reference_name!r} row: not a validate-oracle "
+        raise InputError(cast(Path, reuse_colmap), f"has no {reference_name!r} row: not a validate-oracle "
                                        f"perturbed_summary.json")
     colmap = ColmapOracle(oracle) if previous is None else None
-    rows, mismatched, errors = [], [], []
+    rows, mismatched = [], []
+    errors: list[str] = []
     for name, kind, cs, run_seed in runs:
         if previous is not None and name not in previous:
             continue
@@ -439,7 +442,7 @@ def validate_perturbed(oracle: OracleSection, mesh: trimesh.Trimesh, sets: list[
                 mismatched.append(name)
         else:
             # features and matches kept per set under OUT/colmap/NAME, as validate_oracle does
-            colmap.work_dir = out / "colmap" / name
+            cast(ColmapOracle, colmap).work_dir = out / "colmap" / name
             col = _evaluate_or_error(colmap, cs, mesh, run_seed, f"{name}: colmap", errors)
             row = perturbed_row(name, kind, cs, syn, col)
             row["colmap_capture_sha"] = row["capture_sha"]  # the set COLMAP scored (checked when reused)
@@ -462,7 +465,7 @@ class _OracleError:
 
     def __init__(self, reason: str):
         self.reason = reason
-        self.extra = {}
+        self.extra: dict[str, Any] = {}
 
     def __getattr__(self, key):
         return None

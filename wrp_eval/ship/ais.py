@@ -11,6 +11,7 @@ from __future__ import annotations
 
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, field
+from typing import Any
 
 from pyais import NMEAMessage
 from pyais.exceptions import AISBaseException
@@ -134,7 +135,7 @@ def _decode(msg: NMEAMessage, label: str) -> dict | None:
     if msg_type not in (1, 2, 3, 5, 18, 24):
         return None
     try:
-        fields = msg.decode().asdict()
+        fields: dict[str, Any] = msg.decode().asdict()
     except _PYAIS_ERRORS as err:
         raise InputError(label, f"cannot decode message type {msg_type}: {type(err).__name__}: {err}") from None
     key = (24, fields.get("partno")) if msg_type == 24 else msg_type
@@ -259,7 +260,7 @@ def particulars_from_report(report: AisReport, overrides: Mapping[str, float] | 
         if value is not None:
             known[key], given_by[key] = float(value), "config"
     resolved_type = ship_type
-    if ship_type is not None:
+    if resolved_type is not None:
         given_by["ship_type"] = "config"
     else:
         resolved_type = ship_type_from_ais_code(report.ship_type_code)

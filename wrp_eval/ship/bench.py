@@ -7,6 +7,7 @@ per-face complexities beside the timings so a change in the generator shows up h
 from __future__ import annotations
 
 import time
+from typing import Any
 
 from wrp_eval.bench_record import BenchRecord
 from wrp_eval.ship.complexity import mesh_surface_complexity
@@ -17,7 +18,7 @@ from wrp_eval.ship.proxy import build_proxy
 from wrp_eval.ship.resolve import resolve_particulars
 
 
-def _best_of(fn, repeats: int = 5) -> tuple[float, object]:
+def _best_of(fn, repeats: int = 5) -> tuple[float, Any]:
     best, result = float("inf"), None
     for _ in range(repeats):
         start = time.perf_counter()

@@ -23,7 +23,7 @@ from wrp_eval.schema import StrictModel
 from wrp_eval.ship.motion import ShipMotionSection
 from wrp_eval.ship.particulars import ShipType
 
-_METRES = {"allow_inf_nan": False}
+_METRES: dict[str, Any] = {"allow_inf_nan": False}
 
 
 class ParticularsOverrides(StrictModel):

@@ -20,6 +20,7 @@ from __future__ import annotations
 import hashlib
 import json
 from pathlib import Path
+from typing import cast
 
 import numpy as np
 import trimesh
@@ -140,7 +141,7 @@ class _Builder:
     def mesh(self) -> trimesh.Trimesh:
         if self._box_lo:
             self.parts.append(boxes(np.array(self._box_lo), np.array(self._box_hi)))
-        mesh = trimesh.util.concatenate(self.parts)
+        mesh = cast(trimesh.Trimesh, trimesh.util.concatenate(self.parts))
         return trimesh.Trimesh(mesh.vertices, mesh.faces, process=False)
 
 

@@ -239,7 +239,7 @@ def ship_motion(section: ShipMotionSection, particulars: ShipParticulars | None,
     mean wind (needed by ``sea_state: from_wind``; a flight in a calm wind gets a still ship).
     """
     del particulars
-    if not section.enabled:
+    if not section.enabled or section.sea_state is None:
         return None
     if n_flights < 1:
         raise ValueError("n_flights must be >= 1")

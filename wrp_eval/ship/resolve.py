@@ -4,6 +4,7 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 from pathlib import Path
+from typing import cast
 
 import trimesh
 
@@ -67,7 +68,7 @@ def resolve_particulars(section: ShipSection, config_dir: str | Path = ".", sour
             sentences = list(section.ais)
             labels = [f"{source} ship.ais[{i}]" for i in range(len(sentences))]
         else:
-            path = config_dir / section.ais_file
+            path = config_dir / cast(str, section.ais_file)
             try:
                 sentences = path.read_text(encoding="ascii").splitlines()
             except FileNotFoundError:

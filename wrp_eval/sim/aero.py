@@ -24,6 +24,7 @@ Anderson, *Fundamentals of Aerodynamics*, Sec. 1.5), applied at the centre of ma
 from __future__ import annotations
 
 import numpy as np
+from numpy.typing import ArrayLike, NDArray
 
 from wrp_eval.compiled import kernel
 from wrp_eval.sim.vehicle import QuadrotorParams
@@ -34,15 +35,15 @@ def _area_row(rx: float, ry: float, rz: float, yaw: float, length: float, width:
               rotor_radius: float, rotor_height: float) -> float:
     """Windward area m^2 of one vehicle: relative air (rx, ry, rz) m/s, body yaw rad, body box and rotor
     cylinder sizes m (module docstring)."""
-    horizontal = np.hypot(rx, ry)
-    speed = np.sqrt(horizontal ** 2 + rz ** 2)
+    horizontal: float = np.hypot(rx, ry)
+    speed: float = np.sqrt(horizontal ** 2 + rz ** 2)
     safe_h = horizontal if horizontal > 0.0 else 1.0
     # horizontal unit normal of the wind direction (rotate the direction by +90 deg)
     nx, ny = -ry / safe_h, rx / safe_h
     cos_y, sin_y = np.cos(yaw), np.sin(yaw)
     dot1 = length * (nx * cos_y + ny * sin_y)          # n . x_b * L
     dot2 = width * (-nx * sin_y + ny * cos_y)          # n . y_b * W
-    side = (abs(dot1) + abs(dot2)) * height + 4.0 * np.pi * rotor_radius * rotor_height
+    side: float = (abs(dot1) + abs(dot2)) * height + 4.0 * np.pi * rotor_radius * rotor_height
     if not speed > 0.0:
         return side
     cos_e, sin_e = horizontal / speed, abs(rz) / speed
@@ -50,7 +51,9 @@ def _area_row(rx: float, ry: float, rz: float, yaw: float, length: float, width:
 
 
 @kernel
-def _drag_rows(rel_air, yaw, length, width, height, rotor_radius, rotor_height, drag_coefficient, air_density):
+def _drag_rows(rel_air: NDArray[np.float64], yaw: NDArray[np.float64], length: float, width: float, height: float,
+               rotor_radius: float, rotor_height: float, drag_coefficient: float,
+               air_density: float) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
     """(area (n,) m^2, drag (n, 3) N) for relative air (n, 3) m/s and yaw (n,) rad."""
     n = rel_air.shape[0]
     area, drag = np.empty(n), np.empty((n, 3))
@@ -63,7 +66,8 @@ def _drag_rows(rel_air, yaw, length, width, height, rotor_radius, rotor_height, 
     return area, drag
 
 
-def _drag(rel_air, yaw, params: QuadrotorParams, drag_coefficient: float, air_density_kg_m3: float):
+def _drag(rel_air: ArrayLike, yaw: ArrayLike, params: QuadrotorParams, drag_coefficient: float,
+          air_density_kg_m3: float) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
     rel_air = np.asarray(rel_air, dtype=float)
     yaw = np.broadcast_to(np.asarray(yaw, dtype=float), rel_air.shape[:1])
     return _drag_rows(rel_air, yaw, params.body_length_m, params.body_width_m, params.body_height_m,

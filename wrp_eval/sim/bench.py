@@ -37,7 +37,7 @@ from wrp_eval.sim.flight import FlightSimulator
 from wrp_eval.sim.onboard import ShipInScene
 from wrp_eval.sim.vehicle import PHANTOM4, build_scene
 from wrp_eval.wind.config import TurbulenceSection, WindSection
-from wrp_eval.wind.field import build_wind_field
+from wrp_eval.wind.field import WindField, build_wind_field
 
 
 def bench_path(n_views: int = 50, length_m: float = 700.0) -> FlightPath:
@@ -117,7 +117,7 @@ def raw_rollout_rate(section: SimSection, batch: int, sim_seconds: float,
     return steps / wall, steps / cpu
 
 
-def moderate_wind(section: SimSection, batch: int, seed: int, dt_s: float | None = None):
+def moderate_wind(section: SimSection, batch: int, seed: int, dt_s: float | None = None) -> WindField:
     """Synthetic marine wind 6 m/s at 10 m from the west + moderate Dryden turbulence, one stream per flight,
     with the default ship's air wake, stepping by ``dt_s`` (default: the section's chunk)."""
     wind = WindSection(speed_10m_m_s=6.0, turbulence=TurbulenceSection(severity="moderate"))
@@ -172,7 +172,7 @@ def run_bench() -> list[BenchRecord]:
                    f"mujoco {mujoco.__version__}")
     for batch in (1024, 64, 32):      # 64: the campaign's default batch (issue 19: sim.ratio_batch64 >= 0.5)
         # interleaved, best of 3: this machine is shared, so the ratio is taken between neighbouring runs
-        runs = {"raw": [], "closed": [], "bare": []}
+        runs: dict[str, list[tuple[float, float]]] = {"raw": [], "closed": [], "bare": []}
         for _ in range(3):
             runs["raw"].append(raw_rollout_rate(section, batch, 10.0))
             runs["closed"].append(closed_loop_rate(section, batch, 10.0))

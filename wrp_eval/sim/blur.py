@@ -17,24 +17,27 @@ degrades and can prevent automatic photogrammetric processing).
 from __future__ import annotations
 
 import numpy as np
+from numpy.typing import NDArray
 from scipy.spatial.transform import Rotation
 
 
-def angular_velocity(rot_before: np.ndarray, rot_after: np.ndarray, dt_s: float) -> np.ndarray:
+def angular_velocity(rot_before: NDArray[np.float64], rot_after: NDArray[np.float64],
+                     dt_s: float) -> NDArray[np.float64]:
     """(n, 3) rad/s mean angular velocity, in the camera frame, of cameras turning from ``rot_before`` to
     ``rot_after`` (n, 3, 3) world from camera over ``dt_s`` s."""
     relative = np.einsum("nji,njk->nik", rot_before, rot_after)          # R_before^T R_after
-    return Rotation.from_matrix(relative).as_rotvec() / dt_s
+    rotvec: NDArray[np.float64] = Rotation.from_matrix(relative).as_rotvec()
+    return rotvec / dt_s
 
 
-def motion_blur_px(velocity_m_s: np.ndarray, rotation: np.ndarray, omega_rad_s: np.ndarray,
-                   depth_m: np.ndarray, exposure_s: float, focal_px: float) -> np.ndarray:
+def motion_blur_px(velocity_m_s: NDArray[np.float64], rotation: NDArray[np.float64], omega_rad_s: NDArray[np.float64],
+                   depth_m: NDArray[np.float64], exposure_s: float, focal_px: float) -> NDArray[np.float64]:
     """Blur length (n,) px at the image centre.
 
     velocity_m_s (n, 3): the camera's world velocity; rotation (n, 3, 3): world from camera; omega_rad_s
     (n, 3): angular velocity in the camera frame; depth_m (n,): distance along the optical axis to the
     photographed surface (NaN: unknown, then the blur is NaN); exposure_s: shutter time; focal_px."""
-    v = np.einsum("nji,nj->ni", rotation, velocity_m_s)                  # R^T v: camera frame
+    v: NDArray[np.float64] = np.einsum("nji,nj->ni", rotation, velocity_m_s)  # R^T v: camera frame
     du = -v[:, 0] / depth_m - omega_rad_s[:, 1]
     dv = -v[:, 1] / depth_m + omega_rad_s[:, 0]
     return exposure_s * focal_px * np.hypot(du, dv)

@@ -26,16 +26,18 @@ shutter opens ``trigger_latency_s`` later (:func:`shutter_offset`).
 
 from __future__ import annotations
 
-from typing import Literal
+from typing import Any, Final, Literal
 
 import numpy as np
+from numpy.typing import ArrayLike, NDArray
 from pydantic import Field
 
 from wrp_eval.compiled import kernel
 from wrp_eval.schema import StrictModel
 
-STOP, FLY_THROUGH = "stop", "fly-through"
-SMOOTH_TRANSITION = "smoothTransition"
+STOP: Final = "stop"
+FLY_THROUGH: Final = "fly-through"
+SMOOTH_TRANSITION: Final = "smoothTransition"
 # Largest step of the reference velocity at a fly-through corner (m/s): the position loop turns a velocity step
 # dv into an acceleration demand kv dv (kv = 6 /s, the default gains, controller.py); 0.4 m/s keeps it near
 # the reference's own acceleration limit (2.5 m/s^2 / 6 /s = 0.42 m/s). Without it the corners were taken at
@@ -93,7 +95,7 @@ def vertex_speeds(body: np.ndarray, yaw: np.ndarray, cruise_m_s: float, accel_m_
         corner = np.sqrt(accel_m_s2 * corner_radius_m / np.tan(half_turn))
     with np.errstate(divide="ignore"):
         step = corner_step_m_s / (2.0 * np.sin(half_turn))
-    speed = np.zeros(body.shape[:2])
+    speed: NDArray[np.float64] = np.zeros(body.shape[:2])
     speed[:, 1:-1] = np.minimum(np.minimum(np.nan_to_num(corner, nan=0.0, posinf=np.inf), step),
                                 np.minimum(leg_cap[:, :-1], leg_cap[:, 1:]))
     for k in range(1, speed.shape[1]):             # over viewpoints (tens), every flight at once
@@ -118,7 +120,8 @@ def trigger_planes(body: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
 
 
 @kernel
-def through_row(length: float, tau: float, v0: float, v1: float, v_max: float, accel: float):
+def through_row(length: float, tau: float, v0: float, v1: float, v_max: float,
+                accel: float) -> tuple[float, float, float, float]:
     """(s, v, a, duration) of :func:`through_profile` for one segment at one time."""
     v_peak = np.minimum(v_max, np.sqrt(np.maximum(accel * length + 0.5 * (v0 ** 2 + v1 ** 2), 0.0)))
     v_peak = np.maximum(v_peak, np.maximum(v0, v1))
@@ -145,7 +148,8 @@ def through_row(length: float, tau: float, v0: float, v1: float, v_max: float, a
 
 
 @kernel
-def _through_rows(length, tau, v0, v1, v_max, accel):
+def _through_rows(length: NDArray[np.float64], tau: NDArray[np.float64], v0: NDArray[np.float64],
+                  v1: NDArray[np.float64], v_max: NDArray[np.float64], accel: float) -> NDArray[np.float64]:
     out = np.empty((4, length.size))
     for row in range(length.size):
         out[0, row], out[1, row], out[2, row], out[3, row] = through_row(length[row], tau[row], v0[row], v1[row],
@@ -153,18 +157,20 @@ def _through_rows(length, tau, v0, v1, v_max, accel):
     return out
 
 
-def through_profile(length, tau, v0, v1, v_max, accel):
+def through_profile(length: ArrayLike, tau: ArrayLike, v0: ArrayLike, v1: ArrayLike, v_max: ArrayLike,
+                    accel: float) -> tuple[Any, ...]:
     """Trapezoid from speed v0 to v1 over ``length`` (each (n,)) with acceleration ``accel`` and cruise at most
     ``v_max``: (distance s, speed v, acceleration a, duration) (n,) at time ``tau`` (n,) s. The end speeds
     must be reachable (:func:`vertex_speeds` makes them so). After the duration: at the end, at speed v1.
     ``accel``: a number (m/s^2); the others broadcast."""
     arrays = np.broadcast_arrays(*(np.asarray(x, dtype=float) for x in (length, tau, v0, v1, v_max)))
-    s, v, a, duration = _through_rows(*(np.ascontiguousarray(x).reshape(-1) for x in arrays), float(accel))
+    length, tau, v0, v1, v_max = (np.ascontiguousarray(x).reshape(-1) for x in arrays)
+    s, v, a, duration = _through_rows(length, tau, v0, v1, v_max, float(accel))
     return tuple(x.reshape(arrays[0].shape)[()] for x in (s, v, a, duration))     # [()]: a number for numbers
 
 
 def shutter_offset(past_m: np.ndarray, speed_along_m_s: np.ndarray, chunk_s: float, latency_s: float) -> np.ndarray:
     """(n,) s from now to the shutter of views whose plane was crossed ``past_m`` (n,) m ago at ``speed_along_m_s``
     (n,): the crossing time interpolated within the last chunk, plus the trigger latency."""
-    since = np.clip(past_m / np.maximum(speed_along_m_s, 1e-3), 0.0, chunk_s)
+    since: NDArray[np.float64] = np.clip(past_m / np.maximum(speed_along_m_s, 1e-3), 0.0, chunk_s)
     return latency_s - since

@@ -2,7 +2,7 @@
 
 from __future__ import annotations
 
-from typing import Literal
+from typing import Any, Literal
 
 from pydantic import Field, model_validator
 
@@ -57,7 +57,7 @@ class SimSection(StrictModel):
 
     @model_validator(mode="before")
     @classmethod
-    def _old_wind_rule(cls, data):
+    def _old_wind_rule(cls, data: Any) -> Any:
         """Configs and stored campaigns from before ``sim.mission`` say ``wind_limit_m_s`` / ``wind_average_s``
         (a 30 s average over 10 m/s sent the vehicle home): read them as the operator policy they were."""
         if not isinstance(data, dict) or not ({"wind_limit_m_s", "wind_average_s"} & data.keys()):

@@ -19,8 +19,10 @@ The position loop runs once per simulation chunk (zero-order hold), see README.m
 from __future__ import annotations
 
 from dataclasses import dataclass
+from typing import TypeVar
 
 import numpy as np
+from numpy.typing import ArrayLike, NDArray
 
 from wrp_eval.compiled import as_rows, kernel
 from wrp_eval.sim.vehicle import GRAVITY_M_S2, QuadrotorParams
@@ -53,9 +55,11 @@ GAIN_PRESETS: dict[str, ControllerGains] = {
     "stiff": ControllerGains(kp=18.75, kv=7.5, ki=15.625, attitude_bandwidth_rad_s=16.0),
 }
 
+_Angle = TypeVar("_Angle", float, NDArray[np.float64])
+
 
 @kernel
-def quat_row_to_matrix(quat, rot) -> None:
+def quat_row_to_matrix(quat: NDArray[np.float64], rot: NDArray[np.float64]) -> None:
     """Write the rotation matrix (world from body) of the unit quaternion ``quat`` (4,) (w, x, y, z) into
     ``rot`` (3, 3)."""
     w, x, y, z = quat[0], quat[1], quat[2], quat[3]
@@ -72,7 +76,7 @@ def quat_row_to_matrix(quat, rot) -> None:
 
 
 @kernel
-def _quat_rows_to_matrix(quat):
+def _quat_rows_to_matrix(quat: NDArray[np.float64]) -> NDArray[np.float64]:
     rot = np.empty((quat.shape[0], 3, 3))
     for row in range(quat.shape[0]):
         quat_row_to_matrix(quat[row], rot[row])
@@ -85,12 +89,12 @@ def quat_to_matrix(quat: np.ndarray) -> np.ndarray:
 
 
 @kernel
-def yaw_of(rot):
+def yaw_of(rot: NDArray[np.float64]) -> NDArray[np.float64]:
     """(n,) heading of the body x axis (rad, CCW from world +x) from (n, 3, 3) rotations."""
     return np.arctan2(rot[:, 1, 0], rot[:, 0, 0])
 
 
-def tilt_of(rot: np.ndarray) -> np.ndarray:
+def tilt_of(rot: NDArray[np.float64]) -> NDArray[np.float64]:
     """(n,) angle (rad) between the body z axis and world up."""
     return np.arccos(np.clip(rot[:, 2, 2], -1.0, 1.0))
 
@@ -104,17 +108,18 @@ def cross(a: np.ndarray, b: np.ndarray) -> np.ndarray:
 
 def wrap_angle(a: np.ndarray) -> np.ndarray:
     """Angles wrapped to [-pi, pi) (numbers, lists or arrays)."""
-    return wrapped(np.asarray(a, dtype=float))
+    angles: NDArray[np.float64] = np.asarray(a, dtype=float)
+    return wrapped(angles)
 
 
 @kernel
-def wrapped(a):
+def wrapped(a: _Angle) -> _Angle:
     """:func:`wrap_angle` of a number or an array, for kernels."""
     return (a + np.pi) % (2.0 * np.pi) - np.pi
 
 
 @kernel
-def _attitude_row(b3x: float, b3y: float, b3z: float, yaw: float):
+def _attitude_row(b3x: float, b3y: float, b3z: float, yaw: float) -> tuple[float, float, float, float]:
     """(w, x, y, z) of R_d for one unit thrust axis b3 and heading ``yaw`` (:func:`attitude_quaternion`)."""
     cy, sy = np.cos(yaw), np.sin(yaw)
     bx = cy * b3x + sy * b3y
@@ -129,7 +134,7 @@ def _attitude_row(b3x: float, b3y: float, b3z: float, yaw: float):
 
 
 @kernel
-def _attitude_rows(b3, yaw):
+def _attitude_rows(b3: NDArray[np.float64], yaw: NDArray[np.float64]) -> NDArray[np.float64]:
     quat = np.empty((b3.shape[0], 4))
     for row in range(b3.shape[0]):
         quat[row, 0], quat[row, 1], quat[row, 2], quat[row, 3] = _attitude_row(b3[row, 0], b3[row, 1], b3[row, 2],
@@ -150,8 +155,12 @@ def attitude_quaternion(b3: np.ndarray, yaw: np.ndarray) -> np.ndarray:
 
 
 @kernel
-def _position_loop_rows(pos, vel, body_z, ref_pos, ref_vel, ref_acc, ref_yaw, integrate, integral, dt_s, kp, kv, ki,
-                        integral_limit, mass_kg, tan_max_tilt, max_total_thrust):
+def _position_loop_rows(pos: NDArray[np.float64], vel: NDArray[np.float64], body_z: NDArray[np.float64],
+                        ref_pos: NDArray[np.float64], ref_vel: NDArray[np.float64], ref_acc: NDArray[np.float64],
+                        ref_yaw: NDArray[np.float64], integrate: NDArray[np.bool_], integral: NDArray[np.float64],
+                        dt_s: float, kp: float, kv: float, ki: float, integral_limit: float, mass_kg: float,
+                        tan_max_tilt: float,
+                        max_total_thrust: float) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
     """(thrust (n,) N, R_d quaternions (n, 4)) of the position loop (:meth:`PositionController.__call__`), row by
     row; ``integral`` (n, 3) is updated in place."""
     n = pos.shape[0]
@@ -201,7 +210,9 @@ class PositionController:
         else:
             self.integral[mask] = 0.0
 
-    def __call__(self, pos, vel, body_z, ref_pos, ref_vel, ref_acc, ref_yaw, dt_s, integrate=None):
+    def __call__(self, pos: ArrayLike, vel: ArrayLike, body_z: ArrayLike, ref_pos: ArrayLike, ref_vel: ArrayLike,
+                 ref_acc: ArrayLike, ref_yaw: ArrayLike, dt_s: float,
+                 integrate: ArrayLike | None = None) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
         """(thrust (n,) N, R_d quaternion (n, 4)) for pos/vel (n, 3) world, body_z (n, 3) = R e3.
 
         ``integrate`` (n,) bool: where the position-error integral may grow (None: everywhere). The flight
@@ -215,7 +226,8 @@ class PositionController:
                                                                     ("ref_pos", ref_pos), ("ref_vel", ref_vel),
                                                                     ("ref_acc", ref_acc)))
         integrate = as_rows("integrate", True if integrate is None else integrate, (n,), bool)
-        return _position_loop_rows(*vectors, as_rows("ref_yaw", ref_yaw, (n,)), integrate, self.integral,
-                                   float(dt_s), g.kp, g.kv, g.ki,
+        pos, vel, body_z, ref_pos, ref_vel, ref_acc = vectors
+        return _position_loop_rows(pos, vel, body_z, ref_pos, ref_vel, ref_acc, as_rows("ref_yaw", ref_yaw, (n,)),
+                                   integrate, self.integral, float(dt_s), g.kp, g.kv, g.ki,
                                    g.integral_limit_m_s2 / max(g.ki, 1e-9), self.params.mass_kg, self.tan_max_tilt,
                                    self.max_total_thrust)

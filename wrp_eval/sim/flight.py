@@ -31,14 +31,17 @@ threads) and the loop that calls those steps around ``mujoco.rollout``.
 from __future__ import annotations
 
 import os
+from collections.abc import Callable
 from concurrent.futures import ThreadPoolExecutor
 from dataclasses import dataclass
 from functools import partial
-from typing import NamedTuple
+from typing import Any, NamedTuple
 
 import mujoco
 import numpy as np
+from dm_control import mjcf
 from mujoco import rollout as mj_rollout
+from numpy.typing import ArrayLike, NDArray
 from scipy.spatial.transform import Rotation
 
 from wrp_eval.compiled import kernel
@@ -61,8 +64,10 @@ from wrp_eval.sim.flight_state import (
     RETURNED_BATTERY,
     FlightState,
     FlightTargets,
+    Shot,
     TrajectoryLog,
 )
+from wrp_eval.sim.navigation import NavigationEstimate
 from wrp_eval.sim.onboard import Onboard, ShipInScene, view_depths
 from wrp_eval.sim.phases import (
     YAW_RATE_REF_RAD_S,
@@ -88,6 +93,11 @@ from wrp_eval.sim.phases import (
 )
 from wrp_eval.sim.results import FlightResult
 from wrp_eval.sim.vehicle import PHANTOM4, QuadrotorParams, Scene, build_scene
+from wrp_eval.streams import FlightRngs
+from wrp_eval.wind.base import WindModel
+
+# Onboard.shoot with the chunk's state bound: (rows, views, delay_s) -> the photos of those rows
+_Shoot = Callable[[np.ndarray, np.ndarray, np.ndarray], Shot | None]
 
 
 def _mocap_id(model: mujoco.MjModel, name: str) -> int | None:
@@ -99,7 +109,7 @@ def _mocap_id(model: mujoco.MjModel, name: str) -> int | None:
     return mocap if mocap >= 0 else None
 
 
-def _wind_at(wind, points, t, batch):
+def _wind_at(wind: WindModel, points: NDArray[np.float64], t: float, batch: int) -> NDArray[np.float64]:
     """(batch, 3) wind from ``wind.velocity(points, t)``, shape-checked."""
     out = np.asarray(wind.velocity(points, t), dtype=float)
     if out.shape != (batch, 3):
@@ -107,7 +117,7 @@ def _wind_at(wind, points, t, batch):
     return out
 
 
-def _inside_field(wind, points: np.ndarray) -> np.ndarray:
+def _inside_field(wind: WindModel, points: np.ndarray) -> np.ndarray:
     """(n,) bool: ``points`` (n, 3) m inside the wind model's domain (its optional ``inside(points)``; a model
     without one is everywhere)."""
     inside = getattr(wind, "inside", None)
@@ -144,7 +154,8 @@ def _start_poses(targets: FlightTargets, padded: int, position: np.ndarray, yaw:
 
 
 @kernel
-def _body_rows(state, qpos_flat, qvel_flat):
+def _body_rows(state: NDArray[np.float64], qpos_flat: NDArray[np.intp], qvel_flat: NDArray[np.intp],
+               ) -> tuple[NDArray[np.float64], NDArray[np.float64], NDArray[np.float64], NDArray[np.float64]]:
     """(position (n, 3), velocity (n, 3), rot (n, 3, 3), yaw (n,)) of the drones whose free joints sit at flat
     indices ``qpos_flat`` (n, 7) and ``qvel_flat`` (n, 6) of the rollout ``state``."""
     n = qpos_flat.shape[0]
@@ -168,8 +179,8 @@ def _mission_horizon(sec: SimSection, dt: float) -> tuple[float, int]:
     return away_cap_s, int(np.ceil((m.max_sorties * sec.max_flight_time_s + (m.max_sorties - 1) * away_cap_s) / dt))
 
 
-def _next_sorties(state: FlightState, targets: FlightTargets, onboard: Onboard, position: np.ndarray, nav, t: float,
-                  profile: Profile) -> None:
+def _next_sorties(state: FlightState, targets: FlightTargets, onboard: Onboard, position: np.ndarray,
+                  nav: NavigationEstimate, t: float, profile: Profile) -> None:
     """The flights due back at ``t`` s start their next sortie: a fresh battery, from the breakpoint (their true
     ``position`` (batch, 3) m; the reference from the navigation's ``nav``)."""
     back = np.flatnonzero(state.resume_at <= t + 1e-9)
@@ -177,7 +188,7 @@ def _next_sorties(state: FlightState, targets: FlightTargets, onboard: Onboard, 
     resume(state, targets, back, nav.position[back], nav.yaw[back], t, profile)
 
 
-def _predicted_points(wind, position: np.ndarray, velocity: np.ndarray, dt: float, inside: np.ndarray,
+def _predicted_points(wind: WindModel, position: np.ndarray, velocity: np.ndarray, dt: float, inside: np.ndarray,
                       home: np.ndarray) -> np.ndarray:
     """(batch, 3) m where the next chunk's wind is sampled ahead of time: p + v dt (the vehicle moves < 0.5 m per
     chunk, the prediction is off by 0.5 a dt^2 < 1 cm, and the wind field varies over metres); a prediction
@@ -218,7 +229,7 @@ class _Batch:
     controls: np.ndarray
     out: np.ndarray
     park: np.ndarray
-    models: list
+    models: list[mujoco.MjModel]
     task_size: int
 
     def body(self) -> Body:
@@ -248,7 +259,7 @@ class FlightSimulator:
     """
 
     def __init__(self, section: SimSection = SimSection(), params: QuadrotorParams = PHANTOM4,
-                 scene_root=None):
+                 scene_root: mjcf.RootElement | None = None) -> None:
         self.section = section
         self.params = params
         self.gains = GAIN_PRESETS[section.gains]
@@ -282,14 +293,15 @@ class FlightSimulator:
         self._worker.shutdown(wait=True)
         self._pool.close()
 
-    def __enter__(self):
+    def __enter__(self) -> FlightSimulator:
         return self
 
-    def __exit__(self, *exc):
+    def __exit__(self, *exc: object) -> None:
         self.close()
 
     # -- layout of a batch in the rollout arrays ------------------------------------------------------
-    def _layout(self, batch: int):
+    def _layout(self, batch: int) -> tuple[int, int, NDArray[np.intp], NDArray[np.intp], NDArray[np.intp],
+                                           NDArray[np.intp], NDArray[np.intp]]:
         d = self.section.drones_per_model
         n_models = -(-batch // d)
         padded = n_models * d
@@ -323,12 +335,13 @@ class FlightSimulator:
                       np.empty((n_models, sec.chunk_steps, self.nstate)), park, [self.scene.model] * n_models,
                       task_size)
 
-    def _run_chunk(self, run: _Batch, sec: SimSection, sample_wind=None):
+    def _run_chunk(self, run: _Batch, sec: SimSection,
+                   sample_wind: Callable[[], NDArray[np.float64]] | None = None) -> NDArray[np.float64] | None:
         """Advance ``run`` by one chunk under its held controls. ``sample_wind`` (optional, no arguments) is
         called while the rollout runs (it releases the GIL); its value is returned."""
-        args = (run.models, self._datas, run.state, run.controls)
-        kw = dict(control_spec=self.control_spec, skip_checks=True, nstep=sec.chunk_steps, state=run.out,
-                  chunk_size=run.task_size)
+        args: tuple[Any, ...] = (run.models, self._datas, run.state, run.controls)
+        kw: dict[str, Any] = dict(control_spec=self.control_spec, skip_checks=True, nstep=sec.chunk_steps,
+                                  state=run.out, chunk_size=run.task_size)
         wind = None
         if sample_wind is None:
             self._pool.rollout(*args, **kw)
@@ -341,9 +354,9 @@ class FlightSimulator:
         run.state = np.ascontiguousarray(run.out[:, -1])
         return wind
 
-    def _commands(self, run: _Batch, controller: PositionController, body: Body, nav, ref: Reference,
-                  state: FlightState, wind_b: np.ndarray, dt: float, sec: SimSection, nav_is_truth: bool,
-                  through: bool):
+    def _commands(self, run: _Batch, controller: PositionController, body: Body, nav: NavigationEstimate,
+                  ref: Reference, state: FlightState, wind_b: np.ndarray, dt: float, sec: SimSection,
+                  nav_is_truth: bool, through: bool) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         """Motor thrusts (padded, 4) N, attitude targets (padded, 4) and drag (padded, 3) N for the next
         chunk, from the wind ``wind_b`` (batch, 3) m/s at the flights (calm at the fillers); the position
         loop flies on the navigation estimate ``nav`` (the fillers on their true state; ``nav_is_truth``:
@@ -368,8 +381,9 @@ class FlightSimulator:
         return motors, quat_d, drag
 
     # -- flights --------------------------------------------------------------------------------------
-    def fly(self, path: FlightPath, wind, batch: int, view_offsets: np.ndarray | None = None,
-            start_time_s: float = 0.0, *, ship: ShipInScene | None = None, flight_rngs=None) -> FlightResult:
+    def fly(self, path: FlightPath, wind: WindModel, batch: int, view_offsets: np.ndarray | None = None,
+            start_time_s: float = 0.0, *, ship: ShipInScene | None = None,
+            flight_rngs: FlightRngs = None) -> FlightResult:
         """Fly ``path`` ``batch`` times through ``wind`` (anything with ``velocity(points (n,3), t)``,
         row i = flight i). ``view_offsets`` (batch, n_views, 4): commanded (dx, dy, dz m, dyaw rad) added to
         the plan per flight; the recorded offsets are always measured against the unperturbed plan.
@@ -379,7 +393,8 @@ class FlightSimulator:
         """
         return self._fly(path, wind, batch, view_offsets, start_time_s, self.section, ship, flight_rngs)
 
-    def _targets(self, path, batch, view_offsets, ship, profile: Profile, sec: SimSection) -> FlightTargets:
+    def _targets(self, path: FlightPath, batch: int, view_offsets: np.ndarray | None, ship: ShipInScene | None,
+                 profile: Profile, sec: SimSection) -> FlightTargets:
         targets = FlightTargets.from_path(path, batch, view_offsets, self.params.camera_offset_m,
                                           view_depths(path, None if ship is None else ship.box))
         if not profile.through:
@@ -388,8 +403,9 @@ class FlightSimulator:
                                sec.capture.corner_radius_m)
         return targets.flown_through(*speeds, *trigger_planes(targets.body))
 
-    def _fly(self, path, wind, batch, view_offsets, start_time_s, sec: SimSection, ship=None,
-             flight_rngs=None) -> FlightResult:
+    def _fly(self, path: FlightPath, wind: WindModel, batch: int, view_offsets: np.ndarray | None,
+             start_time_s: float, sec: SimSection, ship: ShipInScene | None = None,
+             flight_rngs: FlightRngs = None) -> FlightResult:
         """:meth:`fly` under the settings ``sec``: per chunk the sensing and phase steps (onboard.py,
         phases.py) on the flight state, then the commands, the record and the rollout."""
         par = self.params
@@ -448,9 +464,9 @@ class FlightSimulator:
         return self._result(state, path, log, sec)
 
     @staticmethod
-    def _endings(state: FlightState, onboard: Onboard, nav, position: np.ndarray, velocity: np.ndarray,
-                 wind_b: np.ndarray, inside: np.ndarray, t: float, last_chunk: bool, sec: SimSection,
-                 away_cap_s: float) -> None:
+    def _endings(state: FlightState, onboard: Onboard, nav: NavigationEstimate, position: np.ndarray,
+                 velocity: np.ndarray, wind_b: np.ndarray, inside: np.ndarray, t: float, last_chunk: bool,
+                 sec: SimSection, away_cap_s: float) -> None:
         """End the flights that fail now (crash, a sortie past the time limit, out of the wind field ``inside``
         (batch,) bool), then apply the autopilot's decisions (:meth:`_mission_rules`)."""
         out_of_time = last_chunk or t - state.sortie_start.min() >= sec.max_flight_time_s
@@ -462,8 +478,8 @@ class FlightSimulator:
         FlightSimulator._mission_rules(state, onboard, nav, position, wind_b, t, sec, away_cap_s)
 
     @staticmethod
-    def _photos_and_phases(state: FlightState, targets: FlightTargets, nav, shoot, dt: float, sec: SimSection,
-                           dwell: float, profile: Profile) -> None:
+    def _photos_and_phases(state: FlightState, targets: FlightTargets, nav: NavigationEstimate, shoot: _Shoot,
+                           dt: float, sec: SimSection, dwell: float, profile: Profile) -> None:
         """This chunk's photos (fly-through triggers, or the photo after the dwell) and phase moves."""
         if profile.through:
             FlightSimulator._passing_photos(state, targets, nav, shoot, dt, sec)
@@ -477,8 +493,8 @@ class FlightSimulator:
         apply_transitions(state, moves)
 
     @staticmethod
-    def _mission_rules(state: FlightState, onboard: Onboard, nav, position: np.ndarray, wind_b: np.ndarray, t: float,
-                       sec: SimSection, away_cap_s: float) -> None:
+    def _mission_rules(state: FlightState, onboard: Onboard, nav: NavigationEstimate, position: np.ndarray,
+                       wind_b: np.ndarray, t: float, sec: SimSection, away_cap_s: float) -> None:
         """The autopilot's decisions this chunk (sim/mission.py): home on energy (away for a battery swap while
         sorties are left), on a wind limit, or without headway (lost when home is out of reach)."""
         m = sec.mission
@@ -491,8 +507,8 @@ class FlightSimulator:
             state.resume_at[away] = t + np.minimum(onboard.away_time_s(away, position[away]), away_cap_s)
         apply_endings(state, cause, t)
 
-    def _launch(self, path, targets: FlightTargets, ship, flight_rngs, dt: float, start_time_s: float,
-                sec: SimSection) -> tuple[Onboard, _Batch]:
+    def _launch(self, path: FlightPath, targets: FlightTargets, ship: ShipInScene | None, flight_rngs: FlightRngs,
+                dt: float, start_time_s: float, sec: SimSection) -> tuple[Onboard, _Batch]:
         """The instruments and the rollout state of ``targets.batch`` flights at ``start_time_s``: each vehicle
         hovers where its navigation believes it is on the first target with its first heading (it has been
         holding there before the mission starts), not at the true target with its error as a step at t = 0."""
@@ -506,18 +522,22 @@ class FlightSimulator:
     def _move_ship(self, run: _Batch, onboard: Onboard, t: float) -> None:
         """Pose the scene's ship body of each model for the next chunk (held over it): the ship of the model's
         first flight (each flight has its own sea; the ship is not part of the physics: contacts are off)."""
+        motion, ship = onboard.motion, self.ship_mocap
+        if motion is None or ship is None:
+            raise ValueError("no moving ship: the scene has no ship mocap body or the flights no ship motion")
         d = self.section.drones_per_model
-        translation, rotation = onboard.motion.flights(np.arange(0, run.batch, d)).pose(t)
+        translation, rotation = motion.flights(np.arange(0, run.batch, d)).pose(t)
         quat = Rotation.from_matrix(rotation).as_quat()[:, [3, 0, 1, 2]]          # (w, x, y, z)
         nmocap = self.scene.model.nmocap
         base = run.control_vec[:len(translation)]
         nu = self.scene.model.nu
-        base[:, nu + 3 * self.ship_mocap + np.arange(3)] = translation
-        base[:, nu + 3 * nmocap + 4 * self.ship_mocap + np.arange(4)] = quat
+        base[:, nu + 3 * ship + np.arange(3)] = translation
+        base[:, nu + 3 * nmocap + 4 * ship + np.arange(4)] = quat
         run.controls[:len(translation)] = base[:, None, :]
 
     @staticmethod
-    def _passing_photos(state: FlightState, targets: FlightTargets, nav, shoot, dt: float, sec: SimSection) -> None:
+    def _passing_photos(state: FlightState, targets: FlightTargets, nav: NavigationEstimate, shoot: _Shoot, dt: float,
+                        sec: SimSection) -> None:
         """Fly-through: photograph the views whose planes the flights have passed (the shutter interpolated
         back to the crossing, plus the trigger latency); views missed are moved over."""
         rows, past, normal, missed = passing_views(state, nav.position, targets, sec.capture.corner_radius_m)
@@ -525,7 +545,7 @@ class FlightSimulator:
         delay = shutter_offset(past, (nav.velocity[rows] * normal).sum(axis=1), dt, sec.capture.trigger_latency_s)
         take_photos(state, targets, rows, shoot(rows, state.photo[rows], delay))
 
-    def _result(self, state: FlightState, path, log: TrajectoryLog, sec: SimSection) -> FlightResult:
+    def _result(self, state: FlightState, path: FlightPath, log: TrajectoryLog, sec: SimSection) -> FlightResult:
         cap = state.captures
         return FlightResult(cap.capture_sets(path.camera), cap.offsets, cap.estimated_offsets, cap.taken, cap.time,
                             cap.pitch, cap.roll, cap.saturated, cap.blur_px, cap.charge, cap.ship_motion,
@@ -533,7 +553,8 @@ class FlightSimulator:
                             log.trajectory(), sec.timestep_s, sec.chunk_steps, state.sortie.copy(),
                             state.view_sortie.copy())
 
-    def hover(self, wind, position, yaw: float, duration_s: float, batch: int = 1, flight_rngs=None) -> FlightResult:
+    def hover(self, wind: WindModel, position: ArrayLike, yaw: float, duration_s: float, batch: int = 1,
+              flight_rngs: FlightRngs = None) -> FlightResult:
         """Hold a hover at ``position`` (3,) m (camera position) with heading ``yaw`` rad for ``duration_s``:
         a one-view path whose dwell is the duration (the settle phase is skipped by a zero timeout; photo in
         stop mode). ``flight_rngs``: as :meth:`fly`'s (the navigation errors)."""

@@ -11,7 +11,10 @@ from dataclasses import dataclass, field, fields, replace
 from typing import NamedTuple
 
 import numpy as np
+from numpy.typing import ArrayLike, NDArray
 
+from wrp_eval.camera import Camera
+from wrp_eval.planning.path import FlightPath
 from wrp_eval.sim.captures import CaptureSet
 from wrp_eval.sim.controller import wrap_angle
 from wrp_eval.sim.results import Trajectory
@@ -69,7 +72,7 @@ class FlightTargets:
         return int(self.body.shape[1])
 
     @classmethod
-    def from_path(cls, path, batch: int, view_offsets: np.ndarray | None, camera_offset_m,
+    def from_path(cls, path: FlightPath, batch: int, view_offsets: np.ndarray | None, camera_offset_m: ArrayLike,
                   depth_m: np.ndarray | None = None) -> FlightTargets:
         """Targets of ``batch`` flights of ``path``; ``view_offsets`` (batch, n_views, 4) (dx, dy, dz m,
         dyaw rad) shift each flight's viewpoints; ``camera_offset_m`` (3,) the camera in the body frame;
@@ -153,7 +156,7 @@ class Shot(NamedTuple):
     ship_motion: np.ndarray
 
 
-def _nan(*shape) -> np.ndarray:
+def _nan(*shape: int) -> np.ndarray:
     return np.full(shape, np.nan)
 
 
@@ -188,7 +191,8 @@ class CaptureLog:
 
     def __getattr__(self, name: str) -> np.ndarray:
         if name in Shot._fields:                 # only called for what is not a field of the log itself
-            return getattr(self.shots, name)
+            value: np.ndarray = getattr(self.shots, name)
+            return value
         raise AttributeError(name)
 
     def record(self, rows: np.ndarray, views: np.ndarray, shot: Shot, targets: FlightTargets) -> None:
@@ -202,7 +206,7 @@ class CaptureLog:
         self.estimated_offsets[rows, views, 3] = wrap_angle(shot.estimated_yaw - targets.plan_yaw[views])
         self.taken[rows, views] = True
 
-    def capture_sets(self, camera) -> tuple[CaptureSet, ...]:
+    def capture_sets(self, camera: Camera) -> tuple[CaptureSet, ...]:
         """One :class:`CaptureSet` per flight, holding only the views it took."""
         return tuple(CaptureSet(self.position[i, taken], self.yaw[i, taken], self.pitch[i, taken],
                                 np.flatnonzero(taken), camera, roll=self.roll[i, taken],
@@ -217,8 +221,8 @@ TRAJECTORY_FIELDS = ("position", "reference", "yaw", "tilt", "thrust", "wind", "
 class TrajectoryLog:
     """Down-sampled records, one row per record time; see :class:`Trajectory` for the fields' units."""
 
-    time: list = field(default_factory=list)
-    rows: dict = field(default_factory=lambda: {k: [] for k in TRAJECTORY_FIELDS})
+    time: list[float] = field(default_factory=list)
+    rows: dict[str, list[np.ndarray]] = field(default_factory=lambda: {k: [] for k in TRAJECTORY_FIELDS})
 
     def append(self, t: float, **values: np.ndarray) -> None:
         """Record time ``t`` s and one (batch, ...) array per :data:`TRAJECTORY_FIELDS` name (copied: the
@@ -279,14 +283,15 @@ class FlightState:
                    np.zeros(batch, dtype=int))
 
     @property
-    def flying(self) -> np.ndarray:
+    def flying(self) -> NDArray[np.bool_]:
         """(batch,) bool: neither done, ended nor away for a battery swap."""
         return self.phase < DONE
 
     @property
-    def active(self) -> np.ndarray:
+    def active(self) -> NDArray[np.bool_]:
         """(batch,) bool: flying or away between two sorties (the mission is not over)."""
-        return self.flying | (self.phase == AWAY)
+        active: NDArray[np.bool_] = self.flying | (self.phase == AWAY)
+        return active
 
     @property
     def failed(self) -> np.ndarray:

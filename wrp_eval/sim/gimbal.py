@@ -29,6 +29,7 @@ from dataclasses import dataclass
 from typing import NamedTuple
 
 import numpy as np
+from numpy.typing import NDArray
 from pydantic import Field, model_validator
 
 from wrp_eval.compiled import as_rows, kernel
@@ -80,14 +81,14 @@ class CameraAttitude(NamedTuple):
 
 
 @kernel
-def _airframe_row(rot):
+def _airframe_row(rot: NDArray[np.float64]) -> tuple[float, float]:
     """(nose elevation, wing elevation) rad of one airframe ``rot`` (3, 3) world from body."""
     nose = np.arcsin(np.minimum(np.maximum(rot[2, 0], -1.0), 1.0))
     return nose, np.arcsin(np.minimum(np.maximum(rot[2, 1], -1.0), 1.0))
 
 
 @kernel
-def _airframe_rows(rot):
+def _airframe_rows(rot: NDArray[np.float64]) -> NDArray[np.float64]:
     out = np.empty((2, rot.shape[0]))
     for row in range(rot.shape[0]):
         out[0, row], out[1, row] = _airframe_row(rot[row])
@@ -105,7 +106,9 @@ _HOLD, _ADVANCE, _SETTLE = 0, 1, 2
 
 
 @kernel
-def _gimbal_rows(rot, wanted_pitch, joint, mode, gain, max_step, pitch_range, roll_range):
+def _gimbal_rows(rot: NDArray[np.float64], wanted_pitch: NDArray[np.float64], joint: NDArray[np.float64], mode: int,
+                 gain: float, max_step: float, pitch_range: NDArray[np.float64], roll_range: NDArray[np.float64],
+                 ) -> tuple[NDArray[np.float64], NDArray[np.float64], NDArray[np.bool_]]:
     """Cameras' (pitch, roll) (n,) rad and saturated (n,) bool for airframes ``rot`` (n, 3, 3) and wanted pitches
     (n,); ``joint`` (n, 2) (pitch, roll) is updated in place as ``mode`` says. A joint's target compensates the
     airframe's nose / wing elevation; a move is first order (``gain``) within the rate limit (``max_step``)."""
@@ -139,7 +142,8 @@ class Gimbal:
         self.joint = np.zeros((len(rot), 2))
         self._move(rot, wanted_pitch, _SETTLE)
 
-    def _move(self, rot: np.ndarray, wanted_pitch: np.ndarray, mode: int):
+    def _move(self, rot: np.ndarray, wanted_pitch: np.ndarray,
+              mode: int) -> tuple[NDArray[np.float64], NDArray[np.float64], NDArray[np.bool_]]:
         p = self.params
         n = len(self.joint)
         return _gimbal_rows(as_rows("rot", rot, (n, 3, 3)), as_rows("wanted_pitch", wanted_pitch, (n,)), self.joint,

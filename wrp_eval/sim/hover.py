@@ -13,7 +13,10 @@ exact balance.
 
 from __future__ import annotations
 
+from typing import Any
+
 import numpy as np
+from numpy.typing import NDArray
 
 from wrp_eval.sim.aero import drag_force
 from wrp_eval.sim.config import SimSection
@@ -23,7 +26,7 @@ from wrp_eval.sim.results import FlightResult
 from wrp_eval.sim.vehicle import PHANTOM4, QuadrotorParams
 
 
-def hover_statistics(result: FlightResult, settle_fraction: float = 0.5) -> dict:
+def hover_statistics(result: FlightResult, settle_fraction: float = 0.5) -> dict[str, Any]:
     """Steady-state statistics (mean, std, max) over the last ``1 - settle_fraction`` of a hover, all flights
     pooled: tilt_deg, thrust_n, drag_force_n, position_error_m, yaw_error_deg; failed count and reasons."""
     tr = result.trajectory
@@ -33,14 +36,15 @@ def hover_statistics(result: FlightResult, settle_fraction: float = 0.5) -> dict
     yaw_err = np.degrees(np.abs(wrap_angle(tr.yaw[:, s] - tr.yaw[:, :1])))
     drag = np.linalg.norm(tr.drag[:, s], axis=-1)
 
-    def stats(x):
+    def stats(x: NDArray[np.float64]) -> dict[str, float]:
         return {"mean": float(np.mean(x)), "std": float(np.std(x)), "max": float(np.max(x))}
     return {"tilt_deg": stats(np.degrees(tr.tilt[:, s])), "thrust_n": stats(tr.thrust[:, s]),
             "drag_force_n": stats(drag), "position_error_m": stats(dist), "yaw_error_deg": stats(yaw_err),
             "failed": int(result.failed.sum()), "failure_reasons": [r for r in result.failure_reason if r]}
 
 
-def analytic_hover_balance(wind_m_s: np.ndarray, section: SimSection, params: QuadrotorParams = PHANTOM4) -> dict:
+def analytic_hover_balance(wind_m_s: np.ndarray, section: SimSection,
+                           params: QuadrotorParams = PHANTOM4) -> dict[str, float]:
     """The balance of a hover at yaw 0 in the steady wind ``wind_m_s`` (3,) m/s, ship frame: drag_force_n,
     tilt_deg and thrust_n."""
     f = drag_force(np.asarray(wind_m_s, dtype=float)[None], np.zeros(1), params, section.drag_coefficient,

@@ -30,6 +30,7 @@ from __future__ import annotations
 from typing import NamedTuple
 
 import numpy as np
+from numpy.typing import NDArray
 from pydantic import Field
 
 from wrp_eval.compiled import kernel
@@ -70,9 +71,12 @@ class MissionSection(StrictModel):
 
 
 @kernel
-def _decision_rows(home, position, wind, estimate, average, weight_estimate, weight_average, judged, px4_limit,
-                   operator_limit, cruise_m_s, cruise_power_w, return_m_s, return_power_w, energy_j, reserve_j,
-                   battery_on):
+def _decision_rows(home: NDArray[np.float64], position: NDArray[np.float64], wind: NDArray[np.float64],
+                   estimate: NDArray[np.float64], average: NDArray[np.float64], weight_estimate: float,
+                   weight_average: float, judged: bool, px4_limit: float, operator_limit: float, cruise_m_s: float,
+                   cruise_power_w: float, return_m_s: float, return_power_w: float, energy_j: NDArray[np.float64],
+                   reserve_j: float, battery_on: bool,
+                   ) -> tuple[NDArray[np.bool_], NDArray[np.bool_], NDArray[np.bool_], NDArray[np.bool_]]:
     """(battery due, PX4 wind over, operator wind over, home reachable) (n,) bool each, row by row; the
     horizontal ``estimate`` and ``average`` (n, 3) move by their weights towards ``wind`` (n, 3) in place
     (weight 1: they start there). px4_limit / operator_limit <= 0: off."""
@@ -148,11 +152,12 @@ def decide(estimate: WindEstimate, home: np.ndarray, position: np.ndarray, wind:
                                      float(return_power_w), energy_j, float(reserve_j), bool(battery_on)))
 
 
-def travel_time_s(start: np.ndarray, end: np.ndarray, wind: np.ndarray, airspeed_m_s: float) -> np.ndarray:
+def travel_time_s(start: NDArray[np.float64], end: NDArray[np.float64], wind: NDArray[np.float64],
+                  airspeed_m_s: float) -> NDArray[np.float64]:
     """(n,) s to fly straight from ``start`` to ``end`` (n, 3) m at ``airspeed_m_s`` with the horizontal
     ``wind`` (n, 3) m/s along the way (ground speed airspeed + the wind's component along the leg, at least
     1 m/s, as the energy rule's estimate)."""
     delta = end - start
-    distance = np.linalg.norm(delta, axis=1)
-    along = np.einsum("ij,ij->i", wind[:, :2], delta[:, :2]) / np.maximum(distance, 1e-9)
+    distance: NDArray[np.float64] = np.linalg.norm(delta, axis=1)
+    along: NDArray[np.float64] = np.einsum("ij,ij->i", wind[:, :2], delta[:, :2]) / np.maximum(distance, 1e-9)
     return distance / np.maximum(airspeed_m_s + along, 1.0)

@@ -41,15 +41,16 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass
 from statistics import NormalDist
-from typing import Literal, NamedTuple
+from typing import Any, Literal, NamedTuple, TypeVar
 
 import numpy as np
+from numpy.typing import ArrayLike, NDArray
 from pydantic import Field
 from scipy.linalg import solve_discrete_are
 
 from wrp_eval.compiled import as_rows, kernel
 from wrp_eval.schema import StrictModel
-from wrp_eval.streams import BlockNormals, flight_generators
+from wrp_eval.streams import BlockNormals, FlightRngs, flight_generators
 
 # 95 % radius of a 2-D isotropic Gaussian (Rayleigh): P(r <= k sigma) = 1 - exp(-k^2/2) = 0.95
 K95_2D = math.sqrt(-2.0 * math.log(0.05))           # 2.4477
@@ -59,6 +60,8 @@ K95_1D = NormalDist().inv_cdf(0.975)                 # 1.95996
 # Hypsometric equation near sea level: dz/dp = R T / (g p) = 287.05 * 288.15 / (9.80665 * 1013.25) m/hPa
 # = 8.3 m/hPa (ISA sea level, ICAO Doc 7488).
 M_PER_HPA = 287.05 * 288.15 / (9.80665 * 1013.25)
+
+_Distance = TypeVar("_Distance", float, NDArray[np.float64])
 
 
 def gm_sigma_from_p95(p95_m: float, k95: float, white_m: float) -> float:
@@ -176,12 +179,12 @@ _NO_IMU = {"accel_noise_density": 0.0, "gyro_noise_density_deg_s": 0.0,
            "gnss_position_floor_m": EKF2_GPS_P_NOISE_M, "gnss_velocity_floor_m_s": EKF2_GPS_V_NOISE_M_S}
 
 
-def _preset(**values) -> dict:
+def _preset(**values: Any) -> dict[str, Any]:
     """One preset: every NavigationSection field (section units: m, s, Hz, deg, m/min) + spec_source."""
     return values
 
 
-_PRESETS: dict[str, dict] = {
+_PRESETS: dict[str, dict[str, Any]] = {
     # Today's behaviour: the controller sees the true state.
     "ideal": _preset(horizontal_sigma_m=0.0, vertical_sigma_m=0.0, correlation_time_s=_TAU_BEARD_MCLAIN_S,
                      update_rate_hz=20.0, latency_s=0.0, white_noise_m=0.0, vertical_white_noise_m=0.0,
@@ -224,7 +227,7 @@ _PRESETS: dict[str, dict] = {
 }
 
 
-def _sigma(description: str):
+def _sigma(description: str) -> Any:
     return Field(None, ge=0.0, description=description + "; None: the preset's value")
 
 
@@ -353,7 +356,7 @@ def hover_p95_spec_m(params: NavigationParams) -> float:
     return K95_2D * math.hypot(params.horizontal_sigma_m, params.white_noise_m)
 
 
-def near_hull_taper(distance_m, reach_m: float):
+def near_hull_taper(distance_m: ArrayLike, reach_m: float) -> NDArray[np.float64]:
     """Weight (n,) of the near-hull heading bias: 1 at the hull, 0 at and beyond ``reach_m``.
 
     Shape (1 - d/D)^3 for d < D: the cubic fall-off of a dipole-like anomaly (|dB| ~ 1/r^3; Michael 2011,
@@ -364,9 +367,9 @@ def near_hull_taper(distance_m, reach_m: float):
 
 
 @kernel
-def _taper(distance_m, reach_m: float):
+def _taper(distance_m: _Distance, reach_m: float) -> _Distance:
     """:func:`near_hull_taper` of a number or an array."""
-    d = np.minimum(np.maximum(distance_m / reach_m, 0.0), 1.0)
+    d: _Distance = np.minimum(np.maximum(distance_m / reach_m, 0.0), 1.0)
     return (1.0 - d) ** 3
 
 
@@ -379,7 +382,8 @@ def inertial_error_step(psd: float, dt_s: float) -> tuple[np.ndarray, np.ndarray
     return f, q
 
 
-def fusion_gain(psd: float, interval_s: float, position_noise: float, velocity_noise: float):
+def fusion_gain(psd: float, interval_s: float, position_noise: float,
+                velocity_noise: float) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
     """Steady-state Kalman gain K (2, 2) and prior covariance P (2, 2) of one axis's (position, velocity)
     filter fusing a position and a velocity fix (1-sigma ``position_noise`` m, ``velocity_noise`` m/s) every
     ``interval_s`` s, the IMU driving it between fixes (white acceleration error, PSD ``psd``): P solves the
@@ -405,8 +409,12 @@ def heading_gain(psd: float, interval_s: float, heading_noise: float) -> tuple[f
 
 
 @kernel
-def _navigation_steps(rows, fixes, first, fused, dt_s, gm, pos_err, vel_err, yaw_noise, gm_phi, gm_drive, white,
-                      vel_sigma, compass_noise, accel_chol, gyro_step, gains, yaw_gain):
+def _navigation_steps(rows: NDArray[np.float64], fixes: NDArray[np.bool_], first: bool, fused: bool, dt_s: float,
+                      gm: NDArray[np.float64], pos_err: NDArray[np.float64], vel_err: NDArray[np.float64],
+                      yaw_noise: NDArray[np.float64], gm_phi: float, gm_drive: NDArray[np.float64],
+                      white: NDArray[np.float64], vel_sigma: NDArray[np.float64], compass_noise: float,
+                      accel_chol: NDArray[np.float64], gyro_step: float, gains: NDArray[np.float64],
+                      yaw_gain: float) -> None:
     """Advance every flight's error state over the m steps of ``rows`` (n, m, _WIDTH) standard normals (column
     layout: :class:`NavigationEstimator`), in place: gm, pos_err, vel_err (n, 3) m, m/s; yaw_noise (n,) rad.
     Per step: the GM moves (not on the very first step, ``first``), the fused error propagates on the IMU
@@ -446,8 +454,13 @@ def _navigation_steps(rows, fixes, first, fused, dt_s, gm, pos_err, vel_err, yaw
 
 
 @kernel
-def _estimate_rows(position, velocity, yaw, err_pos, err_vel, yaw_noise, compass_bias, hull_bias, hull_distance,
-                   reach_m, baro_rate, elapsed_s, latency_s):
+def _estimate_rows(position: NDArray[np.float64], velocity: NDArray[np.float64], yaw: NDArray[np.float64],
+                   err_pos: NDArray[np.float64], err_vel: NDArray[np.float64], yaw_noise: NDArray[np.float64],
+                   compass_bias: NDArray[np.float64], hull_bias: NDArray[np.float64],
+                   hull_distance: NDArray[np.float64], reach_m: float, baro_rate: NDArray[np.float64],
+                   elapsed_s: float, latency_s: float,
+                   ) -> tuple[NDArray[np.float64], NDArray[np.float64], NDArray[np.float64], NDArray[np.float64],
+                              NDArray[np.float64]]:
     """(position, velocity (n, 3), yaw (n,), position error (n, 3), yaw error (n,)) of the estimate: the
     filter's (or the held fix's) errors ``err_pos``, ``err_vel`` (n, 3), ``yaw_noise`` (n,), the latency lag
     -v * latency, the baro drift and the compass biases (the near-hull one tapered by ``hull_distance`` (n,)
@@ -501,7 +514,8 @@ class NavigationEstimator:
     between change nothing at the fix instants: the process noise over the interval is the same).
     """
 
-    def __init__(self, params: NavigationParams, rngs, n_flights: int, dt_s: float, block_steps: int = 256):
+    def __init__(self, params: NavigationParams, rngs: FlightRngs, n_flights: int, dt_s: float,
+                 block_steps: int = 256) -> None:
         if n_flights < 1 or not dt_s > 0:
             raise ValueError("need n_flights >= 1 and dt_s > 0")
         self.params, self.n_flights, self.dt_s = params, int(n_flights), float(dt_s)
@@ -567,7 +581,8 @@ class NavigationEstimator:
         self._k = k
         return k
 
-    def estimate(self, t_s: float, position, velocity, yaw, hull_distance_m=None) -> NavigationEstimate:
+    def estimate(self, t_s: float, position: ArrayLike, velocity: ArrayLike, yaw: ArrayLike,
+                 hull_distance_m: ArrayLike | None = None) -> NavigationEstimate:
         """The estimated state at time ``t_s`` (the first call sets t0; later ones advance by multiples of dt).
 
         position, velocity (n, 3) true, m and m/s; yaw (n,) true, rad; hull_distance_m (n,) distance of each

@@ -10,14 +10,17 @@ position prior is the estimate (what the photo's GPS tag holds).
 from __future__ import annotations
 
 from dataclasses import dataclass
+from typing import Any
 
 import numpy as np
 from scipy.spatial.transform import Rotation
 
 from wrp_eval.camera import Camera, camera_angles, camera_rotations, optical_axes
 from wrp_eval.compiled import as_rows
+from wrp_eval.planning.path import FlightPath
 from wrp_eval.ship.motion import ShipMotion, ShipMotionSection, ship_motion
 from wrp_eval.ship.nofly import distance_to_box, ray_box_distance
+from wrp_eval.ship.particulars import ShipParticulars
 from wrp_eval.sim.blur import angular_velocity, motion_blur_px
 from wrp_eval.sim.config import SimSection
 from wrp_eval.sim.flight_state import FlightTargets, Shot
@@ -30,7 +33,7 @@ from wrp_eval.sim.navigation import (
 )
 from wrp_eval.sim.power import Battery, electrical_power_w, level_flight_power_w
 from wrp_eval.sim.vehicle import QuadrotorParams
-from wrp_eval.streams import children, flight_generators
+from wrp_eval.streams import FlightRngs, children, flight_generators
 
 
 @dataclass(frozen=True)
@@ -42,18 +45,19 @@ class ShipInScene:
 
     box: np.ndarray
     motion: ShipMotionSection = ShipMotionSection()
-    particulars: object | None = None
+    particulars: ShipParticulars | None = None
     wind_speed_10m_m_s: object = None
 
     @classmethod
-    def of(cls, mesh, motion: ShipMotionSection, particulars=None, wind_speed_10m_m_s=None) -> ShipInScene:
+    def of(cls, mesh: Any, motion: ShipMotionSection, particulars: ShipParticulars | None = None,
+           wind_speed_10m_m_s: object = None) -> ShipInScene:
         """The ship of a true ``mesh`` (trimesh, ship frame): its bounding box above the waterline."""
         box = np.array(mesh.bounds, dtype=float)
         box[0, 2] = max(box[0, 2], 0.0)
         return cls(box, motion, particulars, wind_speed_10m_m_s)
 
 
-def view_depths(path, box: np.ndarray | None) -> np.ndarray:
+def view_depths(path: FlightPath, box: np.ndarray | None) -> np.ndarray:
     """(n_views,) m: distance along each planned optical axis to the ship's box, or, where the axis misses it
     (transition views), to its nearest point; NaN without a box and for a view inside it (no depth known)."""
     if box is None:
@@ -68,7 +72,7 @@ class Onboard:
     """The instruments of ``batch`` flights (module docstring), advanced once per chunk of ``dt_s`` s."""
 
     def __init__(self, sec: SimSection, params: QuadrotorParams, targets: FlightTargets, ship: ShipInScene | None,
-                 flight_rngs, dt_s: float, cruise_m_s: float, camera: Camera):
+                 flight_rngs: FlightRngs, dt_s: float, cruise_m_s: float, camera: Camera) -> None:
         batch = targets.batch
         streams = [children(g, 2) for g in flight_generators(flight_rngs, batch)]
         self.sec, self.params, self.dt_s, self.camera = sec, params, dt_s, camera
@@ -97,7 +101,7 @@ class Onboard:
         """Advance the gimbal one chunk (airframes ``rot`` (batch, 3, 3), planned pitch of each flight's next
         view (batch,) rad) and return the cameras' attitude; the previous chunk's is kept for the blur."""
         start = self.gimbal is None
-        if start:
+        if self.gimbal is None:
             self.gimbal = Gimbal(self.gimbal_params, rot, wanted_pitch, self.dt_s)
         attitude = self.gimbal.step(rot, yaw, wanted_pitch, advance=not start)
         self._previous = attitude if self.attitude is None else self.attitude
@@ -137,7 +141,7 @@ class Onboard:
 
     def shoot(self, rows: np.ndarray, views: np.ndarray, delay_s: np.ndarray, t: float, position: np.ndarray,
               velocity: np.ndarray, rot: np.ndarray, nav: NavigationEstimate, attitude: CameraAttitude,
-              targets: FlightTargets) -> Shot:
+              targets: FlightTargets) -> Shot | None:
         """The photos of flights ``rows`` (m,) of ``views`` (m,) whose shutters open ``delay_s`` (m,) s from ``t``
         (negative: earlier in the last chunk): the true vehicle state (batch arrays: ``position``,
         ``velocity`` (batch, 3), ``rot`` (batch, 3, 3)) and the estimate ``nav`` are carried to the shutter
@@ -152,6 +156,8 @@ class Onboard:
         arm = np.stack([c * offset[:, 0] - s * offset[:, 1], s * offset[:, 0] + c * offset[:, 1], offset[:, 2]], 1)
         estimated = nav.position[rows] + nav.velocity[rows] * delay_s[:, None] + arm
         before = self._previous
+        if before is None:
+            raise ValueError("shoot before point_camera: no camera attitude of the last chunk")
         cam_rot = camera_rotations(attitude.yaw[rows], attitude.pitch[rows], attitude.roll[rows])
         omega = angular_velocity(camera_rotations(before.yaw[rows], before.pitch[rows], before.roll[rows]), cam_rot,
                                  self.dt_s)

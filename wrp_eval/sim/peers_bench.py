@@ -27,6 +27,7 @@ from __future__ import annotations
 
 import logging
 import time
+from typing import Any
 
 import numpy as np
 
@@ -36,6 +37,7 @@ from wrp_eval.sim.config import SimSection
 from wrp_eval.sim.flight import FlightSimulator
 from wrp_eval.sim.navigation import NavigationSection
 from wrp_eval.sim.vehicle import GRAVITY_M_S2, PHANTOM4
+from wrp_eval.wind.base import WindModel
 
 log = logging.getLogger(__name__)
 
@@ -45,7 +47,7 @@ ROTORPY_DT_S = 0.01
 HOVER_POINT = np.array([-250.0, 0.0, 30.0])   # 250 m upwind of the ship: free stream
 
 
-def rotorpy_params(section: SimSection) -> dict:
+def rotorpy_params(section: SimSection) -> dict[str, Any]:
     """RotorPy's parameter dictionary of our Phantom 4 (mass, inertia, X layout, parasitic drag, thrust)."""
     p = PHANTOM4
     a = p.arm_length_m / np.sqrt(2.0)
@@ -110,7 +112,7 @@ def rotorpy_hover(batch: int, series: np.ndarray, section: SimSection) -> tuple[
     return wall, float(np.sqrt(np.mean(np.square(errors))))
 
 
-def ours_hover(batch: int, field, section: SimSection) -> tuple[float, float]:
+def ours_hover(batch: int, field: WindModel, section: SimSection) -> tuple[float, float]:
     """(wall s, RMS tracking error m over the second half) of our flights holding the hover point."""
     with FlightSimulator(section) as sim:
         start = time.perf_counter()
@@ -142,7 +144,7 @@ def run_bench() -> list[BenchRecord]:
                 f"BatchedMultirotor rk4 {ROTORPY_DT_S * 1e3:g} ms + BatchedSE3Control, 1 torch thread")
         ideal = section.model_copy(update={"navigation": NavigationSection(preset="ideal")})
         _, ideal_err = ours_hover(batch, moderate_wind(section, batch, 0), ideal)
-        target = ("issue 19 target", 10.0) if batch == 1024 else (None, None)
+        target: tuple[str | None, float | None] = ("issue 19 target", 10.0) if batch == 1024 else (None, None)
         records += [
             BenchRecord(f"peers.ours_drone_s_per_s.b{batch}", ours_rate, "drone-s/s", None, None, note),
             BenchRecord(f"peers.rotorpy_drone_s_per_s.b{batch}", peer_rate, "drone-s/s", None, None, note),

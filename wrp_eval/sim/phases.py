@@ -13,9 +13,10 @@ update the :class:`FlightState` in place.
 from __future__ import annotations
 
 from dataclasses import dataclass
-from typing import NamedTuple
+from typing import Any, NamedTuple
 
 import numpy as np
+from numpy.typing import ArrayLike, NDArray
 
 from wrp_eval.compiled import as_rows, kernel
 from wrp_eval.sim.capture_mode import through_profile, through_row
@@ -51,7 +52,7 @@ YAW_RATE_REF_RAD_S = np.radians(60.0)  # reference yaw rate when a segment is mo
 
 # -- reference speed profile -----------------------------------------------------------------------------
 @kernel
-def _trapezoid(length: float, tau: float, v_max: float, a_max: float):
+def _trapezoid(length: float, tau: float, v_max: float, a_max: float) -> tuple[float, float, float, float, float]:
     """Rest-to-rest trapezoidal speed profile: distance s, speed v, acceleration a and the running integral
     of s, S = int s dt, at time tau s, plus the duration. Before 0: at rest at 0; after: at rest at ``length``."""
     tri = length < v_max ** 2 / a_max
@@ -79,7 +80,8 @@ def _trapezoid(length: float, tau: float, v_max: float, a_max: float):
 
 
 @kernel
-def profile_row(length: float, tau: float, v_max: float, a_max: float, t_jerk: float):
+def profile_row(length: float, tau: float, v_max: float, a_max: float,
+                t_jerk: float) -> tuple[float, float, float, float]:
     """(s, v, a, duration) of :func:`reference_profile` for one segment at one time."""
     s1, v1, a1, big1, duration = _trapezoid(length, tau, v_max, a_max)
     if t_jerk <= 0.0:
@@ -89,14 +91,15 @@ def profile_row(length: float, tau: float, v_max: float, a_max: float, t_jerk: f
 
 
 @kernel
-def _profile_rows(length, tau, v_max, a_max, t_jerk):
+def _profile_rows(length: NDArray[np.float64], tau: NDArray[np.float64], v_max: float, a_max: float,
+                  t_jerk: float) -> NDArray[np.float64]:
     out = np.empty((4, length.size))
     for row in range(length.size):
         out[0, row], out[1, row], out[2, row], out[3, row] = profile_row(length[row], tau[row], v_max, a_max, t_jerk)
     return out
 
 
-def reference_profile(length, tau, v_max, a_max, t_jerk):
+def reference_profile(length: ArrayLike, tau: ArrayLike, v_max: float, a_max: float, t_jerk: float) -> tuple[Any, ...]:
     """Jerk-limited rest-to-rest profile: distance, speed, acceleration (each (n,)) at time tau, and the
     duration (n,); ``length`` and ``tau`` broadcast, ``v_max``, ``a_max`` and ``t_jerk`` are numbers.
 
@@ -132,12 +135,12 @@ class Profile:
         return cls(cruise_m_s, a_max, a_max / sec.jerk_m_s3 if sec.jerk_m_s3 else 0.0,
                    sec.capture.mode == "fly-through")
 
-    def at(self, length: np.ndarray, tau: np.ndarray):
+    def at(self, length: np.ndarray, tau: np.ndarray) -> tuple[Any, ...]:
         """(s m, v m/s, a m/s^2, duration s), each (n,), rest to rest on segments of ``length`` (n,) m at
         ``tau`` (n,) s."""
         return reference_profile(length, tau, self.cruise_m_s, self.acceleration_m_s2, self.jerk_window_s)
 
-    def along(self, seg: Segment, tau: np.ndarray):
+    def along(self, seg: Segment, tau: np.ndarray) -> tuple[Any, ...]:
         """(s, v, a, duration) (n,) on the segments ``seg`` at ``tau`` (n,) s, in this profile's mode."""
         if self.through:
             return through_profile(seg.length, tau, seg.v0, seg.v1, seg.v_max, self.acceleration_m_s2)
@@ -145,7 +148,8 @@ class Profile:
 
 
 def plan_segments(start: np.ndarray, end: np.ndarray, yaw0: np.ndarray, yaw1: np.ndarray,
-                  profile: Profile, v0=None, v1=None, v_max=None) -> Segment:
+                  profile: Profile, v0: np.ndarray | None = None, v1: np.ndarray | None = None,
+                  v_max: np.ndarray | None = None) -> Segment:
     """Segments from ``start`` to ``end`` (n, 3) m turning from ``yaw0`` to ``yaw1`` (n,) rad, in fly-through
     from speed ``v0`` to ``v1`` with cruise limit ``v_max`` (n,) m/s (None: rest to rest). A segment lasts
     the speed profile's time, or longer where the turn needs it at YAW_RATE_REF_RAD_S."""
@@ -175,8 +179,13 @@ class Reference(NamedTuple):
 
 
 @kernel
-def _reference_rows(transit, phase_time, start, end, yaw0, dyaw, length, direction, duration, v0, v1, v_max, position,
-                    through, cruise_m_s, a_max, t_jerk, leash_m):
+def _reference_rows(transit: NDArray[np.bool_], phase_time: NDArray[np.float64], start: NDArray[np.float64],
+                    end: NDArray[np.float64], yaw0: NDArray[np.float64], dyaw: NDArray[np.float64],
+                    length: NDArray[np.float64], direction: NDArray[np.float64], duration: NDArray[np.float64],
+                    v0: NDArray[np.float64], v1: NDArray[np.float64], v_max: NDArray[np.float64],
+                    position: NDArray[np.float64], through: bool, cruise_m_s: float, a_max: float, t_jerk: float,
+                    leash_m: float) -> tuple[NDArray[np.float64], NDArray[np.float64], NDArray[np.float64],
+                                             NDArray[np.float64], NDArray[np.float64], NDArray[np.bool_]]:
     """The arrays of :class:`Reference` (:func:`reference`), row by row."""
     n = transit.size
     ref_pos, ref_vel, ref_acc = np.empty((n, 3)), np.zeros((n, 3)), np.zeros((n, 3))
@@ -216,7 +225,8 @@ def reference(state: FlightState, position: np.ndarray, profile: Profile, leash_
 
 
 # -- how flights end ----------------------------------------------------------------------------------------
-def check_failures(state: FlightState, position: np.ndarray, velocity: np.ndarray, out_of_time) -> np.ndarray:
+def check_failures(state: FlightState, position: np.ndarray, velocity: np.ndarray,
+                   out_of_time: NDArray[np.bool_] | bool) -> np.ndarray:
     """(batch,) outcome codes of flights failing now (COMPLETED elsewhere): non-finite state, below the sea
     surface (ditched), or still flying when ``out_of_time`` ((batch,) bool or one bool for all: the sortie has
     run past the simulator's limit). ``position``, ``velocity`` (batch, 3): true."""
@@ -232,8 +242,10 @@ def check_failures(state: FlightState, position: np.ndarray, velocity: np.ndarra
 
 
 @kernel
-def _headway_rows(phase, index, end, position, progress_m, progress_time, progress_view, t, timeout_s, step_m,
-                  leash_m):
+def _headway_rows(phase: NDArray[np.int_], index: NDArray[np.int_], end: NDArray[np.float64],
+                  position: NDArray[np.float64], progress_m: NDArray[np.float64], progress_time: NDArray[np.float64],
+                  progress_view: NDArray[np.int_], t: float, timeout_s: float, step_m: float,
+                  leash_m: float) -> NDArray[np.bool_]:
     """(batch,) bool of :func:`no_headway`, row by row; the progress record is updated in place."""
     n = phase.size
     stuck = np.zeros(n, np.bool_)
@@ -260,7 +272,9 @@ def no_headway(state: FlightState, position: np.ndarray, t: float, timeout_s: fl
 
 
 @kernel
-def _return_rows(phase, battery_due, px4_wind, operator_wind, stuck, home_reachable):
+def _return_rows(phase: NDArray[np.int_], battery_due: NDArray[np.bool_], px4_wind: NDArray[np.bool_],
+                 operator_wind: NDArray[np.bool_], stuck: NDArray[np.bool_],
+                 home_reachable: NDArray[np.bool_]) -> NDArray[np.int64]:
     """(batch,) outcome codes of :func:`check_returns`, row by row."""
     n = phase.size
     cause = np.zeros(n, np.int64)
@@ -300,7 +314,7 @@ def apply_endings(state: FlightState, cause: np.ndarray, t: float) -> None:
     state.phase = np.where(newly, ENDED, state.phase)
 
 
-def swap_batteries(state: FlightState, cause: np.ndarray, max_sorties: int) -> np.ndarray:
+def swap_batteries(state: FlightState, cause: np.ndarray, max_sorties: int) -> tuple[NDArray[np.intp], np.ndarray]:
     """Flights sent home on energy with sorties left go AWAY for a battery swap instead of ending: their cause
     becomes COMPLETED (the mission goes on). A sortie that took no view ends the mission instead (the battery
     is spent getting to the breakpoint and back: another one would do the same; an operator stops there).
@@ -324,6 +338,8 @@ def resume(state: FlightState, targets: FlightTargets, rows: np.ndarray, positio
     k = state.index[rows]
     speeds = {}
     if profile.through:
+        if targets.vertex_speed is None or targets.leg_speed is None:
+            raise ValueError("fly-through targets without their speeds (FlightTargets.flown_through)")
         speeds = dict(v0=np.zeros(rows.size), v1=targets.vertex_speed[rows, k],
                       v_max=targets.leg_speed[rows, np.maximum(k - 1, 0)])
     state.segment.assign(rows, plan_segments(position, targets.body[rows, k], yaw, targets.yaw[rows, k], profile,
@@ -384,8 +400,12 @@ class Transitions(NamedTuple):
 
 
 @kernel
-def _transition_rows(phase, phase_time, index, duration, end, target_yaw, position, velocity, yaw, n_views, through,
-                     settle_position_m, settle_speed_m_s, settle_yaw_rad, settle_timeout_s, dwell_s):
+def _transition_rows(phase: NDArray[np.int_], phase_time: NDArray[np.float64], index: NDArray[np.int_],
+                     duration: NDArray[np.float64], end: NDArray[np.float64], target_yaw: NDArray[np.float64],
+                     position: NDArray[np.float64], velocity: NDArray[np.float64], yaw: NDArray[np.float64],
+                     n_views: int, through: bool, settle_position_m: float, settle_speed_m_s: float,
+                     settle_yaw_rad: float, settle_timeout_s: float, dwell_s: float,
+                     ) -> tuple[NDArray[np.bool_], NDArray[np.bool_], NDArray[np.bool_], NDArray[np.bool_]]:
     """(to_settle, to_dwell, trigger, chain) (n,) bool of :func:`transitions`, row by row."""
     n = phase.size
     to_settle, to_dwell = np.zeros(n, np.bool_), np.zeros(n, np.bool_)
@@ -420,7 +440,10 @@ def transitions(state: FlightState, position: np.ndarray, velocity: np.ndarray, 
 
 
 @kernel
-def _passing_rows(phase, photo, index, position, body, trigger_normal, arriving, reach_m):
+def _passing_rows(phase: NDArray[np.int_], photo: NDArray[np.int_], index: NDArray[np.int_],
+                  position: NDArray[np.float64], body: NDArray[np.float64], trigger_normal: NDArray[np.float64],
+                  arriving: NDArray[np.float64], reach_m: float,
+                  ) -> tuple[NDArray[np.bool_], NDArray[np.bool_], NDArray[np.float64], NDArray[np.float64]]:
     """(hit, skipped (n,) bool, past (n,) m, the plane's normal (n, 3)) of :func:`passing_views`, row by row."""
     n, n_views = phase.size, body.shape[1]
     hit, skipped, past, normal = np.zeros(n, np.bool_), np.zeros(n, np.bool_), np.zeros(n), np.empty((n, 3))
@@ -450,6 +473,8 @@ def passing_views(state: FlightState, position: np.ndarray, targets: FlightTarge
     (on a hairpin the mitre plane runs almost along the leg: without this a vehicle off the track would be
     "past" it long before the view). A view whose plane the vehicle has not crossed by the time the
     reference is two views further on is skipped: a missed trigger, the photo is not taken."""
+    if targets.trigger_normal is None or targets.arriving is None:
+        raise ValueError("fly-through targets without their trigger planes (FlightTargets.flown_through)")
     hit, skipped, past, normal = _passing_rows(state.phase, state.photo, state.index, position, targets.body,
                                                targets.trigger_normal, targets.arriving, float(reach_m))
     hits = np.flatnonzero(hit)
@@ -461,6 +486,8 @@ def take_photos(state: FlightState, targets: FlightTargets, rows: np.ndarray, sh
     when there are none)."""
     if not rows.size:
         return
+    if shot is None:
+        raise ValueError(f"no shot for the photos of {rows.size} flights")
     view = state.photo[rows]
     state.captures.record(rows, view, shot, targets)
     state.view_sortie[rows, view] = state.sortie[rows]
@@ -481,6 +508,8 @@ def advance(state: FlightState, targets: FlightTargets, rows: np.ndarray, profil
     k1 = state.index[nxt] + 1
     speeds = {}
     if profile.through:
+        if targets.vertex_speed is None or targets.leg_speed is None:
+            raise ValueError("fly-through targets without their speeds (FlightTargets.flown_through)")
         speeds = dict(v0=targets.vertex_speed[nxt, k1 - 1], v1=targets.vertex_speed[nxt, k1],
                       v_max=targets.leg_speed[nxt, k1 - 1])
     state.segment.assign(nxt, plan_segments(state.segment.end[nxt], targets.body[nxt, k1],

@@ -22,9 +22,10 @@ This module imports no simulator code at run time (``QuadrotorParams`` only for 
 
 from __future__ import annotations
 
-from typing import TYPE_CHECKING
+from typing import TYPE_CHECKING, TypeVar
 
 import numpy as np
+from numpy.typing import ArrayLike, NDArray
 from pydantic import Field, ValidationInfo, field_validator
 
 from wrp_eval.compiled import kernel
@@ -34,6 +35,8 @@ if TYPE_CHECKING:
     from wrp_eval.sim.vehicle import QuadrotorParams
 
 JOULES_PER_WH = 3600.0
+
+_Value = TypeVar("_Value", float, NDArray[np.float64])
 
 
 class BatterySection(StrictModel):
@@ -93,22 +96,26 @@ def rotor_disk_area_m2(params: QuadrotorParams) -> float:
 
 
 @kernel
-def _induced_row(thrust, rotor_area_m2: float, air_density: float) -> float:
+def _induced_row(thrust: NDArray[np.float64], rotor_area_m2: float, air_density: float) -> float:
     """Induced power W of one vehicle's rotors ``thrust`` (n_rotors,) N (:func:`induced_power_w`)."""
     total = 0.0
     for k in range(thrust.size):
         total += np.maximum(thrust[k], 0.0) ** 1.5
-    return total / np.sqrt(2.0 * air_density * rotor_area_m2)
+    root: float = np.sqrt(2.0 * air_density * rotor_area_m2)
+    return total / root
 
 
 @kernel
-def _parasite_row(drag, rel_air) -> float:
+def _parasite_row(drag: NDArray[np.float64], rel_air: NDArray[np.float64]) -> float:
     """|F_drag . v_rel| W of one vehicle (:func:`parasite_power_w`)."""
-    return abs(drag[0] * rel_air[0] + drag[1] * rel_air[1] + drag[2] * rel_air[2])
+    power: float = abs(drag[0] * rel_air[0] + drag[1] * rel_air[1] + drag[2] * rel_air[2])
+    return power
 
 
 @kernel
-def _power_rows(thrust, drag, rel_air, rotor_area_m2, air_density, figure_of_merit, drive_efficiency, avionics_w):
+def _power_rows(thrust: NDArray[np.float64], drag: NDArray[np.float64], rel_air: NDArray[np.float64],
+                rotor_area_m2: float, air_density: float, figure_of_merit: float, drive_efficiency: float,
+                avionics_w: float) -> tuple[NDArray[np.float64], NDArray[np.float64], NDArray[np.float64]]:
     """(induced (n,), parasite (n,), electrical (n,)) W of :func:`electrical_power_w`, row by row."""
     n = thrust.shape[0]
     induced, parasite, electrical = np.empty(n), np.empty(n), np.empty(n)
@@ -119,7 +126,9 @@ def _power_rows(thrust, drag, rel_air, rotor_area_m2, air_density, figure_of_mer
     return induced, parasite, electrical
 
 
-def _powers(thrust_per_motor_n, drag_force_n, rel_air_m_s, rotor_area_m2, air_density, section=None):
+def _powers(thrust_per_motor_n: ArrayLike, drag_force_n: ArrayLike | None, rel_air_m_s: ArrayLike | None,
+            rotor_area_m2: float, air_density: float,
+            section: BatterySection | None = None) -> tuple[NDArray[np.float64], ...]:
     thrust = np.asarray(thrust_per_motor_n, dtype=float)
     flat = thrust.reshape(-1, thrust.shape[-1])
     n = len(flat)
@@ -172,7 +181,7 @@ def hover_power_w(params: QuadrotorParams, section: BatterySection, air_density:
     return float(electrical_power_w(thrust, np.zeros((1, 3)), np.zeros((1, 3)), params, section, air_density)[0])
 
 
-def return_energy_j(distance_home_m: np.ndarray, speed_m_s, cruise_power_w) -> np.ndarray:
+def return_energy_j(distance_home_m: np.ndarray, speed_m_s: ArrayLike, cruise_power_w: ArrayLike) -> np.ndarray:
     """Energy (n,) J to fly home: straight line at constant ground speed and constant power, E = P d / V.
 
     ``distance_home_m`` (n,) m, ``speed_m_s`` float or (n,) m/s ground speed towards home (> 0; pass the
@@ -188,7 +197,7 @@ def return_energy_j(distance_home_m: np.ndarray, speed_m_s, cruise_power_w) -> n
 
 
 @kernel
-def straight_home_energy_j(distance_home_m, speed_m_s, cruise_power_w):
+def straight_home_energy_j(distance_home_m: _Value, speed_m_s: _Value, cruise_power_w: _Value) -> _Value:
     """E = P d / V (:func:`return_energy_j` without its check), numbers or arrays."""
     return cruise_power_w * distance_home_m / speed_m_s
 
@@ -247,9 +256,11 @@ class Battery:
 
         ``return_energy_j`` (n,) J or float (:func:`return_energy_j`; 0 for a pure reserve check). Always
         False when the section is disabled."""
-        due = self.energy_j - np.asarray(return_energy_j, dtype=float) <= self.reserve_j
+        due: NDArray[np.bool_] = self.energy_j - np.asarray(return_energy_j, dtype=float) <= self.reserve_j
         return due & self.section.enabled
 
-    def endurance_s(self, power_w) -> np.ndarray:
+    def endurance_s(self, power_w: ArrayLike) -> np.ndarray:
         """(n,) s until the reserve at constant ``power_w`` (W): (energy - reserve) / P, at least 0."""
-        return np.maximum(self.energy_j - self.reserve_j, 0.0) / np.asarray(power_w, dtype=float)
+        endurance: NDArray[np.float64] = (np.maximum(self.energy_j - self.reserve_j, 0.0)
+                                          / np.asarray(power_w, dtype=float))
+        return endurance

@@ -5,6 +5,7 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 import numpy as np
+from numpy.typing import NDArray
 
 from wrp_eval.sim.captures import CaptureSet
 
@@ -83,7 +84,8 @@ class FlightResult:
     def views_per_sortie(self) -> np.ndarray:
         """(batch, max sorties) int: the views each sortie took."""
         top = max(int(self.sorties.max(initial=1)), 1)
-        return (self.view_sortie[:, :, None] == np.arange(1, top + 1)).sum(axis=1)
+        counts: NDArray[np.int_] = (self.view_sortie[:, :, None] == np.arange(1, top + 1)).sum(axis=1)
+        return counts
 
     @property
     def failure_reason(self) -> tuple[str, ...]:

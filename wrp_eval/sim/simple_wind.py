@@ -7,6 +7,7 @@ row i being flight i. The real models (mesoscale field + Dryden turbulence) live
 from __future__ import annotations
 
 import numpy as np
+from numpy.typing import ArrayLike
 
 from wrp_eval.frames import wind_velocity
 
@@ -14,7 +15,7 @@ from wrp_eval.frames import wind_velocity
 class ConstantWind:
     """The same wind vector (3,) m/s, ship frame, everywhere, always."""
 
-    def __init__(self, velocity_m_s):
+    def __init__(self, velocity_m_s: ArrayLike) -> None:
         self.vector = np.asarray(velocity_m_s, dtype=float).reshape(3)
 
     @classmethod

@@ -20,10 +20,12 @@ physics rate (200 Hz at 5 ms), while the position loop runs between chunks at a 
 from __future__ import annotations
 
 from dataclasses import dataclass, field
+from typing import Any
 
 import mujoco
 import numpy as np
 from dm_control import mjcf
+from numpy.typing import ArrayLike, NDArray
 
 from wrp_eval.resources import model_file
 
@@ -87,7 +89,7 @@ class QuadrotorParams:
         return delta * np.array([np.abs(xy[:, 1]).sum(), np.abs(xy[:, 0]).sum(),
                                  4.0 * self.yaw_torque_per_newton_m])
 
-    def attitude_gains(self, bandwidth_rad_s, damping: float) -> tuple[np.ndarray, np.ndarray]:
+    def attitude_gains(self, bandwidth_rad_s: ArrayLike, damping: float) -> tuple[np.ndarray, np.ndarray]:
         """(k_R (3,) N m/rad, k_W (3,) N m s/rad) of a critically-shaped PD: k_R = J w^2, k_W = 2 zeta J w."""
         inertia = np.asarray(self.inertia_kg_m2, dtype=float)
         w = np.broadcast_to(np.asarray(bandwidth_rad_s, dtype=float), (3,))
@@ -170,7 +172,7 @@ class Scene:
 
 def build_scene(n_drones: int, params: QuadrotorParams = PHANTOM4, timestep_s: float = 0.005,
                 root: mjcf.RootElement | None = None, spacing_m: float = 2.0,
-                attitude_bandwidth_rad_s=(14.0, 14.0, 5.0), attitude_damping: float = 0.8,
+                attitude_bandwidth_rad_s: ArrayLike = (14.0, 14.0, 5.0), attitude_damping: float = 0.8,
                 attitude_loop: bool = True) -> Scene:
     """Attach ``n_drones`` quadrotors (free joints, no mutual collisions) to ``root`` and compile.
 
@@ -193,8 +195,8 @@ def build_scene(n_drones: int, params: QuadrotorParams = PHANTOM4, timestep_s: f
     return Scene(model, root, n_drones, *_drone_indices(model, joints, attitude_loop), params)
 
 
-def _attach_drone(root: mjcf.RootElement, i: int, params: QuadrotorParams, spacing_m: float, gains,
-                  attitude_loop: bool):
+def _attach_drone(root: mjcf.RootElement, i: int, params: QuadrotorParams, spacing_m: float,
+                  gains: tuple[NDArray[np.float64], NDArray[np.float64]], attitude_loop: bool) -> Any:
     """Attach drone ``i`` (its free joint, drag actuators and, with ``attitude_loop``, its attitude target and
     actuators with ``gains`` = (k_R, k_W)) to ``root``; returns its free joint."""
     quad = load_quadrotor(params, name=f"drone{i}")
@@ -225,7 +227,10 @@ def _attach_drone(root: mjcf.RootElement, i: int, params: QuadrotorParams, spaci
     return joint
 
 
-def _drone_indices(model: mujoco.MjModel, joints: list, attitude_loop: bool) -> tuple[np.ndarray, ...]:
+def _drone_indices(
+        model: mujoco.MjModel, joints: list[Any], attitude_loop: bool,
+) -> tuple[NDArray[np.int_], NDArray[np.int_], NDArray[np.int_], NDArray[np.int_], NDArray[np.int_],
+           NDArray[np.int_], NDArray[np.int_]]:
     """Scene's index arrays (qpos, qvel, body, actuator, attitude, drag, mocap) of the drones on ``joints``."""
     n_drones = len(joints)
     qpos_index = np.zeros((n_drones, 7), dtype=int)

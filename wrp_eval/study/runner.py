@@ -23,18 +23,21 @@ import re
 import time
 import zlib
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 
 from wrp_eval.atomic import write_json_atomic
 from wrp_eval.campaign.runner import run_campaign
 from wrp_eval.config import ExperimentConfig
+from wrp_eval.errors import InputError
 from wrp_eval.experiment import ExperimentContext
 from wrp_eval.planning.path import KIND_TRANSITION, FlightPath
 from wrp_eval.planning.rerun_log import save_plan_recording
 from wrp_eval.recording import merge_recordings
 from wrp_eval.schema import parse_model
 from wrp_eval.ship.rerun_log import save_ship_recording
+from wrp_eval.study.config import StudySection
 from wrp_eval.study.report import write_study_report
 from wrp_eval.surrogate.train import CHECKPOINT_NAME, train_from_campaign
 from wrp_eval.wrp.config import WrpSection
@@ -64,14 +67,22 @@ def slug(name: str) -> str:
     return re.sub(r"[^A-Za-z0-9._-]+", "_", name).strip("_") or "variant"
 
 
+def study_section(config: ExperimentConfig) -> StudySection:
+    """The config's ``study:`` section (an InputError without one)."""
+    if config.study is None:
+        raise InputError("study", "the config has no study: section")
+    return config.study
+
+
 def base_document(config: ExperimentConfig, smallest: bool) -> dict:
     """The base config as a document (only the keys the file set, so that section defaults keep their meaning,
     e.g. ``ship.type`` given or not), without the study, with the study's ``smallest`` overrides if asked."""
     doc = config.model_dump(mode="json", exclude_unset=True)
     doc.pop("study", None)
     if smallest:
-        doc = deep_merge(doc, config.study.smallest)
-        if "name" not in config.study.smallest.get("run", {}):
+        study = study_section(config)
+        doc = deep_merge(doc, study.smallest)
+        if "name" not in study.smallest.get("run", {}):
             doc.setdefault("run", {})["name"] = f"{config.run.name}-smallest"
     return doc
 
@@ -79,9 +90,10 @@ def base_document(config: ExperimentConfig, smallest: bool) -> dict:
 def variant_configs(config: ExperimentConfig, source: str, smallest: bool = False) -> list:
     """[(variant, ExperimentConfig)] for the variants to run; every one validated before anything runs."""
     base = base_document(config, smallest)
-    variants = list(config.study.variants)
-    if smallest and config.study.smallest_variants:
-        variants = variants[:config.study.smallest_variants]
+    study = study_section(config)
+    variants = list(study.variants)
+    if smallest and study.smallest_variants:
+        variants = variants[:study.smallest_variants]
     return [(v, parse_model(ExperimentConfig, deep_merge(base, v.overrides), f"{source} study variant {v.name!r}"))
             for v in variants]
 
@@ -140,7 +152,7 @@ def run_study(ctx: ExperimentContext, *, smallest: bool = False) -> dict:
     """Every variant of ``ctx.config.study``; writes study.json and report.md under logs/<run.name>/ and returns
     the study document."""
     config = ctx.config
-    study = config.study
+    study = study_section(config)
     built = [(v, ctx.with_config(cfg)) for v, cfg in variant_configs(config, ctx.source, smallest)]
     run_name = built[0][1].config.run.name
     out = built[0][1].folders.root
@@ -157,7 +169,8 @@ def run_study(ctx: ExperimentContext, *, smallest: bool = False) -> dict:
         path = dataclasses.replace(result.path, metadata={**result.path.metadata, "variant": variant.name})
         path.save(folder / "plan" / "path.json")
         write_json_atomic(folder / "plan" / "plan_metrics.json", result.metrics)
-        measured, verdict, wrp_cols = path, None, {}
+        measured, verdict = path, None
+        wrp_cols: dict = {}
         if variant.path != "plan":
             measured, verdict, wrp_cols = _optimised_variant(vctx, variant, path, folder, shared, optimised)
         shown = {variant.path: measured} if variant.path != "plan" else {}   # paths drawn beside the plan
@@ -175,11 +188,11 @@ def run_study(ctx: ExperimentContext, *, smallest: bool = False) -> dict:
         log.info(f"[wrp-eval run] study {number}/{len(built)}: {variant.name}: done in {timings[variant.name]:.1f} s")
     timings["total"] = time.perf_counter() - job_start
     box = study.random_offsets
-    doc = {"config": ctx.source, "run": run_name, "seed": config.run.seed, "smallest": smallest,
-           "table": study.table, "title": study.title, "columns": study.columns, "rows": rows,
-           "random_offsets": {"position_half_width_m": box.position_half_width_m,
-                              "yaw_half_width_deg": box.yaw_half_width_deg},
-           "shared_training": shared, "timings_s": timings}
+    doc: dict[str, Any] = {"config": ctx.source, "run": run_name, "seed": config.run.seed, "smallest": smallest,
+                           "table": study.table, "title": study.title, "columns": study.columns, "rows": rows,
+                           "random_offsets": {"position_half_width_m": box.position_half_width_m,
+                                              "yaw_half_width_deg": box.yaw_half_width_deg},
+                           "shared_training": shared, "timings_s": timings}
     write_json_atomic(out / "study.json", doc)
     merge_recordings(recordings, built[0][1].folders.recording)
     report = write_study_report(out, doc, figures)

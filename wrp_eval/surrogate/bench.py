@@ -72,8 +72,8 @@ def offsets_only_records(data, result, folder: str, oracle: dict) -> list[BenchR
     single-view oracle scores: what the per-view inputs change."""
     start = time.perf_counter()
     section = SurrogateSection(inputs="offsets")
-    split = tuple(np.asarray(result.split[k], dtype=np.int64) for k in ("train", "val", "test"))
-    plain = train_surrogate(data, section, seed=0, split=split)
+    tr, va, te = (np.asarray(result.split[k], dtype=np.int64) for k in ("train", "val", "test"))
+    plain = train_surrogate(data, section, seed=0, split=(tr, va, te))
     agree = single_view_agreement(plain.surrogate, folder, oracle=oracle)
     note = (f"offsets + planned pose only, same split and the same {agree['n_moves']} oracle-scored moves; "
             f"{time.perf_counter() - start:.0f} s")

@@ -61,7 +61,7 @@ class TrialData:
         """(n_trials,) bool: the flight took every view (True where the data does not record it)."""
         if self.conditions is None:
             return np.ones(self.n_trials, bool)
-        return ~(np.asarray(self.conditions, float)[..., -1] < 0.5).any(axis=1)
+        return ~np.any(np.asarray(self.conditions, float)[..., -1] < 0.5, axis=1)
 
     def __post_init__(self) -> None:
         off = np.asarray(self.offsets)

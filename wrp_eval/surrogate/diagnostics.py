@@ -45,7 +45,7 @@ from wrp_eval.campaign.store import TrialStore
 from wrp_eval.errors import InputError
 from wrp_eval.planning.path import FlightPath
 from wrp_eval.recon.capture_io import captures_from_path
-from wrp_eval.recon.scored_ship import scored_ship
+from wrp_eval.recon.scored_ship import ScoredShip, scored_ship
 from wrp_eval.surrogate.metrics import regression_metrics
 
 
@@ -53,8 +53,8 @@ from wrp_eval.surrogate.metrics import regression_metrics
 class CampaignOracle:
     """A campaign's path and its scored ship (:class:`wrp_eval.recon.scored_ship.ScoredShip`): offsets in, error out."""
 
-    path: object
-    ship: object
+    path: FlightPath
+    ship: ScoredShip
     planned: np.ndarray      # (n, 4) x, y, z m, yaw rad
 
     def error(self, offsets: np.ndarray, seed: int, pitch: np.ndarray | None = None,
@@ -80,7 +80,7 @@ class CampaignOracle:
         return captures_from_path(self.path, offsets, pitch, roll=roll, prior_positions=prior, blur_px=blur_px)
 
 
-def campaign_oracle(campaign_dir: str | Path, config_dir: str | Path = ".") -> tuple[CampaignOracle, object]:
+def campaign_oracle(campaign_dir: str | Path, config_dir: str | Path = ".") -> tuple[CampaignOracle, TrialStore]:
     """(:class:`CampaignOracle`, the campaign's TrialStore) from a campaign folder's campaign.json and path.json."""
     folder = Path(campaign_dir)
     store = TrialStore(folder)

@@ -59,7 +59,7 @@ class ViewContext:
         """(n, 2) unique share, partner count."""
         return np.column_stack([self.unique_share, self.partners]).astype(float)
 
-    def geometry(self, offsets: np.ndarray, views: np.ndarray | slice = slice(None)) -> np.ndarray:
+    def geometry(self, offsets: np.ndarray, views: np.ndarray | slice | list[int] = slice(None)) -> np.ndarray:
         """(..., k, 3) flown geometry of offsets (..., k, 4) of the viewpoints ``views`` (k of them)."""
         return flown_geometry(np.asarray(self.position)[views], np.asarray(self.yaw)[views],
                               np.asarray(self.pitch)[views], np.asarray(self.target)[views],

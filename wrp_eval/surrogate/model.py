@@ -17,8 +17,10 @@ from __future__ import annotations
 
 import io
 import json
+from collections.abc import Iterable
 from dataclasses import asdict, dataclass, field
 from pathlib import Path
+from typing import cast
 
 import numpy as np
 import torch
@@ -62,12 +64,13 @@ class ViewSequenceCNN(nn.Module):
 
     def conv_pre(self, layer: int, x: torch.Tensor) -> torch.Tensor:
         """Pre-activation of conv ``layer``: (batch, n, C_in) -> (batch, n, C), 'same' zero padding."""
-        conv = self.convs[layer]
+        conv = cast(nn.Conv1d, self.convs[layer])
         h, n = self.kernel // 2, x.shape[1]
         xp = F.pad(x, (0, 0, h, h))
         cols = torch.cat([xp[:, j:j + n] for j in range(self.kernel)], dim=-1)      # (batch, n, k C_in)
         w = conv.weight.permute(0, 2, 1).reshape(conv.weight.shape[0], -1)          # (C, k C_in)
-        return torch.addmm(conv.bias, cols.reshape(-1, cols.shape[-1]), w.t()).view(x.shape[0], n, -1)
+        bias = cast(torch.Tensor, conv.bias)                                        # created with bias=True
+        return torch.addmm(bias, cols.reshape(-1, cols.shape[-1]), w.t()).view(x.shape[0], n, -1)
 
     def trunk(self, x: torch.Tensor) -> torch.Tensor:
         """(batch, n, in_channels) -> (batch, n, channels) features per viewpoint."""
@@ -131,7 +134,8 @@ class Surrogate:
         if meta.inputs == "per_view":
             self._feat_mean = np.asarray(meta.feature_mean, float)
             self._feat_std = np.asarray(meta.feature_std, float)
-            cover = (self.views.coverage() - self._feat_mean[N_VARYING:]) / self._feat_std[N_VARYING:]
+            views = cast(ViewContext, self.views)
+            cover = (views.coverage() - self._feat_mean[N_VARYING:]) / self._feat_std[N_VARYING:]
             self._cover = torch.tensor(cover, dtype=torch.float32).unsqueeze(0)   # (1, n, 2)
 
     @property
@@ -151,8 +155,9 @@ class Surrogate:
         x = (torch.as_tensor(off_np, dtype=torch.float32) - self._off_mean) / self._off_std
         parts = [x]
         if self.meta.inputs == "per_view":
-            cond = conditions_or_reference(conditions, self.views.condition_reference, x.shape[0])
-            feat = np.concatenate([self.views.geometry(off_np), cond], axis=2)
+            views = cast(ViewContext, self.views)
+            cond = conditions_or_reference(conditions, views.condition_reference, x.shape[0])
+            feat = np.concatenate([views.geometry(off_np), cond], axis=2)
             parts.append(torch.as_tensor((feat - self._feat_mean[:N_VARYING]) / self._feat_std[:N_VARYING],
                                          dtype=torch.float32))
         if self._pose is not None:
@@ -275,11 +280,11 @@ class ViewQuery:
         # column block 0 is position c - h)
         m = surrogate.variable_channels
         scale = torch.as_tensor(surrogate.variable_scale, dtype=torch.float32).view(1, m, 1)
-        w1 = net.convs[0].weight[:, :m, :].detach() / scale                                 # (C, m, k)
+        w1 = cast(nn.Conv1d, net.convs[0]).weight[:, :m, :].detach() / scale                # (C, m, k)
         self._w1 = w1.permute(1, 2, 0).flip(1).reshape(m, -1).contiguous()
         # later layers as (k C_in, C) matrices over the k shifted copies (as ViewSequenceCNN.conv_pre)
-        self._w = [None] + [c.weight.detach().permute(2, 1, 0).reshape(-1, c.weight.shape[0]).contiguous()
-                            for c in net.convs[1:]]
+        self._w = [c.weight.detach().permute(2, 1, 0).reshape(-1, c.weight.shape[0]).contiguous()
+                   for c in cast("Iterable[nn.Conv1d]", net.convs[1:])]
         self.set_base(base_offsets)
 
     @torch.no_grad()
@@ -306,7 +311,8 @@ class ViewQuery:
         base = self.base[index].astype(float)
         delta = candidates - base
         if self.s.variable_channels > 4:
-            geom = self.s.views.geometry(np.concatenate([candidates, base[None]])[:, None, :], views=[index])[:, 0]
+            views = cast(ViewContext, self.s.views)
+            geom = views.geometry(np.concatenate([candidates, base[None]])[:, None, :], views=[index])[:, 0]
             delta = np.concatenate([delta, geom[:-1] - geom[-1]], axis=1)
         return torch.as_tensor(delta, dtype=torch.float32)
 
@@ -333,11 +339,11 @@ class ViewQuery:
             if layer > 0:
                 # 'full' convolution of the activation change: positions lo-h .. hi+h-1
                 w = hi - lo + 2 * h
-                dp = F.pad(delta_act, (0, 0, 2 * h, 2 * h))
+                dp = F.pad(cast(torch.Tensor, delta_act), (0, 0, 2 * h, 2 * h))
                 cols = torch.cat([dp[:, j:j + w] for j in range(k)], dim=-1)      # (q, w, k C)
-                dpre = (cols.reshape(-1, cols.shape[-1]) @ self._w[layer]).view(q, w, -1)
+                dpre = (cols.reshape(-1, cols.shape[-1]) @ self._w[layer - 1]).view(q, w, -1)
                 lo, hi = lo - h, hi + h
             new = F.gelu(self.pre[layer][lo:hi] + dpre) * self._inside[lo:hi]
             delta_act = new - self.act[layer][lo:hi]
-        pooled = (self.pooled_sum + delta_act.sum(dim=1)) / n              # (q, C)
+        pooled = (self.pooled_sum + cast(torch.Tensor, delta_act).sum(dim=1)) / n  # (q, C)
         return self.s.to_error(self.s.net.head(pooled)[:, 0].double().numpy())

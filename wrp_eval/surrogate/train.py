@@ -16,6 +16,7 @@ import time
 from concurrent.futures import ProcessPoolExecutor
 from dataclasses import dataclass, field
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 import torch
@@ -142,7 +143,7 @@ def train_surrogate(data: TrialData, section: SurrogateSection = SurrogateSectio
     history, epoch, best_epoch, final_lr = _fit(net, surrogate, data, section, offsets, target, usable, tr, va,
                                                 seed)
 
-    metrics = {}
+    metrics: dict[str, Any] = {}
     preds = {}
     for name, idx in (("train", tr), ("val", va), ("test", te)):
         keep = idx[usable[idx]]
@@ -188,9 +189,8 @@ def _untrained_meta(data: TrialData, section: SurrogateSection, offsets: np.ndar
         if data.planned_pose is None:
             raise InputError("surrogate.pose_channels", "the data has no planned poses; set pose_channels: false")
         pose = np.asarray(data.planned_pose, float)
-        pose_mean, pose_std = _standardise(pose, 0)
         planned = pose.tolist()
-        pose_mean, pose_std = pose_mean.tolist(), pose_std.tolist()
+        pose_mean, pose_std = (v.tolist() for v in _standardise(pose, 0))
     views = feat_mean = feat_std = None
     if section.inputs == "per_view":
         if data.views is None:

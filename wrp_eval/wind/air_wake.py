@@ -46,10 +46,15 @@ or stability; a real superstructure (bridge, hangar, funnel) makes a more local 
 from __future__ import annotations
 
 from dataclasses import dataclass
+from typing import TYPE_CHECKING
 
 import numpy as np
+from numpy.typing import ArrayLike, NDArray
 
 from wrp_eval.compiled import kernel
+
+if TYPE_CHECKING:
+    from wrp_eval.wind.config import AirWakeSection
 
 # PRIME constants (AERMOD prime.f): cavity top H + 0.22 R (Wilson 1979 / ASHRAE), wake height coefficient 1.2
 # (Weil 1996), far-wake decay exponent 2/3 (prime1 ``xdecay``), Fackrell's cavity-length coefficients.
@@ -79,7 +84,8 @@ def wilson_scale_length(height_m: float, width_m: float) -> float:
     the other (beyond that the block is already two-dimensional; PRIME ``wake_scales``)."""
     h = np.minimum(height_m, 8.0 * width_m)
     w = np.minimum(width_m, 8.0 * height_m)
-    return np.minimum(h, w) ** (2.0 / 3.0) * np.maximum(h, w) ** (1.0 / 3.0)
+    scale: float = np.minimum(h, w) ** (2.0 / 3.0) * np.maximum(h, w) ** (1.0 / 3.0)
+    return scale
 
 
 @kernel
@@ -90,7 +96,8 @@ def cavity_length(height_m: float, width_m: float, length_m: float) -> float:
     rw = width_m / height_m
     rl = np.minimum(np.maximum(length_m / height_m, 0.3), 3.0)
     exponent = np.maximum(0.0, FACKRELL_LENGTH_EXP * (rw - 0.33) / 0.67) if rw < 1.0 else FACKRELL_LENGTH_EXP
-    return FACKRELL_COEF * width_m / (rl**exponent * (1.0 + FACKRELL_WIDTH_COEF * rw))
+    length: float = FACKRELL_COEF * width_m / (rl**exponent * (1.0 + FACKRELL_WIDTH_COEF * rw))
+    return length
 
 
 @kernel
@@ -98,11 +105,13 @@ def wake_height(x_m: float, height_m: float, scale_m: float) -> float:
     """PRIME wake height (m) at x (m) downwind of the upwind face: 1.2 R (x/R + (H/(1.2 R))^3)^(1/3), = H at
     x = 0 (Wilson 1979 / Weil 1996 limits for a uniform approach wind)."""
     x = np.maximum(x_m, 0.0)
-    return WAKE_HEIGHT_COEF * scale_m * np.cbrt(x / scale_m + (height_m / (WAKE_HEIGHT_COEF * scale_m)) ** 3)
+    top: float = WAKE_HEIGHT_COEF * scale_m * np.cbrt(x / scale_m + (height_m / (WAKE_HEIGHT_COEF * scale_m)) ** 3)
+    return top
 
 
 @kernel
-def _row_geometry(wind_x: float, wind_y: float, half_length: float, half_breadth: float, height: float):
+def _row_geometry(wind_x: float, wind_y: float, half_length: float, half_breadth: float,
+                  height: float) -> tuple[float, float, float, float, float, float, float, bool]:
     """(dx, dy, half_along, half_across, scale, cavity, cavity_top, calm) of the wake in one mean wind's
     horizontal direction (module docstring)."""
     speed = np.hypot(wind_x, wind_y)
@@ -117,7 +126,8 @@ def _row_geometry(wind_x: float, wind_y: float, half_length: float, half_breadth
 
 
 @kernel
-def _geometry_rows(wind, half_length, half_breadth, height):
+def _geometry_rows(wind: NDArray[np.float64], half_length: float, half_breadth: float,
+                   height: float) -> tuple[NDArray[np.float64], NDArray[np.float64], NDArray[np.bool_]]:
     """:func:`_row_geometry` of every row of ``wind`` (n, 3): (d (n, 2), (n, 5) half_along ... cavity_top,
     calm (n,))."""
     n = wind.shape[0]
@@ -132,7 +142,7 @@ def _geometry_rows(wind, half_length, half_breadth, height):
 
 
 @kernel
-def footprint(c: float, dx: float, dy: float, half_length: float, half_breadth: float):
+def footprint(c: float, dx: float, dy: float, half_length: float, half_breadth: float) -> tuple[float, float]:
     """(lee, windward): the largest / smallest s of the footprint on the line at crosswind position c (within
     the footprint's crosswind extent), for the downwind direction (dx, dy). A point s d + c n (n = d turned
     90 deg left) is inside when |s dx - c dy| <= L/2 and |s dy + c dx| <= B/2: two intervals in s, centred at
@@ -145,8 +155,10 @@ def footprint(c: float, dx: float, dy: float, half_length: float, half_breadth: 
 
 
 @kernel
-def _factor_rows(points, wind, centre_x, centre_y, half_length, half_breadth, height, lee_deficit,
-                 turbulence_ratio, extent_scale_lengths):
+def _factor_rows(points: NDArray[np.float64], wind: NDArray[np.float64], centre_x: float, centre_y: float,
+                 half_length: float, half_breadth: float, height: float, lee_deficit: float,
+                 turbulence_ratio: float, extent_scale_lengths: float
+                 ) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
     """(deficit (n,), turbulence gain (n,)) at points (n, 3) in mean winds (n, 3): :meth:`ShipAirWake.factors`."""
     n = points.shape[0]
     deficit, gain = np.empty(n), np.empty(n)
@@ -190,13 +202,13 @@ class WakeGeometry:
     d: (n, 2) unit downwind direction; half_along, half_across: the footprint's half extents along / across d;
     scale: Wilson R; cavity: Fackrell L_R; cavity_top: H_R; calm: rows without horizontal wind (no wake)."""
 
-    d: np.ndarray
-    half_along: np.ndarray
-    half_across: np.ndarray
-    scale: np.ndarray
-    cavity: np.ndarray
-    cavity_top: np.ndarray
-    calm: np.ndarray
+    d: NDArray[np.float64]
+    half_along: NDArray[np.float64]
+    half_across: NDArray[np.float64]
+    scale: NDArray[np.float64]
+    cavity: NDArray[np.float64]
+    cavity_top: NDArray[np.float64]
+    calm: NDArray[np.bool_]
 
 
 class ShipAirWake:
@@ -208,8 +220,8 @@ class ShipAirWake:
     turbulence multiplier there (K0); extent_scale_lengths: how far past the cavity end (in R) the wake reaches.
     The sources of every number are in the module docstring."""
 
-    def __init__(self, box: np.ndarray, lee_deficit: float = 0.7, turbulence_ratio: float = 1.7,
-                 extent_scale_lengths: float = 15.0):
+    def __init__(self, box: ArrayLike, lee_deficit: float = 0.7, turbulence_ratio: float = 1.7,
+                 extent_scale_lengths: float = 15.0) -> None:
         box = np.asarray(box, dtype=float)
         if box.shape != (2, 3) or not np.all(box[1] > box[0]) or box[1, 2] <= 0:
             raise ValueError(f"box must be (2, 3) min/max corners with positive sizes and top > 0, got {box}")
@@ -224,19 +236,20 @@ class ShipAirWake:
         self.extent_scale_lengths = float(extent_scale_lengths)
 
     @classmethod
-    def from_section(cls, box: np.ndarray, section) -> ShipAirWake:
+    def from_section(cls, box: ArrayLike, section: AirWakeSection) -> ShipAirWake:
         """From a ``wind.air_wake`` section (:class:`wrp_eval.wind.config.AirWakeSection`)."""
         return cls(box, section.lee_deficit, section.turbulence_ratio, section.extent_scale_lengths)
 
     # --- geometry -------------------------------------------------------------------------------------
-    def geometry(self, mean_wind: np.ndarray) -> WakeGeometry:
+    def geometry(self, mean_wind: ArrayLike) -> WakeGeometry:
         """The wake's geometry for each row of ``mean_wind`` (n, 3) m/s (only its horizontal direction counts)."""
         wind = np.atleast_2d(np.asarray(mean_wind, dtype=float))
         d, lengths, calm = _geometry_rows(wind, self.half_length, self.half_breadth, self.height)
-        return WakeGeometry(d, *lengths.T, calm)
+        half_along, half_across, scale, cavity, cavity_top = lengths.T
+        return WakeGeometry(d, half_along, half_across, scale, cavity, cavity_top, calm)
 
     # --- fields ---------------------------------------------------------------------------------------
-    def factors(self, points: np.ndarray, mean_wind: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    def factors(self, points: ArrayLike, mean_wind: ArrayLike) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
         """(deficit (n,), turbulence gain (n,)) at points (n, 3) m in mean winds (n, 3) m/s: one geometry for
         both (what :class:`wrp_eval.wind.field.WindField` calls once per step); one compiled loop over the rows."""
         points = np.atleast_2d(np.asarray(points, dtype=float))
@@ -245,12 +258,12 @@ class ShipAirWake:
                             float(self.half_breadth), self.height, self.lee_deficit, self.turbulence_ratio,
                             self.extent_scale_lengths)
 
-    def deficit(self, points: np.ndarray, mean_wind: np.ndarray) -> np.ndarray:
+    def deficit(self, points: ArrayLike, mean_wind: ArrayLike) -> NDArray[np.float64]:
         """(n,) fraction of the mean wind removed at points (n, 3): ``lee_deficit`` in the cavity, 0 outside
         the wake."""
         return self.factors(points, mean_wind)[0]
 
-    def reference_point(self, mean_wind: np.ndarray) -> np.ndarray:
+    def reference_point(self, mean_wind: ArrayLike) -> NDArray[np.float64]:
         """(3,) the lee-side reference point for one mean wind (3,): on the wind line through the box centre,
         half a cavity length behind the lee face, at half the block height; there the deficit is exactly
         ``lee_deficit`` and the gain ``turbulence_ratio``."""

@@ -5,6 +5,7 @@ from __future__ import annotations
 from typing import Protocol, runtime_checkable
 
 import numpy as np
+from numpy.typing import NDArray
 
 
 @runtime_checkable
@@ -16,4 +17,4 @@ class WindModel(Protocol):
     of n flights, row i of ``points`` being flight i, and must be queried with non-decreasing t.
     """
 
-    def velocity(self, points: np.ndarray, t: float) -> np.ndarray: ...
+    def velocity(self, points: NDArray[np.float64], t: float) -> NDArray[np.float64]: ...

@@ -8,6 +8,7 @@ from __future__ import annotations
 import time
 
 import numpy as np
+from numpy.typing import NDArray
 from scipy.signal import welch
 
 from wrp_eval.bench_record import BenchRecord
@@ -18,8 +19,8 @@ from wrp_eval.wind.field import build_wind_field
 CASES = ((10.0, 5.0), (10.0, 12.0), (50.0, 5.0), (50.0, 12.0))   # (altitude m, W20 m/s); V = W20
 
 
-def psd_check(altitude_m: float, w20_mps: float, n_flights: int = 64, n_steps: int = 20_000,
-              dt_s: float = 0.05, seed: int = 0, nperseg: int = 4096):
+def psd_check(altitude_m: float, w20_mps: float, n_flights: int = 64, n_steps: int = 20_000, dt_s: float = 0.05,
+              seed: int = 0, nperseg: int = 4096) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
     """(mean |dB error| per axis (3,), std error % per axis (3,)) of a batch of Dryden series against the
     analytic one-sided PSDs over 0.01 Hz .. fs/5 (Welch, averaged over the flights)."""
     turb = DrydenTurbulence(n_flights, dt_s, seed, w20_mps)

@@ -8,6 +8,7 @@ bearing of the bow, the ship frame x = bow, y = port, z = up.
 from __future__ import annotations
 
 import numpy as np
+from numpy.typing import ArrayLike, NDArray
 
 from wrp_eval.frames import ship_to_enu, wind_velocity
 from wrp_eval.wind.grid import WindGrid
@@ -17,8 +18,8 @@ VON_KARMAN = 0.40
 MIN_ROUGHNESS_M = 1e-6     # floor on z0 so that calm columns keep a finite log law
 
 
-def charnock_roughness(speed_10m_m_s: np.ndarray | float, alpha: float = 0.011,
-                       iterations: int = 60) -> tuple[np.ndarray, np.ndarray]:
+def charnock_roughness(speed_10m_m_s: ArrayLike, alpha: float = 0.011,
+                       iterations: int = 60) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
     """Sea-surface roughness z0 (m) and friction velocity u* (m/s) from the 10 m wind speed.
 
     Charnock (1955): z0 = alpha u*^2 / g, with the neutral log law u* = kappa U10 / ln(10 / z0);
@@ -34,8 +35,8 @@ def charnock_roughness(speed_10m_m_s: np.ndarray | float, alpha: float = 0.011,
     return z0, ustar
 
 
-def log_law_factor(height_m: np.ndarray | float, z0_m: np.ndarray | float,
-                   reference_height_m: float = 10.0) -> np.ndarray:
+def log_law_factor(height_m: ArrayLike, z0_m: ArrayLike,
+                   reference_height_m: float = 10.0) -> NDArray[np.float64]:
     """U(z) / U(z_ref) of the neutral log law, ln(z/z0) / ln(z_ref/z0); 0 at and below z0."""
     z = np.asarray(height_m, dtype=float)
     z0 = np.asarray(z0_m, dtype=float)
@@ -45,7 +46,7 @@ def log_law_factor(height_m: np.ndarray | float, z0_m: np.ndarray | float,
 
 
 def synthetic_marine_grid(speed_10m_m_s: float, direction_deg: float, heading_deg: float,
-                          x_m: np.ndarray, y_m: np.ndarray, z_m: np.ndarray, charnock_alpha: float = 0.011,
+                          x_m: ArrayLike, y_m: ArrayLike, z_m: ArrayLike, charnock_alpha: float = 0.011,
                           veer_deg_per_100m: float = 0.0, gradient_per_km: float = 0.0) -> WindGrid:
     """A neutral marine boundary layer on a ship-frame grid (the embedded default mean field).
 

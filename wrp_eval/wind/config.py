@@ -10,7 +10,7 @@ CLI), else the working directory.
 from __future__ import annotations
 
 from itertools import pairwise
-from typing import Literal
+from typing import Any, Literal
 
 from pydantic import Field, model_validator
 
@@ -49,7 +49,7 @@ class TurbulenceSection(StrictModel):
 
     @model_validator(mode="before")
     @classmethod
-    def _old_keys(cls, data):
+    def _old_keys(cls, data: Any) -> Any:
         return renamed_keys(data, {"sigma_w_mps": "sigma_w_m_s", "airspeed_floor_mps": "airspeed_floor_m_s"},
                             "wind.turbulence")
 
@@ -66,7 +66,7 @@ class GustSection(StrictModel):
 
     @model_validator(mode="before")
     @classmethod
-    def _old_keys(cls, data):
+    def _old_keys(cls, data: Any) -> Any:
         return renamed_keys(data, {"amplitude_mps": "amplitude_m_s"}, "wind.gusts")
 
 
@@ -116,7 +116,7 @@ class WindSection(StrictModel):
 
     @model_validator(mode="before")
     @classmethod
-    def _old_keys(cls, data):
+    def _old_keys(cls, data: Any) -> Any:
         return renamed_keys(data, {"speed_10m_mps": "speed_10m_m_s"}, "wind")
 
     @model_validator(mode="after")

@@ -28,23 +28,27 @@ the mean wind carries the field past the vehicle).
 from __future__ import annotations
 
 from collections.abc import Sequence
+from typing import Any, TypeVar
 
 import numpy as np
+from numpy.typing import ArrayLike, NDArray
 from scipy.signal import lfilter
 
 from wrp_eval.compiled import as_rows, kernel
-from wrp_eval.streams import BlockNormals, flight_generators
+from wrp_eval.streams import BlockNormals, FlightRngs, flight_generators
 from wrp_eval.wind.boundary_layer import log_law_factor
 
 FT_M = 0.3048
 KNOT_MPS = 1852.0 / 3600.0
 MIN_ALTITUDE_FT, MAX_ALTITUDE_FT = 10.0, 1000.0
-SQRT3 = np.sqrt(3.0)
+SQRT3: float = np.sqrt(3.0)
 
 # MIL-F-8785C mean-wind shear: W(h) = W20 ln(h/z0)/ln(20 ft/z0) with z0 = 0.15 ft (Sec. 3.7.2.3)
 MIL_SHEAR_Z0_M = 0.15 * FT_M
 # W20 of the MIL-F-8785C / MIL-HDBK-1797 low-altitude severity levels (knots)
 SEVERITY_W20_KT = {"light": 15.0, "moderate": 30.0, "severe": 45.0}
+# a number or an array of them, for the kernels that take either (their result is the same kind)
+_Real = TypeVar("_Real", float, NDArray[np.float64])
 
 
 def severity_w20_mps(severity: str) -> float:
@@ -53,7 +57,7 @@ def severity_w20_mps(severity: str) -> float:
 
 
 @kernel
-def _intensity_and_scale(altitude_m: float, w20_mps: float):
+def _intensity_and_scale(altitude_m: float, w20_mps: float) -> tuple[float, float, float, float]:
     """(sigma_uv, sigma_w, L_uv, L_w) in m/s and m at one altitude (clipped to 10..1000 ft) for W20 m/s."""
     h_ft = np.minimum(np.maximum(altitude_m / FT_M, MIN_ALTITUDE_FT), MAX_ALTITUDE_FT)
     base = 0.177 + 0.000823 * h_ft
@@ -62,7 +66,8 @@ def _intensity_and_scale(altitude_m: float, w20_mps: float):
 
 
 @kernel
-def _parameter_rows(altitude_m, w20_mps):
+def _parameter_rows(altitude_m: NDArray[np.float64], w20_mps: NDArray[np.float64]
+                    ) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
     """(sigma (n, 3), L (n, 3)) of flat altitudes and W20s (n,)."""
     n = altitude_m.size
     sigma, length = np.empty((n, 3)), np.empty((n, 3))
@@ -73,7 +78,7 @@ def _parameter_rows(altitude_m, w20_mps):
     return sigma, length
 
 
-def dryden_parameters(altitude_m: np.ndarray | float, w20_mps: np.ndarray | float):
+def dryden_parameters(altitude_m: ArrayLike, w20_mps: ArrayLike) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
     """Intensities sigma (..., 3) m/s and length scales L (..., 3) m for axes (u, v, w).
 
     altitude_m is clipped to the low-altitude model's range 10..1000 ft.
@@ -84,7 +89,8 @@ def dryden_parameters(altitude_m: np.ndarray | float, w20_mps: np.ndarray | floa
 
 
 @kernel
-def _filters(altitude_m: float, w20_mps: float, airspeed_mps: float):
+def _filters(altitude_m: float, w20_mps: float,
+             airspeed_mps: float) -> tuple[tuple[float, float, float], tuple[float, float, float]]:
     """(tau_u, tau_v, tau_w) s and (K_u, K_v, K_w) of the forming filters at one altitude, W20 and airspeed
     (already floored): tau = L / V, K_u = sigma_u sqrt(2 L_u / (pi V)), K_v,w = sigma sqrt(L / (pi V))."""
     sigma_uv, sigma_w, length_uv, length_w = _intensity_and_scale(altitude_m, w20_mps)
@@ -96,7 +102,8 @@ def _filters(altitude_m: float, w20_mps: float, airspeed_mps: float):
 
 
 @kernel
-def _filter_rows(altitude_m, w20_mps, airspeed_mps):
+def _filter_rows(altitude_m: NDArray[np.float64], w20_mps: NDArray[np.float64],
+                 airspeed_mps: NDArray[np.float64]) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
     """(tau (n, 3), gain (n, 3)) for (n,) altitudes, W20s and floored airspeeds."""
     n = altitude_m.size
     tau, gain = np.empty((n, 3)), np.empty((n, 3))
@@ -107,8 +114,8 @@ def _filter_rows(altitude_m, w20_mps, airspeed_mps):
     return tau, gain
 
 
-def dryden_psd(omega_rad_s: np.ndarray, sigma: Sequence[float], length: Sequence[float],
-               airspeed_mps: float) -> np.ndarray:
+def dryden_psd(omega_rad_s: ArrayLike, sigma: ArrayLike, length: ArrayLike,
+               airspeed_mps: float) -> NDArray[np.float64]:
     """One-sided analytic PSDs (len(omega), 3) in (m/s)^2 per rad/s for axes (u, v, w)."""
     om = np.asarray(omega_rad_s, dtype=float)[:, None]
     s, L = np.asarray(sigma, float)[None, :], np.asarray(length, float)[None, :]
@@ -118,7 +125,8 @@ def dryden_psd(omega_rad_s: np.ndarray, sigma: Sequence[float], length: Sequence
     return np.concatenate([first[:, :1], second[:, 1:]], axis=1)
 
 
-def continuous_filters(sigma: Sequence[float], length: Sequence[float], airspeed_mps: float):
+def continuous_filters(sigma: Sequence[float], length: Sequence[float], airspeed_mps: float) -> list[
+        tuple[NDArray[np.float64], NDArray[np.float64], NDArray[np.float64], NDArray[np.float64]]]:
     """State-space (A, B, C, D) of the three forming filters, in the realisation used here (for tests)."""
     out = []
     for axis in range(3):
@@ -134,14 +142,14 @@ def continuous_filters(sigma: Sequence[float], length: Sequence[float], airspeed
 
 
 @kernel
-def _zoh(tau, dt: float):
+def _zoh(tau: _Real, dt: float) -> tuple[_Real, _Real, _Real, _Real]:
     """Closed-form ZOH coefficients (a, a r, 1 - a(1+r), 1 - a) for time constants tau (any shape)."""
     r = dt / tau
     a = np.exp(-r)
     return a, a * r, -np.expm1(-r) - r * a, -np.expm1(-r)
 
 
-def _discrete_lyapunov_2x2(F: np.ndarray, Q: np.ndarray) -> np.ndarray:
+def _discrete_lyapunov_2x2(F: NDArray[np.float64], Q: NDArray[np.float64]) -> NDArray[np.float64]:
     """Batched solution of P = F P F^T + Q for (..., 2, 2) matrices: vec(P) = (I - F kron F)^-1 vec(Q)."""
     kron = np.einsum("...ij,...kl->...ikjl", F, F).reshape(F.shape[:-2] + (4, 4))
     eye = np.eye(4)
@@ -151,13 +159,15 @@ def _discrete_lyapunov_2x2(F: np.ndarray, Q: np.ndarray) -> np.ndarray:
 
 
 @kernel
-def _second_order_output(x1: float, x2: float) -> float:
+def _second_order_output(x1: _Real, x2: _Real) -> _Real:
     """The v/w filter's output per unit gain, (1 - sqrt3) x1 + sqrt3 x2 (module docstring)."""
     return (1 - SQRT3) * x1 + SQRT3 * x2
 
 
 @kernel
-def _step_rows(points, mean_wind, w20_mps, airspeed_floor_m_s, dt, noise, state_u, state_vw):
+def _step_rows(points: NDArray[np.float64], mean_wind: NDArray[np.float64], w20_mps: NDArray[np.float64],
+               airspeed_floor_m_s: float, dt: float, noise: NDArray[np.float64], state_u: NDArray[np.float64],
+               state_vw: NDArray[np.float64]) -> NDArray[np.float64]:
     """Advance each flight ``noise.shape[1]`` steps (unit normals (n, m, 3)) with the filters of its altitude
     (``points`` (n, 3) m) and airspeed (the ``mean_wind`` (n, 3) m/s speed, floored), updating ``state_u`` (n,)
     and ``state_vw`` (n, 2, 2) in place; returns the turbulence (n, 3) m/s after them, world frame."""
@@ -185,7 +195,7 @@ def _step_rows(points, mean_wind, w20_mps, airspeed_floor_m_s, dt, noise, state_
 
 
 @kernel
-def _to_world(u: float, v: float, w: float, mean_x: float, mean_y: float):
+def _to_world(u: float, v: float, w: float, mean_x: float, mean_y: float) -> tuple[float, float, float]:
     """(x, y, z) of along/across/vertical (u, v, w): u along the mean horizontal wind (x where calm), v 90 deg
     to its left, w up."""
     h = np.hypot(mean_x, mean_y)
@@ -194,7 +204,7 @@ def _to_world(u: float, v: float, w: float, mean_x: float, mean_y: float):
 
 
 @kernel
-def _rotate_rows(uvw, mean_wind):
+def _rotate_rows(uvw: NDArray[np.float64], mean_wind: NDArray[np.float64]) -> NDArray[np.float64]:
     """(n, 3) along/across/vertical -> world frame (:func:`rotate_to_world`)."""
     out = np.empty_like(uvw)
     for row in range(uvw.shape[0]):
@@ -216,8 +226,9 @@ class DrydenTurbulence:
     ``block_steps`` steps, so the per-flight draws are independent of how the time axis is chunked.
     """
 
-    def __init__(self, n_flights: int, dt_s: float, rngs, w20_mps=0.0, sigma_w_override_mps: float | None = None,
-                 airspeed_floor_m_s: float = 1.0, block_steps: int = 1024):
+    def __init__(self, n_flights: int, dt_s: float, rngs: FlightRngs, w20_mps: ArrayLike = 0.0,
+                 sigma_w_override_mps: float | None = None, airspeed_floor_m_s: float = 1.0,
+                 block_steps: int = 1024) -> None:
         if n_flights < 1:
             raise ValueError("n_flights must be >= 1")
         if not dt_s > 0:
@@ -230,12 +241,13 @@ class DrydenTurbulence:
         self.airspeed_floor_m_s = float(airspeed_floor_m_s)
         self.block_steps = int(block_steps)
         self._noise = BlockNormals(self.rngs, n_flights, 3, self.block_steps)
-        self.state_u = None            # (n,)
-        self.state_vw = None           # (n, 2, 2): [axis v/w, (x1, x2)]
+        self.state_u: NDArray[np.float64] | None = None            # (n,)
+        self.state_vw: NDArray[np.float64] | None = None           # (n, 2, 2): [axis v/w, (x1, x2)]
         self.t_s: float | None = None
 
     # --- parameters -------------------------------------------------------------------------------
-    def parameters(self, altitude_m, airspeed_mps):
+    def parameters(self, altitude_m: ArrayLike, airspeed_mps: ArrayLike) -> tuple[
+            NDArray[np.float64], NDArray[np.float64], NDArray[np.float64], NDArray[np.float64], NDArray[np.float64]]:
         """(sigma (n,3), length (n,3), V (n,), tau (n,3), gain (n,3)) for the flights' current conditions."""
         altitude = np.broadcast_to(np.asarray(altitude_m, float), (self.n_flights,))
         sigma, length = dryden_parameters(altitude, self.w20_mps)
@@ -244,11 +256,11 @@ class DrydenTurbulence:
         return sigma, length, v, tau, gain
 
     # --- noise ---------------------------------------------------------------------------------------
-    def _draw(self, n_steps: int) -> np.ndarray:
+    def _draw(self, n_steps: int) -> NDArray[np.float64]:
         """Unit normals (n, n_steps, 3) from each flight's own generator, in stream order."""
         return self._noise.draw(n_steps)
 
-    def _initialise(self, tau: np.ndarray) -> None:
+    def _initialise(self, tau: NDArray[np.float64]) -> None:
         """Draw each flight's state from the stationary distribution of its discrete filters."""
         q = np.pi / self.dt_s
         a, ar, c1, c2 = _zoh(tau, self.dt_s)
@@ -266,13 +278,22 @@ class DrydenTurbulence:
         normals = np.stack([z[:, 0, 1:3], z[:, 1, 0:2]], axis=1)  # (n, 2 axes, 2)
         self.state_vw = np.einsum("naij,naj->nai", chol, normals)
 
-    # --- stepping --------------------------------------------------------------------------------------
-    def output(self, gain: np.ndarray) -> np.ndarray:
-        """Current turbulence (n, 3) along/across/vertical for gains (n, 3)."""
-        vw = _second_order_output(self.state_vw[..., 0], self.state_vw[..., 1])
-        return gain * np.concatenate([self.state_u[:, None], vw], axis=1)
+    def _states(self) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
+        """(state_u, state_vw), drawn by the first :meth:`velocity` or :meth:`generate`."""
+        if self.state_u is None or self.state_vw is None:
+            raise RuntimeError("the turbulence state is drawn by the first velocity() or generate() call")
+        return self.state_u, self.state_vw
 
-    def velocity(self, points: np.ndarray, t: float, mean_wind: np.ndarray | None = None) -> np.ndarray:
+    # --- stepping --------------------------------------------------------------------------------------
+    def output(self, gain: NDArray[np.float64]) -> NDArray[np.float64]:
+        """Current turbulence (n, 3) along/across/vertical for gains (n, 3)."""
+        state_u, state_vw = self._states()
+        vw = _second_order_output(state_vw[..., 0], state_vw[..., 1])
+        turbulence: NDArray[np.float64] = gain * np.concatenate([state_u[:, None], vw], axis=1)
+        return turbulence
+
+    def velocity(self, points: NDArray[np.float64], t: float,
+                 mean_wind: NDArray[np.float64] | None = None) -> NDArray[np.float64]:
         """Turbulence (n, 3) m/s in the world frame at flight positions ``points`` (n, 3) at time ``t`` s
         (non-decreasing across calls).
 
@@ -294,12 +315,12 @@ class DrydenTurbulence:
             if n_steps < 0:
                 raise ValueError(f"turbulence queried at t = {t} s after t = {self.t_s} s: time must not decrease")
         world = _step_rows(points, mean_wind, self.w20_mps, self.airspeed_floor_m_s, self.dt_s, self._draw(n_steps),
-                           self.state_u, self.state_vw)
+                           *self._states())
         self.t_s += n_steps * self.dt_s
         return world
 
     # --- whole series ----------------------------------------------------------------------------------
-    def generate(self, n_steps: int, altitude_m: float, airspeed_mps: float) -> np.ndarray:
+    def generate(self, n_steps: int, altitude_m: float, airspeed_mps: float) -> NDArray[np.float64]:
         """Series (n_flights, n_steps, 3) along/across/vertical at fixed altitude and airspeed.
 
         Sample k is the turbulence at t0 + k dt (k = 0 is the current, or freshly drawn initial, state);
@@ -309,6 +330,7 @@ class DrydenTurbulence:
         if self.t_s is None:
             self._initialise(tau)
             self.t_s = 0.0
+        state_u, state_vw = self._states()
         tau0 = tau[0]
         if not np.allclose(tau, tau0):
             raise ValueError("generate() needs the same altitude and airspeed for every flight")
@@ -316,13 +338,13 @@ class DrydenTurbulence:
         e = self._draw(n_steps) * np.sqrt(np.pi / self.dt_s)    # (n, T, 3)
         out = np.empty((self.n_flights, n_steps, 3))
         # x_{k+1} = a x_k + c e_k as an IIR filter along time (scipy's C loop); zi carries x_0
-        xu_next, _ = lfilter([c2[0]], [1.0, -a[0]], e[:, :, 0], axis=1, zi=(a[0] * self.state_u)[:, None])
-        xu = np.concatenate([self.state_u[:, None], xu_next[:, :-1]], axis=1)
+        xu_next, _ = lfilter([c2[0]], [1.0, -a[0]], e[:, :, 0], axis=1, zi=(a[0] * state_u)[:, None])
+        xu = np.concatenate([state_u[:, None], xu_next[:, :-1]], axis=1)
         out[..., 0] = gain[:, 0:1] * xu
         self.state_u = xu_next[:, -1]
-        new_vw = np.empty_like(self.state_vw)
+        new_vw = np.empty_like(state_vw)
         for ax in (1, 2):
-            x1_0, x2_0 = self.state_vw[:, ax - 1, 0], self.state_vw[:, ax - 1, 1]
+            x1_0, x2_0 = state_vw[:, ax - 1, 0], state_vw[:, ax - 1, 1]
             x2_next, _ = lfilter([c2[ax]], [1.0, -a[ax]], e[:, :, ax], axis=1, zi=(a[ax] * x2_0)[:, None])
             x2 = np.concatenate([x2_0[:, None], x2_next[:, :-1]], axis=1)
             drive = ar[ax] * x2 + c1[ax] * e[:, :, ax]
@@ -335,14 +357,14 @@ class DrydenTurbulence:
         return out
 
 
-def rotate_to_world(uvw: np.ndarray, mean_wind: np.ndarray) -> np.ndarray:
+def rotate_to_world(uvw: ArrayLike, mean_wind: ArrayLike) -> NDArray[np.float64]:
     """(n, 3) along/across/vertical -> world frame: u along the mean horizontal wind (x where calm),
     v 90 deg to its left, w up."""
     return _rotate_rows(np.asarray(uvw, dtype=float), np.asarray(mean_wind, dtype=float))
 
 
 def turbulence_series(altitude_m: float, w20_mps: float, dt_s: float, duration_s: float, seed: int,
-                      airspeed_mps: float | None = None, airspeed_floor_m_s: float = 2.0) -> dict:
+                      airspeed_mps: float | None = None, airspeed_floor_m_s: float = 2.0) -> dict[str, Any]:
     """One Dryden series at fixed altitude (m) for W20 (m/s), time step and duration (s), seed: t (n,) s,
     uvw (n, 3) m/s along/across/vertical, sigma_uvw (3,) m/s, length_uvw (3,) m, airspeed (m/s). Default
     airspeed: the MIL-F-8785C mean wind at that altitude, W20 ln(h/z0)/ln(20 ft/z0) with z0 = 0.15 ft

@@ -11,16 +11,19 @@ different drawn winds together.
 
 from __future__ import annotations
 
-from collections.abc import Sequence
+from collections.abc import Callable, Sequence
 from dataclasses import dataclass
 from pathlib import Path
+from typing import TypeVar, cast
 
 import numpy as np
+from numpy.typing import NDArray
 
-from wrp_eval.frames import ship_pose
+from wrp_eval.errors import InputError
+from wrp_eval.frames import ShipLike, ship_pose
 from wrp_eval.ship.particulars import ShipParticulars
 from wrp_eval.ship.proxy import build_proxy
-from wrp_eval.streams import children, flight_generators
+from wrp_eval.streams import FlightRngs, children, flight_generators
 from wrp_eval.wind.air_wake import ShipAirWake
 from wrp_eval.wind.base import WindModel
 from wrp_eval.wind.boundary_layer import synthetic_marine_grid
@@ -35,6 +38,8 @@ from wrp_eval.wind.gusts import OneMinusCosineGusts
 from wrp_eval.wind.netcdf import MM5_LAYOUT, WRF_LAYOUT, read_mean_wind
 
 TWENTY_FT_M = 20.0 * FT_M
+
+T = TypeVar("T")
 
 
 @dataclass
@@ -55,32 +60,34 @@ class WindField:
     gusts: OneMinusCosineGusts | None = None
     wake: ShipAirWake | None = None
 
-    def speed_10m_at_ship(self, n_flights: int) -> np.ndarray:
+    def speed_10m_at_ship(self, n_flights: int) -> NDArray[np.float64]:
         """(n_flights,) m/s: each flight's mean horizontal wind 10 m above the sea at the ship (the origin), from
         its own mean field (synthetic or mesoscale): what raises the sea it flies over."""
         mean = self.mean.velocity(np.tile([0.0, 0.0, 10.0], (n_flights, 1)), 0.0)
-        return np.hypot(mean[:, 0], mean[:, 1])
+        speed: NDArray[np.float64] = np.hypot(mean[:, 0], mean[:, 1])
+        return speed
 
-    def inside(self, points: np.ndarray) -> np.ndarray:
+    def inside(self, points: NDArray[np.float64]) -> NDArray[np.bool_]:
         """(n,) bool: the rows of ``points`` (n, 3) m inside the mean field's domain (a mean model without an
         ``inside`` covers everywhere). The simulator ends a flight blown outside as lost, instead of raising."""
         inside = getattr(self.mean, "inside", None)
         return np.ones(len(points), dtype=bool) if inside is None else inside(points)
 
-    def velocity(self, points: np.ndarray, t: float) -> np.ndarray:
+    def velocity(self, points: NDArray[np.float64], t: float) -> NDArray[np.float64]:
         points = np.asarray(points, dtype=float)
         wind = self.mean.velocity(points, t)
         if self.wake is not None:
-            return self._in_wake(points, t, wind)
+            return self._in_wake(self.wake, points, t, wind)
         if self.turbulence is not None:
             wind = wind + self.turbulence.velocity(points, t, mean_wind=wind)
         if self.gusts is not None:
             wind = wind + self.gusts.velocity(points, t)
         return wind
 
-    def _in_wake(self, points: np.ndarray, t: float, mean: np.ndarray) -> np.ndarray:
-        """The wind at points (n, 3) whose free-stream mean wind is ``mean`` (n, 3), in the air wake."""
-        deficit, gain = self.wake.factors(points, mean)
+    def _in_wake(self, wake: ShipAirWake, points: NDArray[np.float64], t: float,
+                 mean: NDArray[np.float64]) -> NDArray[np.float64]:
+        """The wind at points (n, 3) whose free-stream mean wind is ``mean`` (n, 3), in the air wake ``wake``."""
+        deficit, gain = wake.factors(points, mean)
         kept = (1.0 - deficit)[:, None]
         wind = mean * kept
         if self.turbulence is not None:
@@ -90,15 +97,15 @@ class WindField:
         return wind
 
 
-def grid_axes(grid: WindGridSection) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+def grid_axes(grid: WindGridSection) -> tuple[NDArray[np.float64], NDArray[np.float64], NDArray[np.float64]]:
     """Node coordinates (x, y, z) of a ``wind.grid`` section (ranges include both ends)."""
-    def axis(lo, hi):
+    def axis(lo: float, hi: float) -> NDArray[np.float64]:
         n = int(np.floor((hi - lo) / grid.spacing_m + 1e-9)) + 1
-        return lo + grid.spacing_m * np.arange(n)
+        return cast(NDArray[np.float64], lo + grid.spacing_m * np.arange(n))
     return axis(*grid.x_range_m), axis(*grid.y_range_m), np.asarray(grid.z_levels_m, dtype=float)
 
 
-def build_mean_grid(section: WindSection, ship, base_dir: str | Path | None = None) -> WindGrid:
+def build_mean_grid(section: WindSection, ship: ShipLike, base_dir: str | Path | None = None) -> WindGrid:
     """The configured mean field as a :class:`WindGrid` around the ship.
 
     ship: anything :func:`wrp_eval.frames.ship_pose` takes (ShipParticulars, ShipPose, (lat, lon, heading))."""
@@ -107,6 +114,8 @@ def build_mean_grid(section: WindSection, ship, base_dir: str | Path | None = No
         x, y, z = grid_axes(section.grid)
         return synthetic_marine_grid(section.speed_10m_m_s, section.direction_deg, pose.heading_deg, x, y, z,
                                      section.charnock_alpha, section.veer_deg_per_100m, section.gradient_per_km)
+    if section.file is None:
+        raise InputError("wind.file", f"required when wind.source is {section.source}")
     path = Path(section.file)
     if not path.is_absolute() and base_dir is not None:
         path = Path(base_dir) / path
@@ -115,7 +124,7 @@ def build_mean_grid(section: WindSection, ship, base_dir: str | Path | None = No
                           section.time_interpolation, layout, section.fill_heights_m, section.charnock_alpha)
 
 
-def _shared(sections: Sequence[WindSection], name: str, value) -> object:
+def _shared(sections: Sequence[WindSection], name: str, value: Callable[[WindSection], T]) -> T:
     """``value(section)`` of the first flight, checked to be the same for every flight of the batch (settings
     one batched model holds once)."""
     first = value(sections[0])
@@ -124,7 +133,8 @@ def _shared(sections: Sequence[WindSection], name: str, value) -> object:
     return first
 
 
-def build_mean_wind(sections: Sequence[WindSection], ship, base_dir: str | Path | None = None) -> GriddedMeanWind:
+def build_mean_wind(sections: Sequence[WindSection], ship: ShipLike,
+                    base_dir: str | Path | None = None) -> GriddedMeanWind:
     """The mean wind of a batch, one ``wind:`` section per flight: one grid per distinct mean field (flights
     whose sections give the same field share one grid, built once), interpolated as the sections say (which
     the flights must share)."""
@@ -147,7 +157,7 @@ def build_mean_wind(sections: Sequence[WindSection], ship, base_dir: str | Path 
     return GriddedMeanWind(grids, method, power, clamp, flight_field)
 
 
-def flight_w20_mps(sections: Sequence[WindSection], at_20ft: np.ndarray) -> np.ndarray | None:
+def flight_w20_mps(sections: Sequence[WindSection], at_20ft: NDArray[np.float64]) -> NDArray[np.float64] | None:
     """Dryden W20 (F,) m/s per flight, or None when no flight has turbulence. at_20ft (F, 3): each flight's
     mean wind 20 ft over the ship (``severity: from_mean``). ``sigma_w_m_s`` overrides the severity
     (W20 = 10 sigma_w); a flight without turbulence in a batch with some gets W20 = 0, for which the shared
@@ -169,7 +179,7 @@ def flight_w20_mps(sections: Sequence[WindSection], at_20ft: np.ndarray) -> np.n
     return w20
 
 
-def build_air_wake(sections: Sequence[WindSection], ship) -> ShipAirWake | None:
+def build_air_wake(sections: Sequence[WindSection], ship: ShipLike) -> ShipAirWake | None:
     """The batch's air wake (the flights share ``wind.air_wake``), or None when it is disabled or ``ship`` has
     no hull: a :class:`ShipPose` or (lat, lon, heading) has no box, so the wake is skipped (documented in the
     wind README; the ship-less benchmarks and grid samples build fields that way). The box is the proxy of the
@@ -180,7 +190,7 @@ def build_air_wake(sections: Sequence[WindSection], ship) -> ShipAirWake | None:
     return ShipAirWake.from_section(build_proxy(ship).bounds, settings)
 
 
-def build_wind_field(sections: Sequence[WindSection], ship, flight_rngs, dt_s: float = 0.01,
+def build_wind_field(sections: Sequence[WindSection], ship: ShipLike, flight_rngs: FlightRngs, dt_s: float = 0.01,
                      base_dir: str | Path | None = None) -> WindField:
     """ONE :class:`WindField` for a batch of F = len(sections) flights stepping by ``dt_s`` seconds.
 
@@ -214,7 +224,8 @@ def build_wind_field(sections: Sequence[WindSection], ship, flight_rngs, dt_s: f
     return WindField(mean, turbulence, gusts, build_air_wake(sections, ship))
 
 
-def sample_mean_field(section: WindSection, ship, base_dir: str | Path | None = None):
+def sample_mean_field(section: WindSection, ship: ShipLike, base_dir: str | Path | None = None
+                      ) -> tuple[NDArray[np.float64], NDArray[np.float64], NDArray[np.float64], NDArray[np.float64]]:
     """The configured mean field on its grid nodes above the sea: x (nx,), y (ny,), z (nz,) m and velocity
     (nx, ny, nz, 3) m/s in the ship frame (z: the ``wind.grid`` levels above 0, or all when none is).
     ship: anything :func:`wrp_eval.frames.ship_pose` takes."""

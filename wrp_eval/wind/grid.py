@@ -31,6 +31,7 @@ from collections.abc import Sequence
 from dataclasses import dataclass
 
 import numpy as np
+from numpy.typing import ArrayLike, NDArray
 
 from wrp_eval.compiled import as_rows, kernel
 from wrp_eval.errors import InputError
@@ -53,10 +54,10 @@ class WindGrid:
     source: where the field came from (for messages and metadata).
     """
 
-    x_m: np.ndarray
-    y_m: np.ndarray
-    heights_m: np.ndarray
-    velocity_mps: np.ndarray
+    x_m: NDArray[np.float64]
+    y_m: NDArray[np.float64]
+    heights_m: NDArray[np.float64]
+    velocity_mps: NDArray[np.float64]
     grid_yaw_rad: float = 0.0
     source: str = "wind grid"
 
@@ -84,7 +85,7 @@ class WindGrid:
     def shape(self) -> tuple[int, int, int]:
         return self.heights_m.shape
 
-    def to_grid_frame(self, points: np.ndarray) -> np.ndarray:
+    def to_grid_frame(self, points: NDArray[np.float64]) -> NDArray[np.float64]:
         """Ship-frame points (n, 3) -> grid-frame (n, 3) (rotation about z by -grid_yaw_rad)."""
         c, s = np.cos(self.grid_yaw_rad), np.sin(self.grid_yaw_rad)
         out = np.array(points, dtype=float, copy=True)
@@ -92,7 +93,7 @@ class WindGrid:
         out[:, 1] = -s * points[:, 0] + c * points[:, 1]
         return out
 
-    def node_positions(self) -> np.ndarray:
+    def node_positions(self) -> NDArray[np.float64]:
         """Ship-frame positions of every node, (nx, ny, nz, 3)."""
         c, s = np.cos(self.grid_yaw_rad), np.sin(self.grid_yaw_rad)
         gx, gy = np.meshgrid(self.x_m, self.y_m, indexing="ij")
@@ -106,7 +107,7 @@ _INSIDE, _OUTSIDE_X, _OUTSIDE_Y, _OUTSIDE_Z = 0, 1, 2, 3
 
 
 @kernel
-def _lower_index(axis, coord):
+def _lower_index(axis: NDArray[np.float64], coord: float) -> int:
     """Index of the interval of the increasing ``axis`` (m,) holding ``coord`` (within its range): the last
     node <= coord, at most m - 2 (a coordinate on the top node is in the last interval)."""
     k = 0
@@ -116,14 +117,15 @@ def _lower_index(axis, coord):
 
 
 @kernel
-def _clamped(coord, lo, hi, nan_value):
+def _clamped(coord: float, lo: float, hi: float, nan_value: float) -> float:
     if coord != coord:                          # NaN
         coord = nan_value
-    return np.minimum(np.maximum(coord, lo), hi)
+    clamped: float = np.minimum(np.maximum(coord, lo), hi)
+    return clamped
 
 
 @kernel
-def _first_outside(coords, lo, hi):
+def _first_outside(coords: NDArray[np.float64], lo: NDArray[np.float64], hi: NDArray[np.float64]) -> int:
     """Row of the first coordinate outside [lo, hi] (n,) or not finite, -1 if none."""
     for row in range(coords.size):
         c = coords[row]
@@ -133,7 +135,10 @@ def _first_outside(coords, lo, hi):
 
 
 @kernel
-def _interpolate_rows(points, grid_yaw, x_axis, y_axis, heights, values, field, idw, idw_power, clamp):
+def _interpolate_rows(points: NDArray[np.float64], grid_yaw: float, x_axis: NDArray[np.float64],
+                      y_axis: NDArray[np.float64], heights: NDArray[np.float64], values: NDArray[np.float64],
+                      field: NDArray[np.int64], idw: bool, idw_power: float,
+                      clamp: bool) -> tuple[NDArray[np.float64], int, int]:
     """Mean wind (n, 3) at ship-frame ``points`` (n, 3) (the grid frame is turned by ``grid_yaw`` rad), in
     ``values[field[i]]`` ((k, nx, ny, nz, 3), ``field`` (n,) int); ``idw``: inverse-distance weights (else
     trilinear). Returns (wind, code, row): code _INSIDE, or (clamp off) the first coordinate found outside (x
@@ -228,7 +233,8 @@ def _interpolate_rows(points, grid_yaw, x_axis, y_axis, heights, values, field, 
 
 
 @kernel
-def _inside_rows(points, grid_yaw, x_axis, y_axis, heights):
+def _inside_rows(points: NDArray[np.float64], grid_yaw: float, x_axis: NDArray[np.float64], y_axis: NDArray[np.float64],
+                 heights: NDArray[np.float64]) -> NDArray[np.bool_]:
     """(n,) bool: ship-frame ``points`` (n, 3) that :func:`_interpolate_rows` (clamp off) accepts: within the
     axes' ranges, and in height within [the lowest bottom, the highest top] of the cell's four columns."""
     n = points.shape[0]
@@ -250,16 +256,16 @@ def _inside_rows(points, grid_yaw, x_axis, y_axis, heights):
     return out
 
 
-def inside(grid: WindGrid, points: np.ndarray) -> np.ndarray:
+def inside(grid: WindGrid, points: NDArray[np.float64]) -> NDArray[np.bool_]:
     """(n,) bool: ship-frame ``points`` (n, 3) m where :func:`interpolate` (clamp off) answers instead of raising
     :class:`OutsideWindGridError` (NaN coordinates are outside)."""
     points = as_rows("points", points, (len(points), 3))
     return _inside_rows(points, float(grid.grid_yaw_rad), grid.x_m, grid.y_m, grid.heights_m)
 
 
-def interpolate(grid: WindGrid, points: np.ndarray, method: str = "idw", idw_power: float = 2.0,
-                clamp: bool = False, values: np.ndarray | None = None,
-                value_index: np.ndarray | None = None) -> np.ndarray:
+def interpolate(grid: WindGrid, points: ArrayLike, method: str = "idw", idw_power: float = 2.0,
+                clamp: bool = False, values: ArrayLike | None = None,
+                value_index: ArrayLike | None = None) -> NDArray[np.float64]:
     """Mean wind (n, 3) m/s, ship frame, at ship-frame ``points`` (n, 3) m.
 
     values: optional node velocities of k fields (k, nx, ny, nz, 3) on ``grid``'s geometry, and value_index
@@ -275,6 +281,8 @@ def interpolate(grid: WindGrid, points: np.ndarray, method: str = "idw", idw_pow
     if values is None:
         values, value_index = grid.velocity_mps[None], np.zeros(len(points), dtype=np.int64)
     else:       # the kernel does not check its indices
+        if value_index is None:
+            raise TypeError("interpolate() needs value_index with values")
         values = np.asarray(values, dtype=float)
         value_index = as_rows("value_index", value_index, (len(points),), np.int64)
         if values.shape[1:] != grid.velocity_mps.shape:
@@ -289,7 +297,7 @@ def interpolate(grid: WindGrid, points: np.ndarray, method: str = "idw", idw_pow
     return wind
 
 
-def _refuse_outside(grid: WindGrid, point: np.ndarray, code: int) -> None:
+def _refuse_outside(grid: WindGrid, point: NDArray[np.float64], code: int) -> None:
     """Raise OutsideWindGridError for grid-frame ``point`` (3,) outside the grid along coordinate ``code``."""
     if code == _OUTSIDE_Z:
         i = min(int(np.searchsorted(grid.x_m, point[0], side="right")) - 1, grid.x_m.size - 2)
@@ -323,7 +331,7 @@ class GriddedMeanWind:
     """
 
     def __init__(self, grids: WindGrid | Sequence[WindGrid], method: str = "idw", idw_power: float = 2.0,
-                 clamp: bool = False, flight_field: np.ndarray | None = None):
+                 clamp: bool = False, flight_field: ArrayLike | None = None) -> None:
         if method not in INTERPOLATION_METHODS:
             raise InputError("wind.interpolation", f"unknown method {method!r}; choose from {INTERPOLATION_METHODS}")
         self.grids = (grids,) if isinstance(grids, WindGrid) else tuple(grids)
@@ -339,8 +347,8 @@ class GriddedMeanWind:
             raise ValueError(f"flight_field must be (F,) indices into the {len(self.grids)} grids")
         # fields grouped by geometry -> per group: geometry, stacked values (k, nx, ny, nz, 3), the flights
         # (rows) in it and each row's index into the stack; built once, used at every step
-        self._groups: list[tuple[WindGrid, np.ndarray, np.ndarray, np.ndarray]] = []
-        if len(self.grids) > 1:
+        self._groups: list[tuple[WindGrid, NDArray[np.float64], NDArray[np.intp], NDArray[np.int_]]] = []
+        if len(self.grids) > 1 and self.flight_field is not None:
             geometries: list[list[int]] = []
             for f, g in enumerate(self.grids):
                 same = [m for m in geometries if _same_geometry(self.grids[m[0]], g)]
@@ -355,7 +363,7 @@ class GriddedMeanWind:
                 values = np.stack([self.grids[f].velocity_mps for f in fields])
                 self._groups.append((self.grids[fields[0]], values, rows, stack_index[self.flight_field[rows]]))
 
-    def inside(self, points: np.ndarray) -> np.ndarray:
+    def inside(self, points: ArrayLike) -> NDArray[np.bool_]:
         """(n,) bool: the rows of ship-frame ``points`` (n, 3) m :meth:`velocity` answers for (everywhere with
         ``clamp``); with several fields row i is tested in flight i's."""
         points = np.asarray(points, dtype=float)
@@ -369,9 +377,9 @@ class GriddedMeanWind:
                 out[rows] = inside(geometry, points[rows])
         return out
 
-    def velocity(self, points: np.ndarray, t: float = 0.0) -> np.ndarray:
+    def velocity(self, points: NDArray[np.float64], t: float = 0.0) -> NDArray[np.float64]:
         """Mean wind (n, 3) m/s at ship-frame points (n, 3) m (row i = flight i with several fields)."""
-        if not self._groups:
+        if not self._groups or self.flight_field is None:
             return interpolate(self.grids[0], points, self.method, self.idw_power, self.clamp)
         points = np.asarray(points, dtype=float)
         if points.shape != (self.flight_field.size, 3):

@@ -12,8 +12,9 @@ runs over its own gusts, as for a flight alone).
 from __future__ import annotations
 
 import numpy as np
+from numpy.typing import ArrayLike, NDArray
 
-from wrp_eval.streams import flight_generators
+from wrp_eval.streams import FlightRngs, flight_generators
 
 
 class OneMinusCosineGusts:
@@ -23,8 +24,8 @@ class OneMinusCosineGusts:
     start_s, azimuth_rad (n_flights, g): onsets (s, ascending, padded with inf = never) and azimuths (rad).
     """
 
-    def __init__(self, n_flights: int, rngs, horizon_s: float, rate_per_min: float, amplitude_m_s: float,
-                 duration_s: float, mean_azimuth_rad=0.0, direction_spread_deg: float = 30.0):
+    def __init__(self, n_flights: int, rngs: FlightRngs, horizon_s: float, rate_per_min: float, amplitude_m_s: float,
+                 duration_s: float, mean_azimuth_rad: ArrayLike = 0.0, direction_spread_deg: float = 30.0) -> None:
         rngs = flight_generators(rngs, n_flights)
         if duration_s <= 0 or horizon_s <= 0 or rate_per_min < 0:
             raise ValueError("gust duration and horizon must be > 0 and the rate >= 0")
@@ -45,7 +46,7 @@ class OneMinusCosineGusts:
             self.start_s[i, :len(s)] = s
             self.azimuth_rad[i, :len(a)] = a
 
-    def velocity(self, points: np.ndarray, t: float) -> np.ndarray:
+    def velocity(self, points: NDArray[np.float64], t: float) -> NDArray[np.float64]:
         """Sum of the gusts active at time t, (n_flights, 3) m/s in the world frame."""
         phase = (t - self.start_s) / self.duration_s              # (n, g)
         active = (phase >= 0.0) & (phase <= 1.0)

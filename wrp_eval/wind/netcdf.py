@@ -27,12 +27,15 @@ The MM5 v3 binary output format (MMOUT_DOMAINx) is NOT read; convert it first.
 
 from __future__ import annotations
 
+from collections.abc import Sequence
 from dataclasses import dataclass
 from datetime import datetime
 from pathlib import Path
+from typing import cast
 
 import numpy as np
 import xarray as xr
+from numpy.typing import NDArray
 
 from wrp_eval.errors import InputError
 from wrp_eval.frames import (
@@ -81,7 +84,10 @@ class NetcdfLayout:
 
     def required(self) -> list[str]:
         names = [self.u, self.v, self.w, self.terrain, self.u10, self.v10, self.lat, self.lon, self.times]
-        names += list(self.geopotential) if self.geopotential else [self.height]
+        if self.geopotential:
+            names += list(self.geopotential)
+        elif self.height is not None:
+            names.append(self.height)
         return names
 
 
@@ -105,7 +111,7 @@ MM5_LAYOUT = NetcdfLayout(
 )
 
 
-def _open(path: Path):
+def _open(path: Path) -> xr.Dataset:
     if not path.is_file():
         raise InputError(path, "no such file")
     try:
@@ -124,7 +130,7 @@ def _parse_time(text: str, source: str) -> datetime:
     raise InputError(source, f"cannot parse time {text!r} (use e.g. 2005-08-28T15:00:00)")
 
 
-def _file_times(ds, layout: NetcdfLayout, path: Path) -> list[datetime]:
+def _file_times(ds: xr.Dataset, layout: NetcdfLayout, path: Path) -> list[datetime]:
     raw = np.asarray(ds[layout.times].values)
     if raw.ndim == 2:  # a char array (Time, DateStrLen)
         raw = np.array([b"".join(row) for row in raw.astype("S1")])
@@ -155,8 +161,8 @@ def select_times(file_times: list[datetime], time: str | None, mode: str,
     return [(lo, 1.0 - frac), (hi, frac)]
 
 
-def _checked(ds, name: str, dims: tuple[str, ...], sizes: dict[str, int], path: Path,
-             optional_time: bool = False) -> np.ndarray:
+def _checked(ds: xr.Dataset, name: str, dims: tuple[str, ...], sizes: dict[str, int], path: Path,
+             optional_time: bool = False) -> NDArray[np.float64]:
     """The variable's values with dims validated, NaN/Inf refused, any *_stag dim destaggered."""
     if name not in ds.variables:
         raise InputError(path, f"missing variable {name!r}")
@@ -191,7 +197,7 @@ def _checked(ds, name: str, dims: tuple[str, ...], sizes: dict[str, int], path: 
 
 def read_mean_wind(path: str | Path, lat_deg: float, lon_deg: float, heading_deg: float,
                    time: str | None = None, time_interpolation: str = "nearest",
-                   layout: NetcdfLayout = WRF_LAYOUT, fill_heights_m=DEFAULT_FILL_HEIGHTS_M,
+                   layout: NetcdfLayout = WRF_LAYOUT, fill_heights_m: Sequence[float] = DEFAULT_FILL_HEIGHTS_M,
                    charnock_alpha: float = 0.011) -> WindGrid:
     """Read a WRF (or converted MM5) file into a :class:`WindGrid` around a ship.
 
@@ -209,7 +215,7 @@ def read_mean_wind(path: str | Path, lat_deg: float, lon_deg: float, heading_deg
     heights, u, v, w = _bottom_up(z_asl - terrain[..., None], u, v, w, path)  # height above the ground
     x_axis, y_axis, grid_yaw = _ship_placement(lat, lon, lat_deg, lon_deg, heading_deg, path)
     # grid-relative -> earth: per-column rotation of the grid x axis from east
-    if f.cos_alpha is not None:
+    if f.cos_alpha is not None and f.sin_alpha is not None:
         cos_a, sin_a = f.cos_alpha.T, f.sin_alpha.T
     else:
         dlat = np.gradient(lat, axis=0)
@@ -218,7 +224,7 @@ def read_mean_wind(path: str | Path, lat_deg: float, lon_deg: float, heading_deg
         cos_a, sin_a = np.cos(alpha), np.sin(alpha)
     heading = np.deg2rad(heading_deg)
 
-    def to_ship(gu, gv):
+    def to_ship(gu: NDArray[np.float64], gv: NDArray[np.float64]) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
         e = gu * cos_a[..., None] - gv * sin_a[..., None] if gu.ndim == 4 else gu * cos_a - gv * sin_a
         n = gu * sin_a[..., None] + gv * cos_a[..., None] if gu.ndim == 4 else gu * sin_a + gv * cos_a
         return enu_to_ship(e, n, heading)
@@ -241,8 +247,9 @@ def read_mean_wind(path: str | Path, lat_deg: float, lon_deg: float, heading_deg
         hgt_list.append(hgt)
         vel_list.append(vel)
         weights.append(weight)
-    heights_out = sum(wt * h for wt, h in zip(weights, hgt_list, strict=True))
-    velocity_out = sum(wt * v for wt, v in zip(weights, vel_list, strict=True))
+    # one or two picks, so each sum is an array
+    heights_out = cast(NDArray[np.float64], sum(wt * h for wt, h in zip(weights, hgt_list, strict=True)))
+    velocity_out = cast(NDArray[np.float64], sum(wt * v for wt, v in zip(weights, vel_list, strict=True)))
     return WindGrid(x_axis, y_axis, heights_out, velocity_out, float(grid_yaw),
                     source=f"{path} ({layout.name})")
 
@@ -253,18 +260,18 @@ class _Fields:
     terrain, u10, v10 (t or 1, j, i); lat, lon (j, i) deg; cos_alpha, sin_alpha (j, i) or None; the time picks
     (index, weight) of :func:`select_times`."""
 
-    u: np.ndarray
-    v: np.ndarray
-    w: np.ndarray
-    z_asl: np.ndarray
-    terrain: np.ndarray
-    u10: np.ndarray
-    v10: np.ndarray
-    lat: np.ndarray
-    lon: np.ndarray
-    cos_alpha: np.ndarray | None
-    sin_alpha: np.ndarray | None
-    picks: list
+    u: NDArray[np.float64]
+    v: NDArray[np.float64]
+    w: NDArray[np.float64]
+    z_asl: NDArray[np.float64]
+    terrain: NDArray[np.float64]
+    u10: NDArray[np.float64]
+    v10: NDArray[np.float64]
+    lat: NDArray[np.float64]
+    lon: NDArray[np.float64]
+    cos_alpha: NDArray[np.float64] | None
+    sin_alpha: NDArray[np.float64] | None
+    picks: list[tuple[int, float]]
 
 
 def _read_fields(path: Path, layout: NetcdfLayout, time: str | None, time_interpolation: str) -> _Fields:
@@ -290,8 +297,10 @@ def _read_fields(path: Path, layout: NetcdfLayout, time: str | None, time_interp
             ph = _checked(ds, layout.geopotential[0], d3, sizes, path)
             phb = _checked(ds, layout.geopotential[1], d3, sizes, path)
             z_asl = (ph + phb) / GRAVITY_MPS2   # destaggered above = mean of the two w-levels
-        else:
+        elif layout.height is not None:
             z_asl = _checked(ds, layout.height, d3, sizes, path)
+        else:
+            raise InputError(path, f"the {layout.name} layout names no level heights (geopotential or height)")
         terrain = _checked(ds, layout.terrain, d2, sizes, path, optional_time=True)
         u10, v10 = (_checked(ds, name, d2, sizes, path) for name in (layout.u10, layout.v10))
         lat, lon = (_checked(ds, name, d2, sizes, path, optional_time=True)[0] for name in (layout.lat, layout.lon))
@@ -311,7 +320,8 @@ def _read_fields(path: Path, layout: NetcdfLayout, time: str | None, time_interp
     return _Fields(u, v, w, z_asl, terrain, u10, v10, lat, lon, cos_a, sin_a, picks)
 
 
-def _bottom_up(heights: np.ndarray, u: np.ndarray, v: np.ndarray, w: np.ndarray, path: Path):
+def _bottom_up(heights: NDArray[np.float64], u: NDArray[np.float64], v: NDArray[np.float64], w: NDArray[np.float64],
+               path: Path) -> tuple[NDArray[np.float64], NDArray[np.float64], NDArray[np.float64], NDArray[np.float64]]:
     """The level heights above the ground (t, i, j, k) m and the winds, ordered bottom-up (MM5's sigma order is
     top-down); a column that is not strictly monotonic, or whose lowest level is not above the ground, is an
     :class:`InputError`."""
@@ -326,8 +336,8 @@ def _bottom_up(heights: np.ndarray, u: np.ndarray, v: np.ndarray, w: np.ndarray,
     return heights, u, v, w
 
 
-def _ship_placement(lat: np.ndarray, lon: np.ndarray, lat_deg: float, lon_deg: float, heading_deg: float,
-                    path: Path) -> tuple[np.ndarray, np.ndarray, float]:
+def _ship_placement(lat: NDArray[np.float64], lon: NDArray[np.float64], lat_deg: float, lon_deg: float,
+                    heading_deg: float, path: Path) -> tuple[NDArray[np.float64], NDArray[np.float64], float]:
     """(x axis (nx,) m, y axis (ny,) m, the grid x axis' angle CCW from the bow rad) of the grid of columns at
     ``lat``, ``lon`` (nx, ny) deg around the ship: its fractional index by Newton steps in a local plane
     (equirectangular about the ship: fine over a few cells; see frames)."""
@@ -335,8 +345,7 @@ def _ship_placement(lat: np.ndarray, lon: np.ndarray, lat_deg: float, lon_deg: f
     de_di, de_dj = np.gradient(east, axis=0), np.gradient(east, axis=1)
     dn_di, dn_dj = np.gradient(north, axis=0), np.gradient(north, axis=1)
     nx, ny = east.shape
-    fi = fj = None
-    ci, cj = np.unravel_index(np.argmin(east**2 + north**2), east.shape)
+    ci, cj = map(int, np.unravel_index(np.argmin(east**2 + north**2), east.shape))
     for _ in range(3):  # Newton steps on the fractional index of the ship
         jac = np.array([[de_di[ci, cj], de_dj[ci, cj]], [dn_di[ci, cj], dn_dj[ci, cj]]])
         step = np.linalg.solve(jac, -np.array([east[ci, cj], north[ci, cj]]))

@@ -11,18 +11,20 @@ from pathlib import Path
 import numpy as np
 import rerun as rr
 from matplotlib.figure import Figure
+from numpy.typing import ArrayLike, NDArray
 
 from wrp_eval.atomic import atomic_path
 from wrp_eval.recording import recording
 
 
-def save_npz_atomic(path: Path, **arrays) -> None:
+def save_npz_atomic(path: Path, **arrays: ArrayLike) -> None:
     """np.savez_compressed (no pickles), written atomically."""
     with atomic_path(path) as tmp, open(tmp, "wb") as fh:
-        np.savez_compressed(fh, **arrays)
+        np.savez_compressed(fh, **arrays)  # type: ignore[arg-type]  # mypy also matches ** to allow_pickle: bool
 
 
-def quiver_png(path: Path, x, y, z, velocity, source: str) -> None:
+def quiver_png(path: Path, x: NDArray[np.float64], y: NDArray[np.float64], z: NDArray[np.float64],
+               velocity: NDArray[np.float64], source: str) -> None:
     """Quiver plots of the mean field at its lowest, middle and top levels, as a PNG.
 
     x (nx,), y (ny,), z (nz,) m: ship-frame node axes; velocity (nx, ny, nz, 3) m/s; source: for the titles."""
@@ -51,7 +53,8 @@ def quiver_png(path: Path, x, y, z, velocity, source: str) -> None:
         fig.savefig(tmp, dpi=90, format="png")
 
 
-def log_mean_field_rerun(path: Path, points: np.ndarray, vectors: np.ndarray, fraction: float) -> None:
+def log_mean_field_rerun(path: Path, points: NDArray[np.float64], vectors: NDArray[np.float64],
+                         fraction: float) -> None:
     """Arrows (``wind/mean``) at a regular subset of the nodes into a .rrd recording (the paper's Fig. 4
     shows 20 %). points, vectors (n, 3): node positions (m) and mean wind (m/s); fraction: share drawn."""
     every = max(1, int(round(1.0 / max(fraction, 1e-6))))

@@ -71,6 +71,8 @@ def common_winds(evaluate_dir: Path, winds: int, seed: int) -> np.ndarray:
         trials = read_trials(name, folder)
         good = set(trials.trial_id[~trials.failed & np.isfinite(trials.error_m)].tolist())
         ok = good if ok is None else ok & good
+    if ok is None:
+        raise ValueError("no evaluated paths to compare (PATHS is empty)")
     ids = np.array(sorted(ok), dtype=int)
     if ids.size < winds:
         raise InputError(evaluate_dir, f"only {ids.size} winds flown by every path without failure; need {winds}")

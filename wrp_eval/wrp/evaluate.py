@@ -32,6 +32,7 @@ from __future__ import annotations
 from collections.abc import Collection
 from dataclasses import dataclass, replace
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 from matplotlib.figure import Figure
@@ -124,9 +125,10 @@ def path_summary(p: PathTrials, rng: np.random.Generator, resamples: int, confid
     completeness) the probability of meeting it; the mean views not taken; each with its CI."""
     ok = p.error_m[~p.failed & np.isfinite(p.error_m)]
     fail = p.failed.astype(float)
-    out = {"path": p.name, "trials": int(p.trial_id.size), "succeeded": int(ok.size),
-           "failure_rate": float(fail.mean()) if fail.size else float("nan"),
-           "failure_rate_ci": _ci((fail,), lambda x, axis: x.mean(axis=axis), rng, resamples, confidence)}
+    out: dict[str, Any] = {
+        "path": p.name, "trials": int(p.trial_id.size), "succeeded": int(ok.size),
+        "failure_rate": float(fail.mean()) if fail.size else float("nan"),
+        "failure_rate_ci": _ci((fail,), lambda x, axis: x.mean(axis=axis), rng, resamples, confidence)}
     for key, fn in (("mean_error_m", lambda x, axis: x.mean(axis=axis)),
                     ("std_error_m", lambda x, axis: x.std(axis=axis, ddof=1)),
                     ("p95_error_m", lambda x, axis: np.percentile(x, 95, axis=axis))):
@@ -159,13 +161,15 @@ def mission_summary(p: PathTrials, rng: np.random.Generator, resamples: int, con
     with exact CIs; expected sorties and mean mission time (battery swaps included) over the COMPLETED missions,
     with bootstrap CIs: a mission lost or sent home early ends on one short sortie, which says nothing of what
     the mission needs (NaN when none completed)."""
-    done = p.completed
+    done, sorties, mission_time_s = p.completed, p.sorties, p.mission_time_s
+    if done is None or sorties is None or mission_time_s is None:
+        raise ValueError(f"path {p.name!r}: no sorties / mission time / completed columns to summarise")
     out = {"p_completed": float(done.mean()) if done.size else float("nan"),
            "p_completed_ci": proportion_ci(int(done.sum()), int(done.size), confidence)}
-    one = done & (p.sorties == 1)
+    one = done & (sorties == 1)
     out.update(p_one_sortie=float(one.mean()) if one.size else float("nan"),
                p_one_sortie_ci=proportion_ci(int(one.sum()), int(one.size), confidence))
-    for key, values in (("expected_sorties", p.sorties), ("mean_mission_time_s", p.mission_time_s)):
+    for key, values in (("expected_sorties", sorties), ("mean_mission_time_s", mission_time_s)):
         v = values[done & np.isfinite(values)]
         out[key] = float(v.mean()) if v.size else float("nan")
         constant = v.size > 2 and np.ptp(v) == 0       # the bootstrap of a constant is that constant

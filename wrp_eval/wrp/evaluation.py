@@ -10,6 +10,7 @@ groups a path's campaign cannot give (no spec, no views-not-taken column, no sor
 from __future__ import annotations
 
 from dataclasses import asdict, dataclass, fields
+from typing import Any
 
 from wrp_eval.wrp.optimize import Table3Row
 
@@ -56,8 +57,9 @@ class PathSummary:
 
     def _groups(self) -> list[tuple[str, ...]]:
         """The key groups this row has, in the document's order."""
-        groups = [("path", "trials", "succeeded", "failure_rate", "failure_rate_ci", "mean_error_m",
-                   "mean_error_m_ci", "std_error_m", "std_error_m_ci", "p95_error_m", "p95_error_m_ci")]
+        groups: list[tuple[str, ...]] = [
+            ("path", "trials", "succeeded", "failure_rate", "failure_rate_ci", "mean_error_m", "mean_error_m_ci",
+             "std_error_m", "std_error_m_ci", "p95_error_m", "p95_error_m_ci")]
         if self.spec_error_m is not None:
             groups.append(("spec_error_m", "spec_completeness", "p_meets_spec", "p_meets_spec_ci"))
         if self.mean_views_not_taken is not None:
@@ -75,7 +77,8 @@ class PathSummary:
     @classmethod
     def from_json_dict(cls, doc: dict) -> "PathSummary":
         known = {f.name for f in fields(cls)}
-        return cls(**{k: (_interval(v) if k.endswith("_ci") else v) for k, v in doc.items() if k in known})
+        kwargs: dict[str, Any] = {k: (_interval(v) if k.endswith("_ci") else v) for k, v in doc.items() if k in known}
+        return cls(**kwargs)
 
 
 @dataclass(frozen=True)
@@ -129,8 +132,9 @@ class RobustnessVerdict:
 
     @classmethod
     def from_json_dict(cls, doc: dict) -> "RobustnessVerdict":
-        return cls(**{**{f.name: doc.get(f.name) for f in fields(cls)},
-                      "placebo_gains_m": tuple(doc["placebo_gains_m"])})
+        kwargs: dict[str, Any] = {**{f.name: doc.get(f.name) for f in fields(cls)},
+                                  "placebo_gains_m": tuple(doc["placebo_gains_m"])}
+        return cls(**kwargs)
 
 
 @dataclass(frozen=True)

@@ -16,6 +16,7 @@ from __future__ import annotations
 import json
 from dataclasses import dataclass, replace
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 import torch
@@ -103,6 +104,8 @@ def resolve_inputs(ctx: ExperimentContext, section: WrpSection, checkpoint: str 
         if trials is not None:
             if trials.n_views != len(path):
                 raise InputError(camp, f"campaign has {trials.n_views} viewpoints, the path {len(path)}")
+            if trials.deviation is None:
+                raise InputError(camp, "the trials have no flown - commanded offsets to take r_s from")
             measured = sample_radii(trials.deviation, section.sample_radius_quantile)
             ok = np.isfinite(measured) & (measured > 0)
             radius = np.where(ok, measured, section.sample_radius_m)
@@ -111,7 +114,7 @@ def resolve_inputs(ctx: ExperimentContext, section: WrpSection, checkpoint: str 
                       f"{section.sample_radius_m} m)")
         else:
             source = f"fixed {section.sample_radius_m} m (no campaign at {camp})"
-    if chol is not None:
+    if chol is not None and trials is not None:
         source += f"; neighbourhoods: the measured position-offset covariance of {trials.n_trials} trials"
     return WrpInputs(path, surrogate, camp, radius, source, chol)
 
@@ -260,7 +263,7 @@ def revert(result: WrpResult, rejected: np.ndarray, surrogate: Surrogate) -> Wrp
 
 def with_kind(section: WrpSection, kind: str | None = None, threshold_m: float | None = None) -> WrpSection:
     """``section`` with another kind and / or threshold (validated for the new values)."""
-    update = {}
+    update: dict[str, Any] = {}
     if kind is not None:
         update["kind"] = kind
     if threshold_m is not None:
@@ -323,6 +326,8 @@ def evaluate_job(ctx: ExperimentContext, out: Path | None = None, *, n_trials: i
     verdict = None
     if forecast and ev.forecast_trials > 0:
         chosen = result.recommended_path
+        if chosen is None:
+            raise RuntimeError("the evaluation recommended no path to fly in the forecast wind")
         fly("forecast", paths[chosen], forecast_config(flown, ctx.config.wind, ev.forecast_trials))
         verdict = forecast_verdict(read_trials(chosen, evaluated_campaign_dir(out, "forecast")), ev, spec,
                                    ctx.campaign_seed, ctx.config.wind)

@@ -41,6 +41,9 @@ def _ci(row: PathSummary, key: str) -> str:
 
 def speed_records(speed: float, row: PathSummary, endings: dict[str, int]) -> list[BenchRecord]:
     """The mission records of one wind speed from its path summary ``row`` and its ending counts."""
+    if (row.spec_error_m is None or row.p_completed is None or row.p_one_sortie is None or row.expected_sorties is None
+            or row.mean_mission_time_s is None or row.p_meets_spec is None or row.mean_views_not_taken is None):
+        raise ValueError(f"path summary {row.path!r} has no spec or no mission figures (sorties, views not taken)")
     tag = f"u{speed:g}"
     note = (f"quickstart path, physical design, U10 {speed:g} m/s, turbulence from the mean wind, {row.trials} "
             f"flights; endings {endings}; P(meets spec) {_ci(row, 'p_meets_spec')}, sorties "
