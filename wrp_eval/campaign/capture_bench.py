@@ -66,7 +66,7 @@ def hover_tilt_std_deg(trajectory) -> float:
 
 
 # No published hover attitude-noise figure of a GNSS-held small multicopter was found by this project's
-# reference search (issue 26): the records carry no anchor value; the anchor text says so.
+# reference search: the records carry no anchor value; the anchor text says so.
 HOVER_TILT_ANCHOR = ("none: no published hover roll/pitch noise of a GNSS-held small multicopter found; "
                      "compare with flight logs (e.g. PX4 Flight Review attitude plots)")
 

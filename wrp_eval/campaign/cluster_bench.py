@@ -1,4 +1,4 @@
-"""``wrp-eval bench --only cluster``: a campaign on a two-node Ray cluster (issue 19, item 4).
+"""``wrp-eval bench --only cluster``: a campaign on a two-node Ray cluster.
 
 Runs ``scripts/ray_two_node.sh`` (``ray start --head`` + ``ray start --address`` on this machine, the same
 campaign on the local backend and on the cluster, the worker node killed mid-campaign, a resume) and reads

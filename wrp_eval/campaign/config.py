@@ -136,7 +136,7 @@ class Perturbation(StrictModel):
     a capture comes from the flight (navigation, gimbal, wind, capture mode, ship motion); except that in a
     ``targeted_share`` of the trials a run of 1..``targeted_max_views`` consecutive viewpoints is commanded off
     the plan (Gaussian, ``targeted_position_sigma_m`` / ``targeted_yaw_sigma_deg``), so that single viewpoints
-    and short segments move on their own in the data, as the optimiser's queries do (issue 18).
+    and short segments move on their own in the data, as the optimiser's queries do.
     ``none``: commanded offsets 0, with the paper's extra disturbance of the flown offsets.
 
     design ``box``: per viewpoint (dx, dy, dz, dyaw) uniform in [-half_width, +half_width], drawn as a

@@ -142,7 +142,7 @@ class CampaignRecorder:
         self.seconds += time.perf_counter() - start
 
     def _log_capture_metrics(self, record: dict, taken: np.ndarray) -> None:
-        """Per-trial figures of the capture realism (issue 16): views taken, blur p95, sent home early."""
+        """Per-trial figures of the capture realism: views taken, blur p95, sent home early."""
         rr, rec = self.rr, self.rec
         rec.log("metrics/views_taken_fraction", rr.Scalars(float(taken.mean()) if taken.size else 0.0))
         blur = record.get("blur_px")

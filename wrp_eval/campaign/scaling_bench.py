@@ -1,4 +1,4 @@
-"""``wrp-eval bench --only scaling``: how the cost grows with the work (issue 19, item 2).
+"""``wrp-eval bench --only scaling``: how the cost grows with the work.
 
 Four curves, each point timed once on this machine, each fitted as cost ~ a x^k on log-log axes (the exponent k
 is a record; ``scaling.*_exponent``):

@@ -17,7 +17,7 @@ from wrp_eval.wind.config import WindSection
 from wrp_eval.wind.dryden import severity_w20_mps
 from wrp_eval.wind.field import TWENTY_FT_M, build_mean_wind
 
-# a preset is reported when its W20 is more than this many times the W20 of the trial's mean wind (issue 26)
+# a preset is reported when its W20 is more than this many times the W20 of the trial's mean wind
 STRESS_RATIO = 1.5
 PRESETS = ("light", "moderate", "severe")
 # trials whose mean field is built at once (each its own grid, ~1.5 MB for the synthetic default)

@@ -1,4 +1,4 @@
-"""``wrp-eval bench --only envelope``: the default envelope of the quickstart path, timed (issue 29).
+"""``wrp-eval bench --only envelope``: the default envelope of the quickstart path, timed.
 
 envelope.wall_s: the default grid (U10 0-16 m/s in 2 m/s steps x 8 directions, looks of 8 flights up to 32,
 boundary to 0.5 m/s) and the forecast cell, flown from scratch with 2 workers and the synthetic oracle; anchor:

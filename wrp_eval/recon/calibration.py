@@ -1,4 +1,4 @@
-"""Why COLMAP's error is several times the synthetic oracle's (issue 17, item 6): the synthetic reconstruction
+"""Why COLMAP's error is several times the synthetic oracle's: the synthetic reconstruction
 made under the COLMAP oracle's conditions.
 
 The two oracles do not measure the same product. The synthetic oracle models a dense reconstruction (as the

@@ -1,4 +1,4 @@
-"""What each view of a capture set covers: the per-view facts a surrogate of the error needs (issue 18, item 2).
+"""What each view of a capture set covers: the per-view facts a surrogate of the error needs.
 
 From the oracle's own observation model (:func:`wrp_eval.recon.fusion.observe_samples`, every view taken as
 registered), per view v with observation weights w_vs of the ground-truth samples s it sees:

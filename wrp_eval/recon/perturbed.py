@@ -1,4 +1,4 @@
-"""Perturbed capture sets of ONE planned path (issue 17, item 5): do the two oracles rank small, realistic
+"""Perturbed capture sets of ONE planned path: do the two oracles rank small, realistic
 capture errors of the same path alike?
 
 ``validate-oracle`` compares the oracles on capture sets that differ grossly (good, degraded, broken paths);

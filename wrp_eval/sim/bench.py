@@ -6,7 +6,7 @@ timestep, same batch, same number of rollout threads), constant hover thrust, in
 sim.closed_loop_steps_per_s: drone-steps/s of our flights (wind with the ship's air wake, drag, navigation
 estimate, gimbal, battery, wind limit, position loop, fly-through reference, photo triggers with blur and the
 ship's motion at the shutter, endings, recording between chunks) flying the bench path around the ship in
-gusty wind for the same simulated time, every default of ``sim:`` on (until issue 16 a hover was measured).
+gusty wind for the same simulated time, every default of ``sim:`` on.
 Both are the best of 3 interleaved runs (the machine is shared with other jobs).
 sim.ratio = closed / raw (target >= 0.7; issue 19: >= 0.5 at batch 64, the campaign's default, and >= 0.75 kept
 at 1,024); measured at batches 1,024 (no suffix), 64 and 32 (``_batch64``, ``_batch32``). For transparency

@@ -1,4 +1,4 @@
-"""``wrp-eval bench --only peers``: our closed-loop flights beside RotorPy 3.0.0 in one run (issue 19, item 1).
+"""``wrp-eval bench --only peers``: our closed-loop flights beside RotorPy 3.0.0 in one run.
 
 The scenario, the same for both: N quadrotors of the Phantom 4's mass and inertia (``wrp_eval.sim.vehicle``)
 hold a hover 30 m above the sea, 250 m from the ship, for ``SIM_S`` simulated seconds in Dryden turbulence of

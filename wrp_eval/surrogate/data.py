@@ -80,7 +80,7 @@ class TrialData:
 
 
 def physical_variance_share(data: TrialData) -> dict[str, float] | None:
-    """How much of the flown offsets' variance the flights made (issue 18): per component group, the summed
+    """How much of the flown offsets' variance the flights made: per component group, the summed
     variance of the wind-induced part (flown - commanded) over the summed variance of the flown offsets, over
     every trial x viewpoint taken: ``position`` (x, y, z, m^2 / m^2) and ``yaw``. None without a deviation."""
     if data.deviation is None:

@@ -1,4 +1,4 @@
-"""Per-view inputs of the surrogate beyond the four offsets (issue 18, item 2).
+"""Per-view inputs of the surrogate beyond the four offsets.
 
 The error of a path is not a function of its offsets alone: the same 1 m pushes a view off a patch only it
 covers, or along a face twenty others see. Each viewpoint i therefore carries, besides (dx, dy, dz, dyaw):

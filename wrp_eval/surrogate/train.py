@@ -378,7 +378,7 @@ def train_from_campaign(ctx: ExperimentContext, campaign_dir: str | Path | None 
     result.metrics["physical_variance_share"] = physical_variance_share(data)
     result.metrics["baseline"] = mean_offset_baseline(data, result.split, usable_rows(data, section)[0])
     if section.validation_moves > 0 and data.views is not None:
-        # the validated single-view error the optimiser's acceptance rule needs (issue 18 item 3)
+        # the validated single-view error the optimiser's acceptance rule needs
         agreement = single_view_agreement(result.surrogate, folder, n_moves=section.validation_moves,
                                           jitters=section.validation_jitters, seed=section.seed_or(ctx.run_seed),
                                           config_dir=ctx.config_dir)

@@ -10,7 +10,7 @@ wrp.iswrp_s / wrp.swrp_s: wall time of one ISWRP / SWRP optimisation of the whol
 the Table 3 columns). wrp.iswrp_full_scan_s: ISWRP with t = 0, where nothing is ever accepted and every one of
 the 49 x 1000 iterations is scored (2.45 M surrogate queries): the worst case of the latest-first scan.
 Anchors: paper Table 3, ISWRP 3.425-79.282 s, SWRP 297.169-341.547 s (Xeon Silver 4210R + RTX 3090, MATLAB).
-Targets (issue 8): ISWRP <= 1 s, SWRP <= 2 s on this 2-core CPU. wrp.iswrp_validated_s / swrp_validated_s: the
+Targets: ISWRP <= 1 s, SWRP <= 2 s on this 2-core CPU. wrp.iswrp_validated_s / swrp_validated_s: the
 same with the product's default acceptance (issue 18: validated margin, measured neighbourhoods), surrogate
 time only (the oracle confirmation is timed in wrp_metrics.json as oracle_confirm_s).
 """
@@ -49,7 +49,7 @@ def run_bench() -> list[BenchRecord]:
                                          neighbourhood_samples=16), threshold_m=threshold, e_original_m=e0,
                               sample_radius_m=radius, step_m=step)
         records.append(_timed(s, params, name, anchor, anchor_value, f"acceptance paper, {r_note}; surrogate: {what}"))
-    # the product's default (issue 18): acceptance validated, neighbourhoods from the measured covariance; the
+    # the product's default: acceptance validated, neighbourhoods from the measured covariance; the
     # margin is twice the single-view error the surrogate group validated in this process (none: the whole
     # search still runs, and nothing can be accepted)
     chol = offset_cholesky(data.deviation) if data.deviation is not None else None

@@ -1,4 +1,4 @@
-"""COLMAP's word on the evaluation's sign (issue 18, item 4): does real photogrammetry agree that a WRP is
+"""COLMAP's word on the evaluation's sign: does real photogrammetry agree that a WRP is
 better or worse than the initial path under the same wind?
 
 ``wrp-eval evaluate CONFIG --colmap-check [--winds N]`` reads a finished evaluation folder (the initial path's,

@@ -80,7 +80,7 @@ class WrpSection(StrictModel):
     stage2_batch: int = Field(8, ge=1, le=100_000, description="stage-1 survivors whose neighbourhoods are "
                               "scored per batch")
     acceptance: Literal["paper", "improve", "validated"] = Field(
-        "validated", description="validated (issue 18): move a viewpoint only to the best accepted candidate, only "
+        "validated", description="validated: move a viewpoint only to the best accepted candidate, only "
                                  "when its neighbourhood score beats the unmoved viewpoint's by twice the "
                                  "surrogate's validated single-view error, and only when the oracle confirms it; "
                                  "paper: Alg. 3 as written (the last accepted candidate is kept); improve: as "

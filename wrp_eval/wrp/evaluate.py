@@ -280,7 +280,7 @@ def summarise(paths: list[PathTrials], seed: int, resamples: int, confidence: fl
 
 
 def forecast_verdict(trials: PathTrials, ev, spec: tuple[float, float], seed: int, wind) -> ForecastVerdict:
-    """What the operator reads (issue 18 item 5): the chosen path in the forecast wind (``wind``: the config's
+    """What the operator reads: the chosen path in the forecast wind (``wind``: the config's
     ``wind:`` section), P(meets spec) with its CI, views not taken and sorties, and GO when the CI's lower bound
     reaches ``ev.go_probability`` (``ev``: the ``wrp.evaluate`` section, for its bootstrap and confidence)."""
     go_probability = ev.go_probability

@@ -1,4 +1,4 @@
-"""``wrp-eval bench --only mission``: how the quickstart mission ends as the wind rises (issue 26).
+"""``wrp-eval bench --only mission``: how the quickstart mission ends as the wind rises.
 
 For U10 = 0, 4, 8, 12, 15 m/s (turbulence from each trial's mean wind, directions uniform, 64 flights each) the
 quickstart experiment's path is flown as planned (``physical`` design) with the default settings, as a campaign

@@ -1,4 +1,4 @@
-"""Per-viewpoint risk: how much each viewpoint contributes to the spread of the mission's error (issue 18, item 5).
+"""Per-viewpoint risk: how much each viewpoint contributes to the spread of the mission's error.
 
 What spreads the error of a flown mission is mostly which views the flight did not take (the drone turned home
 on the wind limit or the battery; issue 16) and, far less, how the taken ones were placed. So, per viewpoint i:

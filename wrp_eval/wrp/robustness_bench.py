@@ -1,4 +1,4 @@
-"""``wrp-eval bench --only robustness``: does a WRP beat its placebos? (issue 18, item 4)
+"""``wrp-eval bench --only robustness``: does a WRP beat its placebos?
 
 The main job's evaluation on the quickstart config (experiments/quickstart.yaml: its campaign, surrogate, ISWRP
 and SWRP, then the initial path, both WRPs and ``wrp.evaluate.placebos`` placebo paths per WRP flown under the
