@@ -32,12 +32,8 @@ run: setup
 test: setup
 	$(BIN)/lint-imports --no-cache
 	$(BIN)/ruff check wrp_eval tests scripts
-	# mypy (~40 s of one core) runs beside the suite, whose processes leave a core idle part of the time; its
-	# report follows the suite's, and either one failing fails the target
-	$(BIN)/mypy > $(VENV)/mypy.log 2>&1 & mypy_pid=$$!; \
-	$(BIN)/python -m pytest -q -p no:cacheprovider -n $(TEST_WORKERS) --dist loadfile; tests=$$?; \
-	wait $$mypy_pid; types=$$?; cat $(VENV)/mypy.log; \
-	if [ $$tests -ne 0 ]; then exit $$tests; fi; exit $$types
+	$(BIN)/mypy
+	$(BIN)/python -m pytest -q -p no:cacheprovider -n $(TEST_WORKERS) --dist loadfile
 
 bench: setup
 	$(BIN)/wrp-eval bench --out logs/bench/
