@@ -1,14 +1,36 @@
 """report.md's sections, each from a small hand-made input (no flights): what the operator reads first, the
-verdict table, the risk map's order."""
+verdict table, the risk map's order, the run's header, the ship and path table, the campaign, the surrogate,
+the missions and the timings."""
 
 from __future__ import annotations
 
 import dataclasses
+from pathlib import Path
 
 import numpy as np
+import trimesh
 
 from wrp_eval.envelope.result import CellResult, DirectionBoundary, Envelope, ForecastWind
-from wrp_eval.report import EARTH_FRAME_WARNING, envelope_section, risk_section, robustness_section, wrp_section
+from wrp_eval.planning.path import KIND_SURFACE, KIND_TRANSITION, FlightPath
+from wrp_eval.report import (
+    EARTH_FRAME_WARNING,
+    campaign_section,
+    envelope_section,
+    header_section,
+    missions_section,
+    operator_section,
+    risk_section,
+    robustness_section,
+    ship_section,
+    surrogate_section,
+    timings_section,
+    wrp_section,
+)
+from wrp_eval.run_summary import CampaignRun, SurrogateFit
+from wrp_eval.ship.complexity import mesh_surface_complexity
+from wrp_eval.ship.particulars import ShipParticulars
+from wrp_eval.ship.proxy import build_proxy
+from wrp_eval.ship.resolve import ResolvedShip
 from wrp_eval.wrp.evaluation import EvaluationResult
 from wrp_eval.wrp.optimize import Table3Row
 from wrp_eval.wrp.risk import ViewRisk
@@ -91,3 +113,78 @@ def test_the_table3_rows_carry_ours_and_the_papers():
     lines = wrp_section({"iswrp": row, "swrp": row})
     assert lines[-2].startswith("| ISWRP | 0.3 | 10 | 4 | 12 | 0.5 | 0.0251 | 28.57 /")
     assert lines[-1].startswith("| SWRP |")
+
+
+def test_the_operator_section_gives_the_forecast_verdict_and_reads_the_older_wind_key():
+    doc = _ev(True).to_json_dict()
+    forecast = {**doc["paths"][1], "p_completed": 0.9375, "p_completed_ci": [0.7, 1.0], "p_one_sortie": 0.875,
+                "p_one_sortie_ci": [0.6, 0.98], "expected_sorties": 1.0667, "expected_sorties_ci": [1.0, 1.2],
+                "mean_mission_time_s": 363.21, "mean_mission_time_s_ci": [360.0, 366.0], "go": False,
+                "go_probability": 0.8, "wind_speed_10m_mps": 6.0, "wind_direction_deg": 270.0,
+                "summary": "NO-GO", "stress_notes": ["a stress note"]}
+    ev = EvaluationResult.from_json_dict({**doc, "forecast": forecast})
+    assert ev.forecast is not None and ev.forecast.wind_speed_10m_m_s == 6.0
+    assert "wind_speed_10m_m_s" in ev.to_json_dict()["forecast"]
+    text = "\n".join(operator_section(ev))
+    assert text.startswith("## Go / no-go: **NO-GO** (path `iswrp`)")
+    assert "In the forecast wind (6 m/s at 10 m from 270 deg" in text and "16 simulated flights" in text
+    assert "| 1 | [0.8, 1] | n/a | 0.938 | 0.875 | 1.07 | [1, 1.2] | 363.2 |" in text
+    assert "a stress note" in text and "lower 95% bound of P(meets spec) >= 0.8" in text
+    assert operator_section(_ev(True)) == []          # no forecast, no first page
+
+
+def _ship() -> ResolvedShip:
+    particulars = ShipParticulars(length_bp_m=140.0, breadth_m=20.0, depth_m=12.0, superstructure_height_m=13.0,
+                                  draft_m=6.0)
+    proxy = build_proxy(particulars, no_fly_margin_m=5.0)
+    mesh = trimesh.creation.box(extents=(140.0, 20.0, 19.0))
+    mesh.apply_translation((0.0, 0.0, 9.5))
+    return ResolvedShip(particulars, {}, proxy, mesh, "box", mesh_surface_complexity(mesh, proxy))
+
+
+def test_the_header_names_the_run_the_seed_and_the_proxy():
+    ship = _ship()
+    lines = header_section("demo", "experiments/demo.yaml", 7, ship)
+    assert lines[0] == "# wrp-eval run `demo`"
+    assert lines[2].startswith(f"Config `experiments/demo.yaml`, seed 7; ship: stylized (140 x 20 x "
+                               f"{ship.proxy.height_m:.1f} m proxy above the waterline, no-fly margin 5 m)")
+
+
+def test_the_ship_section_puts_the_paths_figures_beside_table_7():
+    ship = _ship()
+    path = FlightPath(positions=np.array([[0.0, 0.0, 0.0], [3.0, 4.0, 0.0], [3.0, 4.0, 12.0]]),
+                      yaw=np.zeros(3), pitch=np.zeros(3), face_id=np.array([0, -1, 1]),
+                      kind=np.array([KIND_SURFACE, KIND_TRANSITION, KIND_SURFACE]), sortie=np.zeros(3, dtype=int))
+    metrics = {"n_transition_views": 1, "timings": {"min_s": 1.5, "max_s": 0.25, "tsp_s": 0.5, "total_s": 2.5}}
+    lines = ship_section(ship.complexity, path, metrics)
+    assert "| per face | " + " | ".join(ship.proxy.face_names) + " |" in lines
+    assert "| viewpoints | 3 (1 transition) | 49 |" in lines
+    assert "| length (m) | 17.0 | 684.566 |" in lines              # 5 m + 12 m
+    assert "| flight time (s) | 9.4 | 159.764 |" in lines          # 17 m at 5 m/s + 3 photos x 2 s dwell
+    assert "| tour (s) | 0.5 | 25.537 (GA) |" in lines and "| planning total (s) | 2.5 | |" in lines
+
+
+def test_the_campaign_section_says_what_was_flown_and_the_flights_share_of_the_offsets():
+    campaign = CampaignRun("logs/demo/campaign", 256, 3, 120.0, None)
+    with_share = SurrogateFit(0.9, 0.0004, 0.0003, 40, {"position": 0.953, "yaw": 0.914})
+    text = "\n".join(campaign_section(campaign, "physical", with_share))
+    assert "256 trials (3 failed) in `logs/demo/campaign`; the path flown as planned (`physical` design" in text
+    assert "position 0.953, yaw 0.914" in text
+    box = "\n".join(campaign_section(campaign, "box", dataclasses.replace(with_share, physical_variance_share=None)))
+    assert "commanded offsets from the campaign's `box` perturbation design" in box and "Share of" not in box
+
+
+def test_the_surrogate_section_puts_the_held_out_figures_beside_the_papers():
+    lines = surrogate_section(SurrogateFit(0.91234, 0.00041, 0.0003, 400, None))
+    assert "| R^2 | 0.912 | 0.98 |" in lines and "| RMSE (m) | 0.00041 | 0.16 (on errors of ~3 m) |" in lines
+    assert "| trials | 400 | 300 experiments in all |" in lines
+
+
+def test_the_missions_and_timings_sections_list_files_relative_to_the_run():
+    out = Path("/runs/demo")
+    missions = missions_section({"initial": [str(out / "missions/initial.plan"), str(out / "missions/initial.kmz")]},
+                                out)
+    assert missions[-1] == "- initial: `missions/initial.plan`, `missions/initial.kmz`"
+    timings = timings_section({"plan": 0.42, "campaign": 61.26}, out)
+    assert "| plan | 0.4 |" in timings and "| campaign | 61.3 |" in timings
+    assert "Recording: `rerun /runs/demo/run.rrd`" in timings

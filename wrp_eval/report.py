@@ -135,7 +135,7 @@ def operator_section(ev: EvaluationResult) -> list[str]:
     return [
         f"## Go / no-go: **{'GO' if fc.go else 'NO-GO'}** (path `{row.path}`)",
         "",
-        f"In the forecast wind ({fc.wind_speed_10m_mps:g} m/s at 10 m from {fc.wind_direction_deg:g} deg, "
+        f"In the forecast wind ({fc.wind_speed_10m_m_s:g} m/s at 10 m from {fc.wind_direction_deg:g} deg, "
         f"turbulence as the campaign draws it), {row.trials} simulated flights of the path to fly:",
         "",
         "| P(meets spec) | CI | views not taken (mean) | P(completed) | P(one sortie) | expected sorties | CI | "

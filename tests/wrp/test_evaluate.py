@@ -184,7 +184,7 @@ def test_forecast_verdict_goes_only_when_the_ci_clears_the_bar():
     ev = EvaluateSection(go_probability=0.8, bootstrap=500)
     v = forecast_verdict(good, ev, (0.03, 0.95), 0, wind)
     assert v.row.p_meets_spec == pytest.approx(0.95) and v.row.p_meets_spec_ci[0] >= 0.8 and v.go
-    assert "GO" in v.summary and v.wind_speed_10m_mps == 7.0 and v.row.expected_sorties == 1.0
+    assert "GO" in v.summary and v.wind_speed_10m_m_s == 7.0 and v.row.expected_sorties == 1.0
     marginal = PathTrials("initial", np.arange(60), np.r_[np.full(50, 0.02), np.full(10, 0.05)],
                           np.zeros(60, bool), np.full(60, 0.99), np.zeros(60), 40)
     m = forecast_verdict(marginal, ev, (0.03, 0.95), 0, wind)

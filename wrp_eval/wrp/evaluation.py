@@ -167,14 +167,14 @@ class ForecastVerdict:
     row: PathSummary
     go: bool
     go_probability: float
-    wind_speed_10m_mps: float
+    wind_speed_10m_m_s: float
     wind_direction_deg: float
     summary: str
     stress_notes: tuple[str, ...] = ()
 
     def to_json_dict(self) -> dict:
         doc = {**self.row.to_json_dict(), "go": self.go, "go_probability": self.go_probability,
-               "wind_speed_10m_mps": self.wind_speed_10m_mps, "wind_direction_deg": self.wind_direction_deg,
+               "wind_speed_10m_m_s": self.wind_speed_10m_m_s, "wind_direction_deg": self.wind_direction_deg,
                "summary": self.summary}
         if self.stress_notes:
             doc["stress_notes"] = list(self.stress_notes)
@@ -182,7 +182,9 @@ class ForecastVerdict:
 
     @classmethod
     def from_json_dict(cls, doc: dict) -> "ForecastVerdict":
-        return cls(PathSummary.from_json_dict(doc), doc["go"], doc["go_probability"], doc["wind_speed_10m_mps"],
+        """The older key ``wind_speed_10m_mps`` is read as ``wind_speed_10m_m_s``."""
+        return cls(PathSummary.from_json_dict(doc), doc["go"], doc["go_probability"],
+                   doc.get("wind_speed_10m_m_s", doc.get("wind_speed_10m_mps")),
                    doc["wind_direction_deg"], doc["summary"], tuple(doc.get("stress_notes", ())))
 
 
