@@ -184,7 +184,7 @@ class ForecastVerdict:
     def from_json_dict(cls, doc: dict) -> "ForecastVerdict":
         """The older key ``wind_speed_10m_mps`` is read as ``wind_speed_10m_m_s``."""
         return cls(PathSummary.from_json_dict(doc), doc["go"], doc["go_probability"],
-                   doc.get("wind_speed_10m_m_s", doc.get("wind_speed_10m_mps")),
+                   doc["wind_speed_10m_m_s" if "wind_speed_10m_m_s" in doc else "wind_speed_10m_mps"],
                    doc["wind_direction_deg"], doc["summary"], tuple(doc.get("stress_notes", ())))
 
 
