@@ -22,8 +22,10 @@ $(STAMP): pyproject.toml scripts/system_deps.sh
 	# The CPU build of torch first, through pip: pip takes the wheel this machine keeps on disk (PIP_FIND_LINKS),
 	# uv would not look there, and a bare `torch` requirement could pull a multi-GB CUDA build.
 	$(BIN)/python -m pip install -q "torch==2.13.0"
-	# The rest through uv: the same versions as pip (compared with pip freeze), ~16 s instead of ~90 s here.
-	$(BIN)/uv pip install -q --python $(BIN)/python -e ".[test,cluster]"
+	# The rest through uv: the same versions as pip (compared with pip freeze), in less than half pip's time here.
+	# --compile-bytecode as pip does: without the .pyc files every process (PYTHONDONTWRITEBYTECODE is set on
+	# these machines) compiles the libraries it imports again, 8.2 s instead of 4.6 s for the campaign's imports.
+	$(BIN)/uv pip install -q --compile-bytecode --python $(BIN)/python -e ".[test,cluster]"
 	touch $(STAMP)
 
 run: setup
