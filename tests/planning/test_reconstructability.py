@@ -1,7 +1,12 @@
 import numpy as np
 import pytest
 
-from wrp_eval.planning.reconstructability import SlotTable, pair_reconstructability_points, set_reconstructability
+from wrp_eval.planning.reconstructability import (
+    SlotTable,
+    masked_first_columns,
+    pair_reconstructability_points,
+    set_reconstructability,
+)
 
 
 def _q_by_hand(alpha, d, d_max, theta_m):
@@ -63,3 +68,27 @@ def test_slot_table_matches_the_reference_and_cache():
         ref = set_reconstructability(points[j], normals[j], positions[seen], 80.0) if len(seen) > 1 else 0.0
         assert plain.h(active)[j] == pytest.approx(ref)
         assert cached.h(active)[j] == pytest.approx(ref, rel=1e-5)
+
+
+@pytest.mark.parametrize("rows, columns, share", [(300, 40, 0.3), (50, 60, 0.05), (200, 12, 0.9), (7, 5, 0.0),
+                                                  (7, 5, 1.0)])
+def test_masked_first_columns_is_the_stable_argsort_it_replaces(rows, columns, share):
+    mask = np.random.default_rng(rows + columns).random((rows, columns)) < share
+    for width in {1, max(int(mask.sum(axis=1).max()), 1), columns}:
+        assert np.array_equal(masked_first_columns(mask, width),
+                              np.argsort(~mask, axis=1, kind="stable")[:, :width])
+
+
+def test_the_cache_holds_every_views_q_row_and_zeros_in_padding_rows():
+    rng = np.random.default_rng(5)
+    points = rng.normal(size=(120, 3)) * 10.0
+    normals = rng.normal(size=(120, 3))
+    normals /= np.linalg.norm(normals, axis=1)[:, None]
+    positions = rng.normal(size=(25, 3)) * 30.0
+    visible = rng.random((25, 120)) < 0.3
+    cached = SlotTable.build(visible, points, normals, positions, 80.0, cache=True)
+    plain = SlotTable.build(visible, points, normals, positions, 80.0)
+    s, k = np.nonzero(plain.slot_view >= 0)
+    assert cached.cache is not None and cached.cache.dtype == np.float32
+    assert np.array_equal(cached.cache[s, k], plain.q_rows(s, k).astype(np.float32))
+    assert not cached.cache[plain.slot_view < 0].any()
