@@ -1,7 +1,7 @@
 import numpy as np
 import pytest
 
-from wrp_eval.planning.minmax import maximise, minimise, set_metrics
+from wrp_eval.planning.minmax import _importance, maximise, minimise, set_metrics
 from wrp_eval.planning.reconstructability import SlotTable, pair_reconstructability_points
 
 
@@ -82,3 +82,18 @@ def test_ours_scales_thresholds_and_radii_with_complexity(plans):
     zf = plans[("stylized", "zhou2020")].metrics["per_face"]
     assert {f["threshold"] for f in zf.values()} == {0.6}
     assert len({round(f["radius_m"], 9) for f in zf.values()}) == 1
+
+
+def test_importance_is_the_largest_inverse_h_of_the_samples_a_view_sees():
+    rng = np.random.default_rng(3)
+    visible = rng.random((30, 200)) < 0.2
+    visible[7] = False                                                    # a view that sees no sample
+    points, normals = rng.normal(size=(200, 3)), np.tile([0.0, 0.0, 1.0], (200, 1))
+    table = SlotTable.build(visible, points, normals, rng.normal(size=(30, 3)) * 20.0, 60.0)
+    h = rng.random(200) * 3.0
+    h[rng.random(200) < 0.1] = 0.0
+    for view in range(30):
+        samples, _ = table.entries(view)
+        hs = h[samples]
+        expected = float(np.max(np.where(hs > 0, 1.0 / np.maximum(hs, 1e-300), np.inf))) if samples.size else 0.0
+        assert _importance(table, h, view) == expected

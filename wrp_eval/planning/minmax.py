@@ -26,7 +26,9 @@ from dataclasses import dataclass
 from typing import Any
 
 import numpy as np
+from numpy.typing import NDArray
 
+from wrp_eval.compiled import kernel
 from wrp_eval.planning.reconstructability import SlotTable
 
 _TOL = 1e-9
@@ -44,12 +46,24 @@ class MinResult:
     threshold: np.ndarray
 
 
-def _importance(table: SlotTable, h: np.ndarray, view: int | np.integer[Any]) -> float:
-    samples, _ = table.entries(view)
-    if samples.size == 0:
+@kernel
+def _largest_inverse(h: NDArray[np.float64], view_sample: NDArray[np.int64], start: int, stop: int) -> float:
+    """max over ``view_sample[start:stop]`` of 1 / h (inf where h <= 0), 0 for an empty range: one compiled
+    call instead of five numpy calls (the minimisation asks it ~30,000 times at 330 views)."""
+    if stop <= start:
         return 0.0
-    hs = h[samples]
-    return float(np.max(np.where(hs > 0, 1.0 / np.maximum(hs, 1e-300), np.inf)))
+    largest = -np.inf
+    for i in range(start, stop):
+        value = h[view_sample[i]]
+        inverse = 1.0 / max(value, 1e-300) if value > 0 else np.inf
+        if inverse > largest:
+            largest = inverse
+    return largest
+
+
+def _importance(table: SlotTable, h: NDArray[np.float64], view: int | np.integer[Any]) -> float:
+    """max over the samples ``view`` sees of 1 / h(s) (inf where h(s) is 0; 0 when it sees none)."""
+    return float(_largest_inverse(h, table.view_sample, int(table.view_ptr[view]), int(table.view_ptr[view + 1])))
 
 
 def minimise(table: SlotTable, initial: np.ndarray, thresholds: np.ndarray) -> MinResult:
