@@ -13,11 +13,8 @@ import open3d as o3d
 
 from wrp_eval.camera import Camera, camera_rotations
 from wrp_eval.compiled import kernel
+from wrp_eval.open3d_arrays import o3d_tensor
 from wrp_eval.ship.proxy import Proxy
-
-
-def _o3d_tensor(array: np.ndarray) -> o3d.core.Tensor:
-    return o3d.core.Tensor(array)  # type: ignore[call-overload]  # open3d's stubs omit the dtype and device defaults
 
 
 class ProxyRaycaster:
@@ -26,13 +23,13 @@ class ProxyRaycaster:
     def __init__(self, proxy: Proxy):
         vertices, faces = proxy.triangles()
         self.scene = o3d.t.geometry.RaycastingScene()
-        self.scene.add_triangles(_o3d_tensor(vertices.astype(np.float32)),
-                                 _o3d_tensor(faces.astype(np.uint32)))
+        self.scene.add_triangles(o3d_tensor(vertices.astype(np.float32)),
+                                 o3d_tensor(faces.astype(np.uint32)))
 
     def first_hit(self, origins: np.ndarray, directions: np.ndarray) -> np.ndarray:
         """Distance (n,) to the first proxy hit along unit ``directions`` (inf when none)."""
         rays = np.concatenate([origins, directions], axis=1).astype(np.float32)
-        return self.scene.cast_rays(_o3d_tensor(rays))["t_hit"].numpy().astype(float)
+        return self.scene.cast_rays(o3d_tensor(rays))["t_hit"].numpy().astype(float)
 
 
 @kernel

@@ -54,6 +54,7 @@ import numpy as np
 from scipy.spatial import cKDTree
 
 from wrp_eval.compiled import kernel
+from wrp_eval.open3d_arrays import o3d_tensor
 from wrp_eval.recon.config import OracleSection
 from wrp_eval.recon.image_effects import (
     INCIDENCE_RAMP_DEG,
@@ -64,7 +65,7 @@ from wrp_eval.recon.image_effects import (
     patch_match_probability,
     pixel_noise_px,
 )
-from wrp_eval.recon.oracle import GroundTruth, Scores, align_to_ground_truth, o3d_tensor
+from wrp_eval.recon.oracle import GroundTruth, Scores, align_to_ground_truth
 from wrp_eval.sim.captures import CaptureSet
 
 OCCLUSION_OFFSET_M = 0.01    # occlusion rays start this far off the surface (no self-hits on shared edges)

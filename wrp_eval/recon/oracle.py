@@ -25,6 +25,7 @@ import trimesh
 from scipy.spatial import cKDTree
 
 from wrp_eval.errors import InputError
+from wrp_eval.open3d_arrays import o3d_tensor
 from wrp_eval.sim.captures import CaptureSet
 
 SEA_HALF_EXTENT_M = 1.0e5  # the sea plane occluder spans +-100 km around the origin
@@ -180,11 +181,6 @@ def _fibonacci_sphere(count: int) -> np.ndarray:
     r = np.sqrt(1.0 - z * z)
     phi = np.pi * (3.0 - np.sqrt(5.0)) * i
     return np.stack([r * np.cos(phi), r * np.sin(phi), z], axis=1)
-
-
-def o3d_tensor(array: np.ndarray) -> o3d.core.Tensor:
-    """``o3d.core.Tensor(array)``: a copy of ``array`` (its dtype) on the CPU."""
-    return o3d.core.Tensor(array)  # type: ignore[call-overload]  # open3d's stubs omit the dtype and device defaults
 
 
 def _tensor_mesh(vertices: np.ndarray, faces: np.ndarray) -> o3d.t.geometry.TriangleMesh:

@@ -22,7 +22,8 @@ import numpy as np
 from scipy.ndimage import convolve1d
 
 from wrp_eval.camera import Camera
-from wrp_eval.recon.oracle import GroundTruth, o3d_tensor
+from wrp_eval.open3d_arrays import o3d_tensor
+from wrp_eval.recon.oracle import GroundTruth
 from wrp_eval.sim.captures import CaptureSet
 
 SEA_RGB = np.array([0.10, 0.20, 0.30])

@@ -55,10 +55,11 @@ from scipy.sparse.csgraph import connected_components, minimum_spanning_tree
 
 from wrp_eval.camera import Camera, optical_axes
 from wrp_eval.compiled import kernel
+from wrp_eval.open3d_arrays import o3d_tensor
 from wrp_eval.recon.config import OracleSection, SyntheticOracleSection
 from wrp_eval.recon.fusion import FusedReconstruction, fuse
 from wrp_eval.recon.image_effects import blur_keypoint_fraction
-from wrp_eval.recon.oracle import GroundTruth, MeshOracle, o3d_tensor
+from wrp_eval.recon.oracle import GroundTruth, MeshOracle
 from wrp_eval.sim.captures import CaptureSet
 
 REGISTRATION_CALIBRATION_WIDTH_PX = 800  # the COLMAP renders min_registration_rays was calibrated on (README)
