@@ -164,7 +164,7 @@ def test_fly_through_segments_run_from_v0_to_v1():
     v0, v1, v_max = np.array([2.0, 0.0]), np.array([4.0, 1.0]), np.array([5.0, 5.0])
     seg = plan_segments(start, end, np.zeros(2), np.zeros(2), THROUGH, v0, v1, v_max)
     assert seg.v0.tolist() == [2.0, 0.0] and seg.v1.tolist() == [4.0, 1.0] and seg.v_max.tolist() == [5.0, 5.0]
-    expected = through_profile(seg.length, np.zeros(2), v0, v1, v_max, SEC.acceleration_m_s2)[3]
+    expected = through_profile(seg.length, np.zeros(2), v0, v1, v_max, SEC.acceleration_m_s2, THROUGH.jerk_window_s)[3]
     assert seg.duration == pytest.approx(expected)
     # the reference starts at v0 along the segment (no rest at the start) and arrives at v1
     state = FlightState.start(_targets(2, through=True))

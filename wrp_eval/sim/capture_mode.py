@@ -120,9 +120,10 @@ def trigger_planes(body: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
 
 
 @kernel
-def through_row(length: float, tau: float, v0: float, v1: float, v_max: float,
-                accel: float) -> tuple[float, float, float, float]:
-    """(s, v, a, duration) of :func:`through_profile` for one segment at one time."""
+def _through_trapezoid(length: float, tau: float, v0: float, v1: float, v_max: float,
+                       accel: float) -> tuple[float, float, float, float, float]:
+    """The trapezoid of :func:`through_profile` (no window), extended at v0 before 0 and at v1 after its end:
+    (s, v, a, S = int_0^tau s dt, duration) at time ``tau`` (any real)."""
     v_peak = np.minimum(v_max, np.sqrt(np.maximum(accel * length + 0.5 * (v0 ** 2 + v1 ** 2), 0.0)))
     v_peak = np.maximum(v_peak, np.maximum(v0, v1))
     t_acc = (v_peak - v0) / accel
@@ -131,41 +132,89 @@ def through_row(length: float, tau: float, v0: float, v1: float, v_max: float,
     s_dec = 0.5 * (v_peak + v1) * t_dec
     t_cruise = np.maximum(length - s_acc - s_dec, 0.0) / v_peak if v_peak > 1e-9 else 0.0
     duration = t_acc + t_cruise + t_dec
-    moving = tau < duration
-    tau = np.minimum(np.maximum(tau, 0.0), duration)
-    in_acc, in_cruise = tau < t_acc, tau < t_acc + t_cruise
-    t_d = tau - t_acc - t_cruise
-    if in_acc:
-        s, v = v0 * tau + 0.5 * accel * tau ** 2, v0 + accel * tau
-    elif in_cruise:
-        s, v = s_acc + v_peak * (tau - t_acc), v_peak
-    else:
-        s, v = s_acc + v_peak * t_cruise + v_peak * t_d - 0.5 * accel * t_d ** 2, v_peak - accel * t_d
-    a = 0.0
-    if moving:
-        a = accel if in_acc and t_acc > 0 else (0.0 if in_cruise else (-accel if t_dec > 0 else 0.0))
-    return np.minimum(s, length), v, a, duration
+    big_acc = 0.5 * v0 * t_acc ** 2 + accel * t_acc ** 3 / 6.0
+    s_cruise_end = s_acc + v_peak * t_cruise
+    big_cruise_end = big_acc + s_acc * t_cruise + 0.5 * v_peak * t_cruise ** 2
+    s_end = s_cruise_end + v_peak * t_dec - 0.5 * accel * t_dec ** 2
+    big_end = big_cruise_end + s_cruise_end * t_dec + 0.5 * v_peak * t_dec ** 2 - accel * t_dec ** 3 / 6.0
+    if tau < 0.0:
+        return v0 * tau, v0, 0.0, 0.5 * v0 * tau ** 2, duration
+    if tau < t_acc:
+        return (v0 * tau + 0.5 * accel * tau ** 2, v0 + accel * tau, accel,
+                0.5 * v0 * tau ** 2 + accel * tau ** 3 / 6.0, duration)
+    if tau < t_acc + t_cruise:
+        t_c = tau - t_acc
+        return s_acc + v_peak * t_c, v_peak, 0.0, big_acc + s_acc * t_c + 0.5 * v_peak * t_c ** 2, duration
+    if tau > duration:
+        t_e = tau - duration
+        return s_end + v1 * t_e, v1, 0.0, big_end + s_end * t_e + 0.5 * v1 * t_e ** 2, duration
+    t_d = tau - t_acc - t_cruise          # also at the end and for a NaN time (then every output is NaN)
+    return (s_cruise_end + v_peak * t_d - 0.5 * accel * t_d ** 2, v_peak - accel * t_d, -accel,
+            big_cruise_end + s_cruise_end * t_d + 0.5 * v_peak * t_d ** 2 - accel * t_d ** 3 / 6.0, duration)
+
+
+@kernel
+def through_window(length: float, v0: float, v1: float, accel: float, window_s: float) -> float:
+    """The jerk window (s) a fly-through segment can take: ``window_s``, or less where the leg is too short for
+    it at its end speeds (the window adds (v0 + v1) T / 2 to the distance the trapezoid covers, and the
+    trapezoid over what is left must still reach v1: 2 a (L - (v0 + v1) T / 2) >= |v1^2 - v0^2|)."""
+    if window_s <= 0.0 or v0 + v1 <= 0.0:
+        return np.maximum(window_s, 0.0)
+    room = np.maximum(2.0 * accel * length - np.abs(v1 ** 2 - v0 ** 2), 0.0) / (accel * (v0 + v1))
+    window: float = np.minimum(window_s, room)
+    return window
+
+
+@kernel
+def through_row(length: float, tau: float, v0: float, v1: float, v_max: float,
+                accel: float, window_s: float = 0.0) -> tuple[float, float, float, float]:
+    """(s, v, a, duration) of :func:`through_profile` for one segment at one time."""
+    window = through_window(length, v0, v1, accel, window_s)
+    if window <= 1e-9:
+        _, _, _, _, duration = _through_trapezoid(length, 0.0, v0, v1, v_max, accel)
+        s, v, a, _, _ = _through_trapezoid(length, np.minimum(np.maximum(tau, 0.0), duration), v0, v1, v_max, accel)
+        return np.minimum(s, length), v, a if tau < duration else 0.0, duration
+    # the trapezoid over the length the window leaves, averaged over [tau - T, tau] (exact, from S = int s),
+    # shifted by v0 T / 2 so that the segment starts at its viewpoint
+    inner = length - 0.5 * (v0 + v1) * window
+    _, _, _, _, inner_duration = _through_trapezoid(inner, 0.0, v0, v1, v_max, accel)
+    duration = inner_duration + window
+    if tau >= duration:
+        return length, v1, 0.0, duration
+    tau = np.maximum(tau, 0.0)
+    s1, w1, _, big1, _ = _through_trapezoid(inner, tau, v0, v1, v_max, accel)
+    s0, w0, _, big0, _ = _through_trapezoid(inner, tau - window, v0, v1, v_max, accel)
+    s = (big1 - big0) / window + 0.5 * v0 * window
+    return np.minimum(s, length), (s1 - s0) / window, (w1 - w0) / window, duration
 
 
 @kernel
 def _through_rows(length: NDArray[np.float64], tau: NDArray[np.float64], v0: NDArray[np.float64],
-                  v1: NDArray[np.float64], v_max: NDArray[np.float64], accel: float) -> NDArray[np.float64]:
+                  v1: NDArray[np.float64], v_max: NDArray[np.float64], accel: float,
+                  window_s: float) -> NDArray[np.float64]:
     out = np.empty((4, length.size))
     for row in range(length.size):
         out[0, row], out[1, row], out[2, row], out[3, row] = through_row(length[row], tau[row], v0[row], v1[row],
-                                                                         v_max[row], accel)
+                                                                         v_max[row], accel, window_s)
     return out
 
 
 def through_profile(length: ArrayLike, tau: ArrayLike, v0: ArrayLike, v1: ArrayLike, v_max: ArrayLike,
-                    accel: float) -> tuple[Any, ...]:
-    """Trapezoid from speed v0 to v1 over ``length`` (each (n,)) with acceleration ``accel`` and cruise at most
+                    accel: float, window_s: float = 0.0) -> tuple[Any, ...]:
+    """Speed profile from v0 to v1 over ``length`` (each (n,)) with acceleration ``accel`` and cruise at most
     ``v_max``: (distance s, speed v, acceleration a, duration) (n,) at time ``tau`` (n,) s. The end speeds
     must be reachable (:func:`vertex_speeds` makes them so). After the duration: at the end, at speed v1.
-    ``accel``: a number (m/s^2); the others broadcast."""
+    ``accel``: a number (m/s^2); the others broadcast.
+
+    ``window_s`` T > 0 (the jerk window a / j of :class:`wrp_eval.sim.phases.Profile`): the trapezoid over
+    L - (v0 + v1) T / 2, averaged over a moving window of T, so the acceleration ramps from 0 at the segment's
+    start to 0 at its end (jerk at most a / T; PX4 limits its auto-mode jerk, MPC_JERK_AUTO): a corner is then
+    a step in the velocity's direction only, not also in the acceleration. The segment lasts T longer and
+    still covers L from v0 to v1; where the leg is too short for T at its end speeds the window shrinks
+    (:func:`through_window`). T = 0: the plain trapezoid, the acceleration stepping at the viewpoints."""
     arrays = np.broadcast_arrays(*(np.asarray(x, dtype=float) for x in (length, tau, v0, v1, v_max)))
     length, tau, v0, v1, v_max = (np.ascontiguousarray(x).reshape(-1) for x in arrays)
-    s, v, a, duration = _through_rows(length, tau, v0, v1, v_max, float(accel))
+    s, v, a, duration = _through_rows(length, tau, v0, v1, v_max, float(accel), float(window_s))
     return tuple(x.reshape(arrays[0].shape)[()] for x in (s, v, a, duration))     # [()]: a number for numbers
 
 

@@ -143,7 +143,8 @@ class Profile:
     def along(self, seg: Segment, tau: np.ndarray) -> tuple[Any, ...]:
         """(s, v, a, duration) (n,) on the segments ``seg`` at ``tau`` (n,) s, in this profile's mode."""
         if self.through:
-            return through_profile(seg.length, tau, seg.v0, seg.v1, seg.v_max, self.acceleration_m_s2)
+            return through_profile(seg.length, tau, seg.v0, seg.v1, seg.v_max, self.acceleration_m_s2,
+                                   self.jerk_window_s)
         return self.at(seg.length, tau)
 
 
@@ -192,7 +193,7 @@ def _reference_rows(transit: NDArray[np.bool_], phase_time: NDArray[np.float64],
     yaw, dist2, held = np.empty(n), np.empty(n), np.zeros(n, np.bool_)
     for row in range(n):
         if through:
-            s, v, a, _ = through_row(length[row], phase_time[row], v0[row], v1[row], v_max[row], a_max)
+            s, v, a, _ = through_row(length[row], phase_time[row], v0[row], v1[row], v_max[row], a_max, t_jerk)
         else:
             s, v, a, _ = profile_row(length[row], phase_time[row], cruise_m_s, a_max, t_jerk)
         d2 = 0.0
