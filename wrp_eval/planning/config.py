@@ -45,9 +45,9 @@ class PlanningSection(StrictModel):
     max_rounds: int = Field(2, ge=0, description="maximisation passes over the view set")
     # --- tour
     tour_solver: Literal["multistart", "ortools", "ga"] = Field(
-        "multistart", description="multistart: OR-Tools descent + random starts, 2-opt/Or-opt, iterated local "
-        "search (deterministic); ortools: OR-Tools guided local search for tour_time_limit_s; ga: the "
-        "paper's genetic algorithm")
+        "multistart", description="multistart: nearest-neighbour starts from view 0 and 16 random views, "
+        "2-opt/Or-opt, iterated local search (deterministic); ortools: OR-Tools guided local search for "
+        "tour_time_limit_s; ga: the paper's genetic algorithm")
     tour_time_limit_s: float = Field(0.3, gt=0, description="time limit of the ortools solver, s "
                                      "(its result depends on the machine's load)")
     ga_population: int = Field(120, ge=4)
