@@ -160,6 +160,20 @@ def _angle_rows(rot: NDArray[np.float64]) -> tuple[NDArray[np.float64], NDArray[
     return yaw, pitch, roll
 
 
+# planned pitch (rad, absolute) from which the optical axis counts as vertical: there its heading (the yaw of
+# camera_angles) turns by up to 180 deg for a tilt of a fraction of a degree past the vertical
+VERTICAL_AXIS_PITCH_RAD = float(np.radians(85.0))
+
+
+def image_heading(rotations: ArrayLike) -> NDArray[np.float64]:
+    """Heading (n,) rad of the image's x axis (the camera's right, column 0 of the world-from-camera
+    ``rotations`` (n, 3, 3)) over the horizontal plane: for a level gimbal (roll 0) yaw - pi/2 at every pitch,
+    and unlike the optical axis's heading continuous through nadir and zenith."""
+    rot = np.asarray(rotations, dtype=float)
+    heading: NDArray[np.float64] = np.arctan2(rot[..., 1, 0], rot[..., 0, 0])
+    return heading
+
+
 def camera_angles(rotations: ArrayLike) -> tuple[NDArray[np.float64], NDArray[np.float64], NDArray[np.float64]]:
     """Inverse of :func:`camera_rotations`: world-from-camera rotations (n, 3, 3) -> yaw, pitch, roll (n,) rad.
 

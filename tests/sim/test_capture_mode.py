@@ -10,6 +10,7 @@ from wrp_eval.sim.capture_mode import (
     CaptureSection,
     shutter_offset,
     through_profile,
+    through_window,
     vertex_speeds,
 )
 from wrp_eval.sim.phases import YAW_RATE_REF_RAD_S, reference_profile
@@ -18,6 +19,51 @@ A = 2.5      # m/s^2, the default reference acceleration
 
 
 # -- through_profile ---------------------------------------------------------------------------------------
+T_JERK = A / 4.0    # s, the jerk window of the default sim section (a / MPC_JERK_AUTO)
+
+
+@pytest.mark.parametrize("length,v0,v1,v_max", [
+    (9.0, 0.0, 0.23, 5.0),       # from rest into a sharp corner
+    (6.0, 0.23, 1.4, 5.0),       # corner to corner
+    (30.0, 3.0, 3.0, 5.0),       # accelerate, cruise, decelerate
+    (1.0, 2.0, 2.0, 5.0),        # short: the window shrinks
+])
+def test_the_windowed_profile_is_the_box_average_with_zero_acceleration_at_both_ends(length, v0, v1, v_max):
+    dt = 1e-4
+    tau = np.arange(0.0, 20.0, dt)
+    window = through_window(length, v0, v1, A, T_JERK)
+    s, v, a, duration = through_profile(length, tau, v0, v1, v_max, A, T_JERK)
+    end = float(duration[0])
+    inside = tau <= end
+    # from the viewpoint at v0 with no acceleration to the next at v1 with none, covering the leg exactly
+    assert (s[0], v[0], a[0]) == pytest.approx((0.0, v0, 0.0), abs=1e-9)
+    last = through_profile(length, end, v0, v1, v_max, A, T_JERK)
+    assert last[:3] == pytest.approx((length, v1, 0.0), abs=1e-9)
+    assert np.all(np.diff(s[inside]) >= -1e-12) and v[inside].max() <= v_max + 1e-9
+    # one trajectory: s' = v, v' = a; the acceleration within +-a, the jerk within 2 a / T
+    np.testing.assert_allclose(np.gradient(s[inside], dt)[1:-1], v[inside][1:-1], atol=1e-6)
+    np.testing.assert_allclose(np.gradient(v[inside], dt)[1:-1], a[inside][1:-1], atol=2e-3)
+    assert np.abs(a).max() <= A + 1e-9
+    assert np.abs(np.diff(a[inside])).max() / dt <= 2.0 * A / window * (1.0 + 1e-3)
+    # the speed is the plain trapezoid over the leg less (v0 + v1) T / 2, averaged over the last T
+    inner = length - 0.5 * (v0 + v1) * window
+    grid = np.arange(-window, end, dt)
+    raw_v = through_profile(inner, np.maximum(grid, 0.0), v0, v1, v_max, A)[1]
+    raw_v = np.where(grid < 0.0, v0, raw_v)
+    k = int(round(window / dt))
+    box = np.convolve(raw_v, np.ones(k) / k, mode="valid")[1:]         # box[j]: the mean over [tau_j - T, tau_j]
+    n = min(len(box), int(inside.sum())) - 2
+    np.testing.assert_allclose(v[:n], box[:n], atol=2e-3)
+
+
+def test_the_window_shrinks_on_a_leg_too_short_for_it():
+    assert through_window(30.0, 3.0, 3.0, A, T_JERK) == T_JERK
+    assert 0.0 < through_window(1.5, 3.0, 3.0, A, T_JERK) < T_JERK
+    assert through_window(1.5, 3.0, 3.0, A, 0.0) == 0.0
+    # end speeds that only just fit the leg leave no room for a window
+    assert through_window(3.0, 0.0, np.sqrt(2 * A * 3.0), A, T_JERK) == pytest.approx(0.0, abs=1e-12)
+
+
 @pytest.mark.parametrize("length,v0,v1,v_max", [
     (10.0, 2.0, 1.0, 5.0),       # accelerate, cruise, decelerate
     (2.0, 1.0, 1.5, 5.0),        # too short for the cruise speed: a triangle
@@ -174,10 +220,11 @@ def test_the_capture_section_rejects_bad_values():
 
 # -- in flight: no photo during a heading change faster than the mission commands ------------------------------
 # The tolerance (deg/s) on the camera's heading rate at the shutter over the faster of the two legs' commanded
-# rates (dyaw / leg time) around the view: the reference still starts each leg with a step in acceleration (no
-# jerk limit in fly-through), a tilt of ~10 deg in 0.2 s that swings the heading by 1-2 deg; measured up to
-# 9 deg/s on this path. Before the corner velocity-step cap (CORNER_STEP_M_S), corners taken at the arc speed
-# swung it by up to 43 deg/s at the shutter where the mission commands none.
+# rates (dyaw / leg time) around the view: the reference still turns its velocity in one step at a corner
+# (capped at CORNER_STEP_M_S; the acceleration is jerk-limited to 0 there), a tilt of 10-20 deg that swings the
+# airframe's heading by 1-3 deg; measured up to 6.7 deg/s on this path. Before the jerk window the acceleration
+# stepped too (from braking to accelerating: 33 deg of tilt at a 125 deg corner, 12.8 deg/s); before the corner
+# velocity-step cap, corners taken at the arc speed swung it by up to 43 deg/s where the mission commands none.
 RATE_TOLERANCE_DEG_S = 12.0
 
 

@@ -9,12 +9,14 @@ the viewpoint (centripetal acceleration v^2 / r = a_lat; R plays the part of PX4
 radius NAV_ACC_RAD, the distance at which a mission turns towards the next leg); slow enough on each leg
 that the heading turns at the reference yaw rate; and reachable from its neighbours with the acceleration
 limit (a forward and a backward pass, the usual velocity planning of a polyline). Between viewpoints the
-speed is a trapezoid from v0 to v1 (:func:`through_profile`); the first viewpoint is left from rest (after
-its photo, taken hovering); the reference stops at the last, whose photo is taken when the vehicle crosses its
-plane (often still slowing down) or, failing that, once it has settled there. The reference's velocity turns
-at each viewpoint without a jerk limit (a corner is a step in the velocity direction; the controller rounds
-it), so the corner speed is also kept to a velocity step of :data:`CORNER_STEP_M_S`: a larger step tilts the
-airframe hard just as the shutter opens (blur, and a heading swing no mission commands).
+speed is a trapezoid from v0 to v1 averaged over the jerk window T = a / j of the stop mode (PX4's
+MPC_JERK_AUTO; :func:`through_profile`), so the acceleration ramps to 0 at every viewpoint; the first viewpoint
+is left from rest (after its photo, taken hovering); the reference stops at the last, whose photo is taken when
+the vehicle crosses its plane (often still slowing down) or, failing that, once it has settled there. The
+reference's velocity still turns at each viewpoint in one step (a corner is a step in the velocity's
+direction, not in the acceleration; the controller rounds it), so the corner speed is also kept to a velocity
+step of :data:`CORNER_STEP_M_S`: a larger step tilts the airframe hard just as the shutter opens (blur, and a
+heading swing no mission commands).
 
 Trigger (:func:`wrp_eval.sim.phases.passing_views`): a view is shot when the estimated position crosses the
 plane through the view's target normal to the bisector of the arriving and leaving legs (a vehicle rounding
@@ -159,7 +161,8 @@ def through_window(length: float, v0: float, v1: float, accel: float, window_s: 
     it at its end speeds (the window adds (v0 + v1) T / 2 to the distance the trapezoid covers, and the
     trapezoid over what is left must still reach v1: 2 a (L - (v0 + v1) T / 2) >= |v1^2 - v0^2|)."""
     if window_s <= 0.0 or v0 + v1 <= 0.0:
-        return np.maximum(window_s, 0.0)
+        whole: float = np.maximum(window_s, 0.0)
+        return whole
     room = np.maximum(2.0 * accel * length - np.abs(v1 ** 2 - v0 ** 2), 0.0) / (accel * (v0 + v1))
     window: float = np.minimum(window_s, room)
     return window
