@@ -123,3 +123,29 @@ def test_camera_angles_round_trip():
     y3, p3, r3 = camera_angles(nadir)
     np.testing.assert_allclose(p3, -np.pi / 2)
     np.testing.assert_allclose(camera_rotations(y3, p3, r3), nadir, atol=1e-12)
+
+
+def test_a_nadir_photo_tipped_past_the_vertical_keeps_the_form_near_its_plan():
+    from scipy.spatial.transform import Rotation
+
+    from wrp_eval.camera import angles_near_plan, camera_angles, camera_rotations
+
+    # planned: heading 10 deg, straight down; flown: turned 2 deg about the vertical and tipped 0.1 deg past it.
+    # A side view (pitch -30 deg) turned 3 deg keeps its angles whatever its plan.
+    plan_yaw, plan_pitch = np.radians([10.0, 10.0]), np.radians([-90.0, -30.0])
+    nadir = Rotation.from_rotvec([0.0, 0.0, np.radians(2.0)]).as_matrix() @ camera_rotations(
+        plan_yaw[:1], plan_pitch[:1])[0] @ Rotation.from_rotvec([np.radians(-0.1), 0.0, 0.0]).as_matrix()
+    side = camera_rotations(plan_yaw[1:] + np.radians(3.0), plan_pitch[1:])[0]
+    flown = np.stack([nadir, side])
+    yaw, pitch, roll = camera_angles(flown)
+    assert abs(np.degrees(yaw[0] - plan_yaw[0])) > 170.0 and abs(np.degrees(roll[0])) > 170.0   # the other form
+    near = angles_near_plan(yaw, pitch, roll, plan_yaw, plan_pitch)
+    np.testing.assert_allclose(np.degrees(near[0][0] - plan_yaw[0]), 2.0, atol=0.05)
+    np.testing.assert_allclose(np.degrees(near[1][0]), -90.1, atol=0.01)      # tipped past nadir
+    np.testing.assert_allclose(np.degrees(near[2][0]), 0.0, atol=0.05)
+    np.testing.assert_allclose(camera_rotations(*near), flown, atol=1e-12)     # the same rotations
+    assert (near[0][1], near[1][1], near[2][1]) == (yaw[1], pitch[1], roll[1])
+    # a nadir photo genuinely turned 120 deg keeps its own form (the other would need a 180 deg roll)
+    turned = camera_rotations(plan_yaw[:1] + np.radians(120.0), np.radians([-89.9]))
+    kept = angles_near_plan(*camera_angles(turned), plan_yaw[:1], plan_pitch[:1])
+    np.testing.assert_allclose(np.degrees(kept[0] - plan_yaw[:1]), 120.0, atol=1e-9)

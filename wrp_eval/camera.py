@@ -160,18 +160,27 @@ def _angle_rows(rot: NDArray[np.float64]) -> tuple[NDArray[np.float64], NDArray[
     return yaw, pitch, roll
 
 
-# planned pitch (rad, absolute) from which the optical axis counts as vertical: there its heading (the yaw of
-# camera_angles) turns by up to 180 deg for a tilt of a fraction of a degree past the vertical
+# planned pitch (rad, absolute) from which a view's optical axis counts as vertical (nadir, zenith)
 VERTICAL_AXIS_PITCH_RAD = float(np.radians(85.0))
 
 
-def image_heading(rotations: ArrayLike) -> NDArray[np.float64]:
-    """Heading (n,) rad of the image's x axis (the camera's right, column 0 of the world-from-camera
-    ``rotations`` (n, 3, 3)) over the horizontal plane: for a level gimbal (roll 0) yaw - pi/2 at every pitch,
-    and unlike the optical axis's heading continuous through nadir and zenith."""
-    rot = np.asarray(rotations, dtype=float)
-    heading: NDArray[np.float64] = np.arctan2(rot[..., 1, 0], rot[..., 0, 0])
-    return heading
+def angles_near_plan(yaw: ArrayLike, pitch: ArrayLike, roll: ArrayLike, plan_yaw: ArrayLike,
+                     plan_pitch: ArrayLike) -> tuple[NDArray[np.float64], NDArray[np.float64], NDArray[np.float64]]:
+    """The same rotations (:func:`camera_rotations`) as (yaw, pitch, roll) (n,) rad, each in the form nearer its
+    plan (n,) rad. Every rotation has two forms, (y, p, r) and (y + pi, +-pi - p, r + pi) (+ for p > 0); where the
+    planned optical axis is vertical (:data:`VERTICAL_AXIS_PITCH_RAD`) a tilt of a fraction of a degree past the
+    vertical makes :func:`camera_angles` give the form with the yaw turned by ~180 deg and the roll by ~180 deg.
+    There the form with the smaller |yaw - plan_yaw| + |roll| is kept (the other pitch then lies just beyond
+    +-pi/2: the camera tipped past the vertical); elsewhere the angles are returned as given."""
+    yaw, pitch, roll, plan_yaw, plan_pitch = (np.array(a, dtype=float, ndmin=1) for a in
+                                              (yaw, pitch, roll, plan_yaw, plan_pitch))
+    other_yaw = np.angle(np.exp(1j * (yaw + np.pi)))
+    other_roll = np.angle(np.exp(1j * (roll + np.pi)))
+    away = np.abs(np.angle(np.exp(1j * (yaw - plan_yaw)))) + np.abs(roll)
+    other_away = np.abs(np.angle(np.exp(1j * (other_yaw - plan_yaw)))) + np.abs(other_roll)
+    flip = (np.abs(plan_pitch) >= VERTICAL_AXIS_PITCH_RAD) & (other_away < away)
+    return (np.where(flip, other_yaw, yaw), np.where(flip, np.copysign(np.pi, pitch) - pitch, pitch),
+            np.where(flip, other_roll, roll))
 
 
 def camera_angles(rotations: ArrayLike) -> tuple[NDArray[np.float64], NDArray[np.float64], NDArray[np.float64]]:

@@ -37,7 +37,7 @@ def test_the_windowed_profile_is_the_box_average_with_zero_acceleration_at_both_
     inside = tau <= end
     # from the viewpoint at v0 with no acceleration to the next at v1 with none, covering the leg exactly
     assert (s[0], v[0], a[0]) == pytest.approx((0.0, v0, 0.0), abs=1e-9)
-    last = through_profile(length, end, v0, v1, v_max, A, T_JERK)
+    last = through_profile(length, np.nextafter(end, 0.0), v0, v1, v_max, A, T_JERK)   # the profile's own end
     assert last[:3] == pytest.approx((length, v1, 0.0), abs=1e-9)
     assert np.all(np.diff(s[inside]) >= -1e-12) and v[inside].max() <= v_max + 1e-9
     # one trajectory: s' = v, v' = a; the acceleration within +-a, the jerk within 2 a / T
@@ -192,6 +192,12 @@ def test_vertex_speeds_are_reachable_with_the_acceleration_limit():
     # flights are planned independently: row 2 alone is row 2 of the batch
     alone, _ = vertex_speeds(body[2:3], yaw[2:3], 5.0, A, YAW_RATE_REF_RAD_S, 2.0)
     assert np.array_equal(alone[0], speed[2])
+    # with the jerk window every leg keeps room for the whole window (it does not have to shrink)
+    windowed, leg = vertex_speeds(body, yaw, 5.0, A, YAW_RATE_REF_RAD_S, 2.0, window_s=T_JERK)
+    assert np.all(windowed <= speed + 1e-12)
+    room = np.array([through_window(length[i, k], windowed[i, k], windowed[i, k + 1], A, T_JERK)
+                     for i in range(batch) for k in range(n - 1) if moving[i, k]])
+    assert np.all(room >= T_JERK - 1e-9)
 
 
 # -- trigger and shutter ------------------------------------------------------------------------------------
@@ -252,12 +258,13 @@ def test_no_fly_through_photo_turns_faster_than_the_mission_commands():
     assert res.taken.all()
     # the heading rate each leg commands: its heading change over its duration (phases.plan_segments)
     targets = FlightTargets.from_path(path, 1, None, PHANTOM4.camera_offset_m, np.full(len(path.yaw), np.nan))
+    window = sec.acceleration_m_s2 / sec.jerk_m_s3
     speed, leg = vertex_speeds(targets.body, targets.yaw, path.speed_m_s, sec.acceleration_m_s2, YAW_RATE_REF_RAD_S,
-                               sec.capture.corner_radius_m)
+                               sec.capture.corner_radius_m, window_s=window)
     length = np.linalg.norm(np.diff(targets.body[0], axis=0), axis=1)
     dyaw = np.abs((np.diff(targets.yaw[0]) + np.pi) % (2.0 * np.pi) - np.pi)
     duration = np.maximum(through_profile(length, np.zeros_like(length), speed[0, :-1], speed[0, 1:], leg[0],
-                                          sec.acceleration_m_s2)[3], dyaw / YAW_RATE_REF_RAD_S)
+                                          sec.acceleration_m_s2, window)[3], dyaw / YAW_RATE_REF_RAD_S)
     commanded = dyaw / duration
     allowed = np.degrees(np.maximum(np.r_[0.0, commanded], np.r_[commanded, 0.0]))
     # the airframe's heading rate (the gimbal's yaw follows it) at each shutter, from the per-chunk record

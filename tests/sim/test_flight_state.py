@@ -144,24 +144,3 @@ def test_targets_carry_the_views_depth_and_the_fly_through_speeds():
     fast = deep.flown_through(np.ones((2, 3)), np.full((2, 2), 5.0), *trigger_planes(deep.body))
     assert fast.vertex_speed.shape == (2, 3) and fast.leg_speed.tolist() == [[5.0, 5.0]] * 2
     assert deep.vertex_speed is None and np.array_equal(fast.body, deep.body)    # a new value, the old one kept
-
-
-def test_a_nadir_photo_tilted_past_the_vertical_keeps_a_small_heading_offset():
-    from scipy.spatial.transform import Rotation
-
-    from wrp_eval.camera import camera_angles, camera_rotations
-    from wrp_eval.sim.flight_state import Shot, _yaw_offsets
-
-    # planned: heading 10 deg, straight down; flown: the same camera tilted 0.1 deg past the vertical and turned
-    # 2 deg about the vertical; a side view (pitch -30 deg) turned 3 deg, for which the offset is the yaw's
-    planned_yaw, planned_pitch = np.radians([10.0, 10.0]), np.radians([-90.0, -30.0])
-    nadir = Rotation.from_rotvec([0.0, 0.0, np.radians(2.0)]).as_matrix() @ camera_rotations(
-        planned_yaw[:1], planned_pitch[:1])[0] @ Rotation.from_rotvec([np.radians(-0.1), 0.0, 0.0]).as_matrix()
-    side = camera_rotations(planned_yaw[1:] + np.radians(3.0), planned_pitch[1:])[0]
-    yaw, pitch, roll = camera_angles(np.stack([nadir, side]))
-    assert abs(np.degrees(yaw[0] - planned_yaw[0])) > 170.0         # the optical axis's heading flipped
-    blank = {name: np.zeros(2) for name in Shot._fields}
-    shot = Shot(**{**blank, "yaw": yaw, "pitch": pitch, "roll": roll})
-    offsets = np.degrees(_yaw_offsets(shot, planned_yaw, planned_pitch))
-    assert offsets[0] == pytest.approx(2.0, abs=0.05)
-    assert offsets[1] == pytest.approx(3.0, abs=1e-9)

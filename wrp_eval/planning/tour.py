@@ -330,8 +330,8 @@ def nearest_neighbour_tours(cost: np.ndarray, starts: np.ndarray) -> np.ndarray:
 
 def canonical_direction(order: np.ndarray) -> np.ndarray:
     """The closed tour ``order`` (n,) from view 0, run the way that leaves view 0 towards the lower-indexed of its
-    two tour neighbours. A closed tour has no direction of its own; this convention fixes one, so that solvers
-    that find the same cycle give the same path."""
+    two tour neighbours. A closed tour has no direction of its own; this convention fixes the multistart
+    solver's, whichever way its last local search ran."""
     order = np.roll(np.asarray(order), -int(np.flatnonzero(np.asarray(order) == 0)[0]))
     if len(order) < 3 or order[1] < order[-1]:
         return order

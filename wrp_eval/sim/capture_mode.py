@@ -77,13 +77,16 @@ class CaptureSection(StrictModel):
 
 
 def vertex_speeds(body: np.ndarray, yaw: np.ndarray, cruise_m_s: float, accel_m_s2: float,
-                  yaw_rate_rad_s: float, corner_radius_m: float,
-                  corner_step_m_s: float = CORNER_STEP_M_S) -> tuple[np.ndarray, np.ndarray]:
+                  yaw_rate_rad_s: float, corner_radius_m: float, corner_step_m_s: float = CORNER_STEP_M_S,
+                  window_s: float = 0.0) -> tuple[np.ndarray, np.ndarray]:
     """(speed at each viewpoint (batch, n_views), cruise limit of each leg (batch, n_views - 1)) m/s for the
     fly-through reference through the body targets ``body`` (batch, n_views, 3) m with headings ``yaw``
     (batch, n_views) rad. The first and last viewpoints are at rest. At a corner of turn angle theta the
     reference's velocity turns in one step of 2 v sin(theta/2), at the viewpoint, where the photo is taken:
-    v is kept to ``corner_step_m_s`` / (2 sin(theta/2)) (:data:`CORNER_STEP_M_S`)."""
+    v is kept to ``corner_step_m_s`` / (2 sin(theta/2)) (:data:`CORNER_STEP_M_S`). With the jerk window T =
+    ``window_s`` (:func:`through_profile`) a leg of length L from v0 must leave room for it: the trapezoid over
+    L - (v0 + v1) T / 2 reaches v1 when v1 <= sqrt((v0 - a T / 2)^2 + 2 a L) - a T / 2 (the usual
+    sqrt(v0^2 + 2 a L) at T = 0), in the forward pass and, mirrored, in the backward pass."""
     delta = np.diff(body, axis=1)
     length = np.linalg.norm(delta, axis=2)
     dyaw = np.abs((np.diff(yaw, axis=1) + np.pi) % (2.0 * np.pi) - np.pi)
@@ -100,10 +103,13 @@ def vertex_speeds(body: np.ndarray, yaw: np.ndarray, cruise_m_s: float, accel_m_
     speed: NDArray[np.float64] = np.zeros(body.shape[:2])
     speed[:, 1:-1] = np.minimum(np.minimum(np.nan_to_num(corner, nan=0.0, posinf=np.inf), step),
                                 np.minimum(leg_cap[:, :-1], leg_cap[:, 1:]))
+    half = 0.5 * accel_m_s2 * window_s
     for k in range(1, speed.shape[1]):             # over viewpoints (tens), every flight at once
-        speed[:, k] = np.minimum(speed[:, k], np.sqrt(speed[:, k - 1] ** 2 + 2.0 * accel_m_s2 * length[:, k - 1]))
+        reach = np.sqrt((speed[:, k - 1] - half) ** 2 + 2.0 * accel_m_s2 * length[:, k - 1]) - half
+        speed[:, k] = np.minimum(speed[:, k], reach)
     for k in range(speed.shape[1] - 2, -1, -1):
-        speed[:, k] = np.minimum(speed[:, k], np.sqrt(speed[:, k + 1] ** 2 + 2.0 * accel_m_s2 * length[:, k]))
+        reach = np.sqrt((speed[:, k + 1] - half) ** 2 + 2.0 * accel_m_s2 * length[:, k]) - half
+        speed[:, k] = np.minimum(speed[:, k], reach)
     return speed, leg_cap
 
 
@@ -150,8 +156,8 @@ def _through_trapezoid(length: float, tau: float, v0: float, v1: float, v_max: f
     if tau > duration:
         t_e = tau - duration
         return s_end + v1 * t_e, v1, 0.0, big_end + s_end * t_e + 0.5 * v1 * t_e ** 2, duration
-    t_d = tau - t_acc - t_cruise          # also at the end and for a NaN time (then every output is NaN)
-    return (s_cruise_end + v_peak * t_d - 0.5 * accel * t_d ** 2, v_peak - accel * t_d, -accel,
+    t_d = tau - t_acc - t_cruise          # also at the end, and for a NaN time (s and v NaN)
+    return (s_cruise_end + v_peak * t_d - 0.5 * accel * t_d ** 2, v_peak - accel * t_d, -accel if t_dec > 0.0 else 0.0,
             big_cruise_end + s_cruise_end * t_d + 0.5 * v_peak * t_d ** 2 - accel * t_d ** 3 / 6.0, duration)
 
 
@@ -211,7 +217,8 @@ def through_profile(length: ArrayLike, tau: ArrayLike, v0: ArrayLike, v1: ArrayL
 
     ``window_s`` T > 0 (the jerk window a / j of :class:`wrp_eval.sim.phases.Profile`): the trapezoid over
     L - (v0 + v1) T / 2, averaged over a moving window of T, so the acceleration ramps from 0 at the segment's
-    start to 0 at its end (jerk at most a / T; PX4 limits its auto-mode jerk, MPC_JERK_AUTO): a corner is then
+    start to 0 at its end (jerk at most a / T where the ramps and the cruise outlast T, 2 a / T otherwise;
+    PX4 limits its auto-mode jerk, MPC_JERK_AUTO): a corner is then
     a step in the velocity's direction only, not also in the acceleration. The segment lasts T longer and
     still covers L from v0 to v1; where the leg is too short for T at its end speeds the window shrinks
     (:func:`through_window`). T = 0: the plain trapezoid, the acceleration stepping at the viewpoints."""

@@ -400,7 +400,7 @@ class FlightSimulator:
         if not profile.through:
             return targets
         speeds = vertex_speeds(targets.body, targets.yaw, path.speed_m_s, sec.acceleration_m_s2, YAW_RATE_REF_RAD_S,
-                               sec.capture.corner_radius_m)
+                               sec.capture.corner_radius_m, window_s=profile.jerk_window_s)
         return targets.flown_through(*speeds, *trigger_planes(targets.body))
 
     def _fly(self, path: FlightPath, wind: WindModel, batch: int, view_offsets: np.ndarray | None,

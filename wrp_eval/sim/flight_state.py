@@ -13,7 +13,7 @@ from typing import NamedTuple
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from wrp_eval.camera import VERTICAL_AXIS_PITCH_RAD, Camera, camera_rotations, image_heading
+from wrp_eval.camera import Camera
 from wrp_eval.planning.path import FlightPath
 from wrp_eval.sim.captures import CaptureSet
 from wrp_eval.sim.controller import wrap_angle
@@ -201,10 +201,9 @@ class CaptureLog:
         for stored, taken in zip(self.shots, shot, strict=True):
             stored[rows, views] = taken
         self.offsets[rows, views, :3] = shot.position - targets.plan_position[views]
-        yaw_offset = _yaw_offsets(shot, targets.plan_yaw[views], targets.plan_pitch[views])
-        self.offsets[rows, views, 3] = yaw_offset
+        self.offsets[rows, views, 3] = wrap_angle(shot.yaw - targets.plan_yaw[views])
         self.estimated_offsets[rows, views, :3] = shot.estimated_position - targets.plan_position[views]
-        self.estimated_offsets[rows, views, 3] = wrap_angle(yaw_offset + (shot.estimated_yaw - shot.yaw))
+        self.estimated_offsets[rows, views, 3] = wrap_angle(shot.estimated_yaw - targets.plan_yaw[views])
         self.taken[rows, views] = True
 
     def capture_sets(self, camera: Camera) -> tuple[CaptureSet, ...]:
@@ -298,18 +297,3 @@ class FlightState:
     def failed(self) -> np.ndarray:
         """(batch,) bool: crashed or out of the simulator's time."""
         return np.isin(self.outcome, FAILURES)
-
-
-def _yaw_offsets(shot: Shot, plan_yaw: np.ndarray, plan_pitch: np.ndarray) -> np.ndarray:
-    """(m,) rad: the heading offset of each photo from its plan, the camera's yaw against the planned yaw; for a
-    view planned with its optical axis vertical (nadir, zenith: :data:`wrp_eval.camera.VERTICAL_AXIS_PITCH_RAD`)
-    the image's x axis against the planned one (:func:`wrp_eval.camera.image_heading`), because there a
-    fraction of a degree of tilt past the vertical turns the optical axis's heading by up to 180 deg while the
-    image barely turns."""
-    offset = wrap_angle(shot.yaw - plan_yaw)
-    vertical = np.abs(plan_pitch) >= VERTICAL_AXIS_PITCH_RAD
-    if vertical.any():
-        flown = camera_rotations(shot.yaw[vertical], shot.pitch[vertical], shot.roll[vertical])
-        planned = camera_rotations(plan_yaw[vertical], plan_pitch[vertical])
-        offset[vertical] = wrap_angle(image_heading(flown) - image_heading(planned))
-    return offset

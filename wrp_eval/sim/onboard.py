@@ -15,7 +15,7 @@ from typing import Any
 import numpy as np
 from scipy.spatial.transform import Rotation
 
-from wrp_eval.camera import Camera, camera_angles, camera_rotations, optical_axes
+from wrp_eval.camera import Camera, angles_near_plan, camera_angles, camera_rotations, optical_axes
 from wrp_eval.compiled import as_rows
 from wrp_eval.planning.path import FlightPath
 from wrp_eval.ship.motion import ShipMotion, ShipMotionSection, ship_motion
@@ -176,6 +176,7 @@ class Onboard:
             cam_pos, cam_rot = ship.to_ship_frame(shutter, cam_pos, cam_rot)
             swing = ship.dof(shutter)
         if turned or self.motion is not None:
-            yaw, pitch, roll = camera_angles(cam_rot)
+            yaw, pitch, roll = angles_near_plan(*camera_angles(cam_rot), targets.plan_yaw[views],
+                                                targets.plan_pitch[views])
         return Shot(shutter, cam_pos, yaw, pitch, roll, attitude.saturated[rows], estimated, estimated_yaw, blur,
                     self.battery.charge[rows], swing)
