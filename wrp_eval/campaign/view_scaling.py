@@ -1,5 +1,5 @@
 """Cost against the view count (``wrp-eval bench --only views``, also part of ``--only scaling``): the quickstart
-ship planned at decreasing ground sampling distance (``GSDS_MM``: 46 / 143 / 330 / 559 views), and per
+ship planned at decreasing ground sampling distance (``GSDS_MM``: 46 / 141 / 329 / 555 views), and per
 plan
 
 * planning: the ``ours`` planner's wall time and its stages (sampling, visibility, Min, Max, tour, transitions);
@@ -7,7 +7,7 @@ plan
   milliseconds per view;
 * campaign: ``FLIGHTS`` physical-design flights of the path at U10 ``WIND_M_S`` (directions uniform, turbulence
   from the mean wind, 2 local workers): trials per minute and each trial's flight and oracle seconds; and
-  ``LARGE_CAMPAIGN_FLIGHTS`` flights of the 143-view inspection path (a training campaign's size).
+  ``LARGE_CAMPAIGN_FLIGHTS`` flights of the ~141-view inspection path (a training campaign's size).
 
 Each curve is fitted as cost ~ a views^k on log-log axes; the exponents are records (the performance issue's
 targets: planning <= 1.3, oracle and campaign <= 1.1).
