@@ -128,10 +128,10 @@ def trigger_planes(body: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
 
 
 @kernel
-def _through_trapezoid(length: float, tau: float, v0: float, v1: float, v_max: float,
-                       accel: float) -> tuple[float, float, float, float, float]:
-    """The trapezoid of :func:`through_profile` (no window), extended at v0 before 0 and at v1 after its end:
-    (s, v, a, S = int_0^tau s dt, duration) at time ``tau`` (any real)."""
+def _through_shape(length: float, v0: float, v1: float, v_max: float,
+                   accel: float) -> tuple[float, float, float, float]:
+    """(peak speed m/s, acceleration, cruise and deceleration times s) of the trapezoid of :func:`through_profile`
+    (no window) from v0 to v1 over ``length``; it lasts their sum."""
     v_peak = np.minimum(v_max, np.sqrt(np.maximum(accel * length + 0.5 * (v0 ** 2 + v1 ** 2), 0.0)))
     v_peak = np.maximum(v_peak, np.maximum(v0, v1))
     t_acc = (v_peak - v0) / accel
@@ -139,26 +139,35 @@ def _through_trapezoid(length: float, tau: float, v0: float, v1: float, v_max: f
     s_acc = 0.5 * (v_peak + v0) * t_acc
     s_dec = 0.5 * (v_peak + v1) * t_dec
     t_cruise = np.maximum(length - s_acc - s_dec, 0.0) / v_peak if v_peak > 1e-9 else 0.0
+    return v_peak, t_acc, t_cruise, t_dec
+
+
+@kernel
+def _through_at(tau: float, v0: float, v1: float, accel: float, v_peak: float, t_acc: float, t_cruise: float,
+                t_dec: float) -> tuple[float, float, float, float]:
+    """(s, v, a, S = int_0^tau s dt) at time ``tau`` (any real) on the trapezoid of :func:`_through_shape`,
+    extended at v0 before 0 and at v1 after its end."""
     duration = t_acc + t_cruise + t_dec
+    s_acc = 0.5 * (v_peak + v0) * t_acc
     big_acc = 0.5 * v0 * t_acc ** 2 + accel * t_acc ** 3 / 6.0
     s_cruise_end = s_acc + v_peak * t_cruise
     big_cruise_end = big_acc + s_acc * t_cruise + 0.5 * v_peak * t_cruise ** 2
-    s_end = s_cruise_end + v_peak * t_dec - 0.5 * accel * t_dec ** 2
-    big_end = big_cruise_end + s_cruise_end * t_dec + 0.5 * v_peak * t_dec ** 2 - accel * t_dec ** 3 / 6.0
     if tau < 0.0:
-        return v0 * tau, v0, 0.0, 0.5 * v0 * tau ** 2, duration
+        return v0 * tau, v0, 0.0, 0.5 * v0 * tau ** 2
     if tau < t_acc:
         return (v0 * tau + 0.5 * accel * tau ** 2, v0 + accel * tau, accel,
-                0.5 * v0 * tau ** 2 + accel * tau ** 3 / 6.0, duration)
+                0.5 * v0 * tau ** 2 + accel * tau ** 3 / 6.0)
     if tau < t_acc + t_cruise:
         t_c = tau - t_acc
-        return s_acc + v_peak * t_c, v_peak, 0.0, big_acc + s_acc * t_c + 0.5 * v_peak * t_c ** 2, duration
+        return s_acc + v_peak * t_c, v_peak, 0.0, big_acc + s_acc * t_c + 0.5 * v_peak * t_c ** 2
     if tau > duration:
+        s_end = s_cruise_end + v_peak * t_dec - 0.5 * accel * t_dec ** 2
+        big_end = big_cruise_end + s_cruise_end * t_dec + 0.5 * v_peak * t_dec ** 2 - accel * t_dec ** 3 / 6.0
         t_e = tau - duration
-        return s_end + v1 * t_e, v1, 0.0, big_end + s_end * t_e + 0.5 * v1 * t_e ** 2, duration
+        return s_end + v1 * t_e, v1, 0.0, big_end + s_end * t_e + 0.5 * v1 * t_e ** 2
     t_d = tau - t_acc - t_cruise          # also at the end, and for a NaN time (s and v NaN)
     return (s_cruise_end + v_peak * t_d - 0.5 * accel * t_d ** 2, v_peak - accel * t_d, -accel if t_dec > 0.0 else 0.0,
-            big_cruise_end + s_cruise_end * t_d + 0.5 * v_peak * t_d ** 2 - accel * t_d ** 3 / 6.0, duration)
+            big_cruise_end + s_cruise_end * t_d + 0.5 * v_peak * t_d ** 2 - accel * t_d ** 3 / 6.0)
 
 
 @kernel
@@ -180,19 +189,20 @@ def through_row(length: float, tau: float, v0: float, v1: float, v_max: float,
     """(s, v, a, duration) of :func:`through_profile` for one segment at one time."""
     window = through_window(length, v0, v1, accel, window_s)
     if window <= 1e-9:
-        _, _, _, _, duration = _through_trapezoid(length, 0.0, v0, v1, v_max, accel)
-        s, v, a, _, _ = _through_trapezoid(length, np.minimum(np.maximum(tau, 0.0), duration), v0, v1, v_max, accel)
+        v_peak, t_acc, t_cruise, t_dec = _through_shape(length, v0, v1, v_max, accel)
+        duration = t_acc + t_cruise + t_dec
+        s, v, a, _ = _through_at(np.minimum(np.maximum(tau, 0.0), duration), v0, v1, accel, v_peak, t_acc, t_cruise,
+                                 t_dec)
         return np.minimum(s, length), v, a if tau < duration else 0.0, duration
     # the trapezoid over the length the window leaves, averaged over [tau - T, tau] (exact, from S = int s),
     # shifted by v0 T / 2 so that the segment starts at its viewpoint
-    inner = length - 0.5 * (v0 + v1) * window
-    _, _, _, _, inner_duration = _through_trapezoid(inner, 0.0, v0, v1, v_max, accel)
-    duration = inner_duration + window
+    v_peak, t_acc, t_cruise, t_dec = _through_shape(length - 0.5 * (v0 + v1) * window, v0, v1, v_max, accel)
+    duration = t_acc + t_cruise + t_dec + window
     if tau >= duration:
         return length, v1, 0.0, duration
     tau = np.maximum(tau, 0.0)
-    s1, w1, _, big1, _ = _through_trapezoid(inner, tau, v0, v1, v_max, accel)
-    s0, w0, _, big0, _ = _through_trapezoid(inner, tau - window, v0, v1, v_max, accel)
+    s1, w1, _, big1 = _through_at(tau, v0, v1, accel, v_peak, t_acc, t_cruise, t_dec)
+    s0, w0, _, big0 = _through_at(tau - window, v0, v1, accel, v_peak, t_acc, t_cruise, t_dec)
     s = (big1 - big0) / window + 0.5 * v0 * window
     return np.minimum(s, length), (s1 - s0) / window, (w1 - w0) / window, duration
 
