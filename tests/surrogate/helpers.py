@@ -40,7 +40,7 @@ def make_campaign(folder, n_trials: int, n_views: int, seed: int = 0, nan_trials
         records.append({"trial_id": k, "path_digest": digest, "n_views": n_views,
                         "commanded_offsets": commanded[k].tolist(), "flown_offsets": f.tolist(),
                         "error_m": float("nan") if k in failed_trials else float(error[k]),
-                        "failed": k in failed_trials})
+                        "failed": k in failed_trials, "oracle_seed": 1000 + k})
     with TrialStore(folder) as store:
         store.write_meta({"path_digest": digest, "n_views": n_views, "n_trials": n_trials,
                           "config": TrialConfig().model_dump(mode="json")}, doc)   # the default (stylized) ship

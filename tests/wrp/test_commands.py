@@ -102,3 +102,28 @@ def test_optimize_e_original_from_the_surrogate(trained_campaign, tmp_path):
     assert doc["e_original_source"] == "surrogate at zero offsets"
     # default threshold: 0.08 x E_original
     assert doc["table3"]["threshold_m"] == pytest.approx(0.08 * doc["table3"]["e_original_m"])
+
+
+def test_optimize_robust_screens_each_lever_on_flights_apart_from_the_risk_map(trained_campaign, tmp_path):
+    root, cfg, campaign = trained_campaign
+    robust_cfg = tmp_path / "robust.yaml"
+    robust_cfg.write_text(cfg.read_text().replace(
+        "oracle_error: false}",
+        "oracle_error: false, robust: {risk_flights: 8, screen_flights: 4, placebos: 3, views_fraction: 0.3}}"))
+    out = tmp_path / "wrp-robust"
+    assert main(["optimize", str(robust_cfg), "--kind", "robust", "--out", str(out), "--campaign", str(campaign),
+                 "--quiet"]) == 0
+    doc = json.loads((out / "levers.json").read_text())
+    assert len(doc["risk_flights"]) == 8 and len(doc["screen_flights"]) == 4
+    assert not set(doc["risk_flights"]) & set(doc["screen_flights"])
+    assert doc["risk_source"].startswith("re-scored 8 flights")       # the test store has no view_registered
+    assert set(doc["levers"]) == {"redundant", "standoff"}
+    for screen in doc["levers"].values():
+        assert screen["flights"] == 4 and screen["views"] == doc["views"]
+        assert screen["verdict"]["placebos_flown"] == 3 and len(screen["placebo_p95_gains_m"]) == 3
+    assert len(doc["views"]) <= 2 and all(0 <= v < 6 for v in doc["views"])   # ceil(0.3 x 6), positive risk only
+    original, robust = FlightPath.load(campaign / "path.json"), FlightPath.load(out / "path.json")
+    added = len(doc["views"]) if "redundant" in doc["applied"] else 0
+    assert len(robust) == len(original) + added
+    if not doc["applied"]:
+        assert np.array_equal(robust.positions, original.positions) and doc["moved"] is False

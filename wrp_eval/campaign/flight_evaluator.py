@@ -109,6 +109,7 @@ class FlightEvaluator:
                 capture_time_s=result.capture_time_s[i], camera_roll=result.camera_roll[i],
                 estimated_offsets=result.estimated_offsets[i],
                 blur_px=result.blur_px[i], battery_charge=result.battery_charge[i], ship_motion=result.ship_motion[i],
+                view_registered=view_registered(taken, recon.registered_mask),
                 flight_outcome="completed" if result.outcome[i] == COMPLETED else result.outcome_reason[i],
                 sorties=int(result.sorties[i]), view_sortie=result.view_sortie[i],
                 mission_time_s=float(result.flight_time_s[i]), ending=OUTCOME_NAMES[int(result.outcome[i])]))
@@ -116,6 +117,16 @@ class FlightEvaluator:
 
     def close(self) -> None:
         self.sim.close()
+
+
+def view_registered(taken: np.ndarray, registered_mask: np.ndarray | None) -> np.ndarray | None:
+    """(n_views,) 1.0 / 0.0 where the oracle did / did not register a taken view, NaN where none was taken; None
+    when the oracle does not say which views it registered."""
+    if registered_mask is None:
+        return None
+    out = np.full(taken.shape, np.nan)
+    out[taken] = registered_mask
+    return out
 
 
 def make_flight_evaluator(context: CampaignContext, **options) -> FlightEvaluator:

@@ -32,8 +32,9 @@ class TrialOutcome:
     estimated_offsets (n_views, 4): the navigation's record of
     the capture pose minus the plan (the image's position prior); blur_px (n_views,); battery_charge
     (n_views,) fraction left at the shutter; ship_motion (n_views, 4): heave m, roll, pitch, yaw rad of the
-    ship at the shutter; flight_outcome: "completed" or why the mission ended early (returned home: battery
-    with no sortie left, wind limit, no headway; lost) or failed.
+    ship at the shutter; view_registered (n_views,): 1 where the oracle registered the view, 0 where it did not
+    (None when the oracle does not say); flight_outcome: "completed" or why the mission ended early (returned
+    home: battery with no sortie left, wind limit, no headway; lost) or failed.
     The mission (None when the evaluator has none): sorties flown; view_sortie (n_views,) int: the sortie that
     took each view (0: none did); mission_time_s: the last photo or the end, battery swaps included; ending:
     the outcome's name (:data:`wrp_eval.sim.flight_state.OUTCOME_NAMES`)."""
@@ -52,6 +53,7 @@ class TrialOutcome:
     blur_px: np.ndarray | None = None
     battery_charge: np.ndarray | None = None
     ship_motion: np.ndarray | None = None
+    view_registered: np.ndarray | None = None
     flight_outcome: str | None = None
     sorties: int | None = None
     view_sortie: np.ndarray | None = None
@@ -61,7 +63,7 @@ class TrialOutcome:
 
 # per-view columns of the capture realism: name -> values per view (1: a list of floats, k: nested lists)
 REALISM_COLUMNS = {"capture_time_s": 1, "camera_roll": 1, "estimated_offsets": 4, "blur_px": 1, "battery_charge": 1,
-                   "ship_motion": 4}
+                   "ship_motion": 4, "view_registered": 1}
 
 
 def _nested(k: int) -> pa.DataType:

@@ -1,6 +1,6 @@
 """``wrp-eval optimize``: the wind-resistance path (ISWRP / SWRP) of a path, from a trained surrogate.
 
-    wrp-eval optimize CONFIG [--kind iswrp|swrp] [--threshold T] [--out DIR] [--checkpoint FILE]
+    wrp-eval optimize CONFIG [--kind iswrp|swrp|robust] [--threshold T] [--out DIR] [--checkpoint FILE]
                              [--campaign DIR] [--e-original E] [--no-oracle] [--quiet]
 
 Writes <out>/path.json (the WRP) and <out>/wrp_metrics.json (the paper's Table 3 columns: offset rate,
@@ -31,7 +31,7 @@ def register(sub: argparse._SubParsersAction) -> None:
     p = sub.add_parser("optimize", help="wind-resistance path (ISWRP/SWRP, paper Alg. 3/4) from a surrogate",
                        description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     p.add_argument("config", metavar="CONFIG")
-    p.add_argument("--kind", choices=("iswrp", "swrp"), default=None, help="overrides wrp.kind")
+    p.add_argument("--kind", choices=("iswrp", "swrp", "robust"), default=None, help="overrides wrp.kind")
     p.add_argument("--threshold", type=float, default=None, help="t in metres of error (overrides wrp.threshold_m)")
     p.add_argument("--out", default=None, help="output folder (default wrp.out_dir or logs/<run.name>/wrp-<kind>)")
     p.add_argument("--checkpoint", default=None, help="surrogate checkpoint (overrides wrp.checkpoint)")

@@ -43,7 +43,8 @@ class ReconResult:
     time_s: wall time of the evaluation; scale: the ICP scale factor; n_points: reconstructed points;
     hole_part_m + accuracy_part_m = error_m: what missing surface and what inaccurate surface contribute
     (each oracle's split is in its docstring: the synthetic oracle's by reconstruction probability, a point
-    cloud's by tau).
+    cloud's by tau); registered_mask: (total_views,) bool, which views are in the reconstruction, where the
+    oracle tells (None otherwise).
     """
 
     error_m: float
@@ -63,6 +64,7 @@ class ReconResult:
     extra: dict = field(default_factory=dict)
     hole_part_m: float = float("nan")
     accuracy_part_m: float = float("nan")
+    registered_mask: np.ndarray | None = field(default=None, compare=False)
 
     @property
     def registered_fraction(self) -> float:
@@ -274,7 +276,8 @@ class MeshOracle:
 
     def reconstruct(self, capture_set: CaptureSet, gt: GroundTruth, seed: int = 0) -> tuple:
         """(reconstruction, registered views, failure reason or "", extra diagnostics): the oracle's own part.
-        The reconstruction has ``len`` (points) and ``score(gt, section, seed) -> Scores``."""
+        The reconstruction has ``len`` (points) and ``score(gt, section, seed) -> Scores``; registered views: their
+        count, or the (n,) bool mask of the views registered."""
         raise NotImplementedError
 
     def evaluate(self, capture_set: CaptureSet, ship_mesh: trimesh.Trimesh, seed: int = 0) -> ReconResult:
@@ -283,12 +286,13 @@ class MeshOracle:
         check_inputs(capture_set, ship_mesh)
         gt = self.ground_truth(ship_mesh)
         recon, registered, reason, extra = self.reconstruct(capture_set, gt, seed)
+        mask = np.asarray(registered, dtype=bool) if np.ndim(registered) == 1 else None
         s = self.section
         scores = recon.score(gt, s, seed)
         return ReconResult(scores.error_m, scores.accuracy_m, scores.completeness, scores.precision,
-                           scores.fscore, s.tau_m, registered, len(capture_set), bool(reason), reason,
-                           time.perf_counter() - start, scores.scale, len(recon), self.name, extra,
-                           scores.hole_part_m, scores.accuracy_part_m)
+                           scores.fscore, s.tau_m, int(mask.sum()) if mask is not None else int(registered),
+                           len(capture_set), bool(reason), reason, time.perf_counter() - start, scores.scale,
+                           len(recon), self.name, extra, scores.hole_part_m, scores.accuracy_part_m, mask)
 
 
 def align_to_ground_truth(points: np.ndarray, gt: GroundTruth, max_correspondence_m: float,

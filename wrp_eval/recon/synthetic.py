@@ -439,9 +439,9 @@ class SyntheticOracle(MeshOracle):
         super().__init__(section)
 
     def reconstruct(self, capture_set: CaptureSet, gt: GroundTruth,
-                    seed: int = 0) -> tuple[FusedReconstruction, int, str, dict]:
-        """The fused reconstruction from the registered views, the registered count, failure reason ("" if
-        none) and diagnostics."""
+                    seed: int = 0) -> tuple[FusedReconstruction, np.ndarray | int, str, dict]:
+        """The fused reconstruction from the registered views, which views registered ((n,) bool; 0 when none
+        could), failure reason ("" if none) and diagnostics."""
         p = self.section.synthetic
         cam = capture_set.camera
         n = len(capture_set)
@@ -484,4 +484,4 @@ class SyntheticOracle(MeshOracle):
                  "median_pose_sigma_deg": float(np.degrees(np.median(registered_sigma[:, 0])))
                  if len(registered_sigma) else None,
                  "median_pose_sigma_m": float(np.median(registered_sigma[:, 1])) if len(registered_sigma) else None}
-        return fused, n_registered, reason, extra
+        return fused, registered_mask, reason, extra

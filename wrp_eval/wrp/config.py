@@ -31,7 +31,27 @@ class EvaluateSection(StrictModel):
                                  "P(meets spec) with its CI and the go / no-go (0: none)")
     go_probability: float = Field(0.8, gt=0, le=1, description="GO when the lower confidence bound of P(meets "
                                   "spec) in the forecast wind reaches this")
+    robust: bool = Field(False, description="also optimise and fly the robust kind (wrp.robust) and, when it "
+                         "applied a lever, its placebos: the same levers at as many viewpoints chosen at random")
     out_dir: str | None = Field(None, description="none: logs/<run.name>/evaluate")
+
+
+class RobustSection(StrictModel):
+    """``wrp.kind: robust`` (issue 30): levers beyond moving a viewpoint, each screened with the oracle on the
+    initial path's campaign flights against its own placebos (wrp_eval/wrp/levers.py, README)."""
+
+    levers: list[Literal["redundant", "standoff"]] = Field(["redundant", "standoff"], min_length=1)
+    views_fraction: float = Field(0.05, gt=0, le=0.5, description="each lever acts on this share of the "
+                                  "viewpoints (the riskiest; at least one): the view budget a redundant lever adds")
+    standoff_fraction: float = Field(0.1, gt=0, le=0.5, description="standoff lever: move back by this share "
+                                     "of the view's depth (its GSD grows by the same share)")
+    risk_flights: int = Field(64, ge=8, le=100_000, description="campaign flights the risk map is measured on")
+    screen_flights: int = Field(24, ge=4, le=100_000, description="other campaign flights each lever and its "
+                                "placebos are screened on")
+    placebos: int = Field(20, ge=1, le=10_000, description="placebo levers (as many viewpoints at random)")
+    apply: Literal["recommended", "all"] = Field("recommended", description="the levers the robust path applies: "
+                                                 "those the screening recommends, or all of them whatever their "
+                                                 "verdict (to fly a rejected lever and check the screening)")
 
 
 class WrpSection(StrictModel):
@@ -44,7 +64,7 @@ class WrpSection(StrictModel):
     0.2-0.3 on E_original 3.185 is 6-9 %). e_original_m: the wind-free path's error (none: from the oracle).
     """
 
-    kind: Literal["iswrp", "swrp"] = "iswrp"
+    kind: Literal["iswrp", "swrp", "robust"] = "iswrp"
     path: str | None = None
     checkpoint: str | None = None
     campaign_dir: str | None = None
@@ -100,3 +120,4 @@ class WrpSection(StrictModel):
     out_dir: str | None = Field(None, description="none: logs/<run.name>/wrp-<kind>")
     threads: int = Field(1, ge=1, le=2)
     evaluate: EvaluateSection = EvaluateSection()
+    robust: RobustSection = RobustSection()

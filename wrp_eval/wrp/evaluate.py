@@ -216,8 +216,9 @@ def robustness_verdict(gains: np.ndarray, placebo_means: np.ndarray, rng: np.ran
 
 
 def paired_difference(base: PathTrials, other: PathTrials, rng: np.random.Generator, resamples: int,
-                      confidence: float) -> PairedDifference:
-    """other - base on the same trial ids: mean error (trials where both succeeded) and failure rate."""
+                      confidence: float, spec: tuple[float, float] | None = None) -> PairedDifference:
+    """other - base on the same trial ids: mean and p95 error (trials where both succeeded), failure rate and,
+    with ``spec``, P(meets spec) (all paired trials)."""
     common, ib, io = np.intersect1d(base.trial_id, other.trial_id, return_indices=True)
     if common.size == 0:
         raise InputError(other.name, "no trial ids in common with the initial path's campaign")
@@ -225,12 +226,21 @@ def paired_difference(base: PathTrials, other: PathTrials, rng: np.random.Genera
     d_err = other.error_m[io][both] - base.error_m[ib][both]
     d_fail = other.failed[io].astype(float) - base.failed[ib].astype(float)
     mean = lambda x, axis: x.mean(axis=axis)  # noqa: E731
+    e_base, e_other = base.error_m[ib][both], other.error_m[io][both]
+    p95 = lambda b, o, axis: np.percentile(o, 95, axis=axis) - np.percentile(b, 95, axis=axis)  # noqa: E731
+    spec_diff = None
+    if spec is not None:
+        spec_diff = (meets_spec(other, *spec)[io].astype(float) - meets_spec(base, *spec)[ib].astype(float))
     return PairedDifference(
         other.name, base.name, int(common.size), int(both.sum()),
         float(d_err.mean()) if d_err.size else float("nan"),
         _ci((d_err,), mean, rng, resamples, confidence) if d_err.size > 2 else None,
         int((d_err < 0).sum()), int((d_err > 0).sum()), float(d_fail.mean()),
-        _ci((d_fail,), mean, rng, resamples, confidence))
+        _ci((d_fail,), mean, rng, resamples, confidence),
+        float(p95(e_base, e_other, None)) if d_err.size else float("nan"),
+        _ci((e_base, e_other), p95, rng, resamples, confidence, paired=True) if d_err.size > 2 else None,
+        None if spec_diff is None else float(spec_diff.mean()),
+        None if spec_diff is None else _ci((spec_diff,), mean, rng, resamples, confidence))
 
 
 def box_plot(paths: list[PathTrials], file: Path) -> None:
@@ -258,7 +268,8 @@ def summarise(paths: list[PathTrials], seed: int, resamples: int, confidence: fl
     rng = np.random.default_rng(np.random.SeedSequence(seed, spawn_key=(7,)))
     result = EvaluationResult(confidence, resamples,
                               tuple(path_summary(p, rng, resamples, confidence, spec) for p in paths),
-                              tuple(paired_difference(paths[0], p, rng, resamples, confidence) for p in paths[1:]))
+                              tuple(paired_difference(paths[0], p, rng, resamples, confidence, spec)
+                                    for p in paths[1:]))
     if windfree_m is None:
         return result
     base = paths[0]

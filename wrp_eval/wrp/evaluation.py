@@ -85,7 +85,9 @@ class PathSummary:
 class PairedDifference:
     """``path`` - ``versus`` on the same trial ids (evaluate.json ``paired``): mean error difference over the
     trials where both succeeded (m) and failure-rate difference over all, with paired bootstrap CIs; wins and
-    losses count the pairs where ``path`` had the smaller / larger error."""
+    losses count the pairs where ``path`` had the smaller / larger error; p95 error difference (m, the same
+    pairs) and, with a spec, the P(meets spec) difference (all pairs), each with its paired bootstrap CI (None
+    in documents written before them)."""
 
     path: str
     versus: str
@@ -97,13 +99,18 @@ class PairedDifference:
     losses: int
     failure_rate_diff: float
     failure_rate_diff_ci: Interval
+    p95_error_diff_m: float | None = None
+    p95_error_diff_ci: Interval = None
+    p_meets_spec_diff: float | None = None
+    p_meets_spec_diff_ci: Interval = None
 
     def to_json_dict(self) -> dict:
         return asdict(self)
 
     @classmethod
     def from_json_dict(cls, doc: dict) -> "PairedDifference":
-        return cls(**{f.name: doc[f.name] for f in fields(cls)})
+        kwargs: dict[str, Any] = {f.name: doc.get(f.name) for f in fields(cls)}
+        return cls(**kwargs)
 
 
 @dataclass(frozen=True)

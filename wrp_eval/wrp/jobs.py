@@ -31,6 +31,7 @@ from wrp_eval.planning.path import FlightPath, digest_of_document
 from wrp_eval.recon.capture_io import captures_from_path
 from wrp_eval.recon.scored_ship import ScoredShip
 from wrp_eval.ship.nofly import flyable
+from wrp_eval.sim.onboard import view_depths
 from wrp_eval.surrogate.data import TrialData, load_campaign_trials
 from wrp_eval.surrogate.model import Surrogate
 from wrp_eval.wrp.config import WrpSection
@@ -47,6 +48,7 @@ from wrp_eval.wrp.optimize import (
     sample_radii,
 )
 from wrp_eval.wrp.placebo import placebo_offsets
+from wrp_eval.wrp.robust import robust_job, robust_placebo_paths
 
 EVALUATED_PATHS = ("initial", "iswrp", "swrp")
 WRP_KINDS = EVALUATED_PATHS[1:]
@@ -274,8 +276,11 @@ def with_kind(section: WrpSection, kind: str | None = None, threshold_m: float |
 def optimize_job(ctx: ExperimentContext, *, kind: str | None = None, threshold_m: float | None = None,
                  out: Path | None = None, checkpoint=None, campaign=None, e_original: float | None = None,
                  use_oracle: bool = True) -> dict:
-    """``wrp-eval optimize``: the config's ``wrp:`` section with the command line's kind and threshold."""
+    """``wrp-eval optimize``: the config's ``wrp:`` section with the command line's kind and threshold (kind
+    robust: :func:`wrp_eval.wrp.robust.robust_job`, levers.json instead of wrp_metrics.json)."""
     section = with_kind(ctx.config.wrp, kind, threshold_m)
+    if section.kind == "robust":
+        return robust_job(ctx, section, Path(out) if out else ctx.folders.wrp(section.kind), campaign)
     inputs = resolve_inputs(ctx, section, checkpoint, campaign)
     return run_optimize(ctx, section, Path(out) if out else ctx.folders.wrp(section.kind), inputs,
                         e_original=e_original, use_oracle=use_oracle)
@@ -302,6 +307,17 @@ def evaluate_job(ctx: ExperimentContext, out: Path | None = None, *, n_trials: i
     # a WRP that moved nothing is the initial path: its placebos would all be the initial path too
     placebo_paths, infeasible = placebo_paths_of(ctx, {k: p for k, p in paths.items() if k not in unmoved},
                                                  ev.placebos)
+    if ev.robust:
+        robust_dir = evaluated_wrp_dir(out, "robust")
+        levers = robust_job(ctx, section, robust_dir, inputs.campaign_dir)
+        paths["robust"] = FlightPath.load(robust_dir / "path.json")
+        if levers["moved"]:
+            rng = np.random.default_rng(np.random.SeedSequence(ctx.campaign_seed, spawn_key=(11, len(WRP_KINDS))))
+            placebo_paths["robust"] = robust_placebo_paths(
+                inputs.path, levers, ev.placebos, view_depths(inputs.path, ctx.flight_proxy.bounds),
+                section.robust.standoff_fraction, rng)
+        else:
+            unmoved.append("robust")
 
     def fly(name: str, path: FlightPath, trial=flown) -> PathTrials:
         folder = evaluated_campaign_dir(out, name)
@@ -322,7 +338,8 @@ def evaluate_job(ctx: ExperimentContext, out: Path | None = None, *, n_trials: i
                        unmoved)
     placebos = PlaceboControl(ev.placebos, tuple(unmoved), infeasible,
                               "as many viewpoints as the WRP moved, chosen at random, moved by the WRP's move "
-                              "magnitudes in random directions with its yaw offsets (wrp/placebo.py)")
+                              "magnitudes in random directions with its yaw offsets (wrp/placebo.py); robust: its "
+                              "levers at as many viewpoints chosen at random (wrp/robust.py)")
     verdict = None
     if forecast and ev.forecast_trials > 0:
         chosen = result.recommended_path

@@ -1,0 +1,131 @@
+"""The robust kind's levers (wrp/levers.py): the risk map, the path and capture-set changes, the screening."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from wrp_eval.camera import optical_axes
+from wrp_eval.planning.path import FlightPath
+from wrp_eval.recon.capture_io import captures_from_path
+from wrp_eval.wrp.levers import (
+    captures_with_lever,
+    leg_partners,
+    path_with_lever,
+    registration_risk,
+    riskiest,
+    screen_lever,
+)
+
+
+def ring_path(n: int = 12, radius: float = 30.0) -> FlightPath:
+    """``n`` views on a circle round the origin facing it, pitched 10 deg down, unequal spacing."""
+    ang = np.cumsum(np.linspace(0.3, 0.8, n))
+    ang = 2 * np.pi * ang / ang[-1]
+    pos = np.stack([radius * np.cos(ang), radius * np.sin(ang), np.full(n, 20.0)], axis=1)
+    n_ = len(pos)
+    return FlightPath(pos, np.arctan2(-pos[:, 1], -pos[:, 0]), np.full(n_, -np.radians(10)), np.arange(n_) % 3,
+                      np.zeros(n_, int), np.zeros(n_, int))
+
+
+def test_risk_is_the_covariance_of_a_lost_view_with_the_error():
+    rng = np.random.default_rng(0)
+    registered = np.ones((200, 4), bool)
+    registered[:, 1] = rng.random(200) < 0.5          # view 1 registers in half the flights ...
+    registered[:, 2] = rng.random(200) < 0.5          # ... view 2 too, but does not matter
+    registered[:, 3] = False                          # view 3 never: nothing a flight does changes it
+    errors = 0.010 + 0.002 * ~registered[:, 1] + 1e-4 * rng.standard_normal(200)
+    risk = registration_risk(registered, errors)
+    assert risk.p_unregistered[0] == 0 and risk.p_unregistered[3] == 1
+    p = risk.p_unregistered[1]
+    assert risk.risk_m[1] == pytest.approx(0.002 * p * (1 - p), rel=0.1)
+    assert abs(risk.risk_m[2]) < 0.1 * risk.risk_m[1]
+    assert risk.risk_m[0] == 0 and risk.risk_m[3] == 0
+    assert riskiest(risk, 2).tolist() in ([1], [1, 2])          # only positive risks are chosen
+    assert riskiest(risk, 1).tolist() == [1]
+
+
+def test_the_redundant_view_sits_halfway_along_the_shorter_leg():
+    path = ring_path()
+    views = np.array([0, 4, 11])
+    partner = leg_partners(path.positions, views)
+    legs = np.linalg.norm(np.diff(path.positions, axis=0), axis=1)
+    assert partner[0] == 1 and partner[2] == 10                 # the ends have one leg
+    assert partner[1] == (3 if legs[3] <= legs[4] else 5)
+    out = path_with_lever(path, "redundant", views, 0.1, np.full(len(path), 30.0))
+    assert len(out) == len(path) + 3
+    # every original view is kept, in tour order, and each new one lies between its two ends
+    kept = [int(np.flatnonzero(np.all(out.positions == p, axis=1))[0]) for p in path.positions]
+    assert kept == sorted(kept)
+    for v, w in zip(views, partner, strict=True):
+        mid = (path.positions[v] + path.positions[w]) / 2
+        at = int(np.flatnonzero(np.all(np.isclose(out.positions, mid), axis=1))[0])
+        assert min(kept[v], kept[w]) < at < max(kept[v], kept[w])
+        assert out.face_id[at] == path.face_id[v]
+
+
+def test_standoff_moves_only_the_chosen_views_back_along_their_axes():
+    path = ring_path()
+    depth = np.linspace(20.0, 40.0, len(path))
+    out = path_with_lever(path, "standoff", np.array([2, 5]), 0.1, depth)
+    moved = np.linalg.norm(out.positions - path.positions, axis=1)
+    assert moved[[2, 5]] == pytest.approx(0.1 * depth[[2, 5]])
+    assert np.all(moved[np.setdiff1d(np.arange(len(path)), [2, 5])] == 0)
+    back = (path.positions - out.positions)[[2, 5]] / moved[[2, 5], None]
+    assert back == pytest.approx(optical_axes(path.yaw, path.pitch)[[2, 5]])
+    assert np.all(np.linalg.norm(out.positions[[2, 5], :2], axis=1) > 30.0)     # farther from the ship
+
+
+@pytest.mark.parametrize("lever", ["redundant", "standoff"])
+def test_a_lever_on_the_planned_captures_is_the_lever_on_the_path(lever):
+    path = ring_path()
+    views, depth = np.array([3, 7]), np.full(len(path), 25.0)
+    from_path = captures_from_path(path_with_lever(path, lever, views, 0.1, depth))
+    from_captures = captures_with_lever(captures_from_path(path), lever, views, 0.1, depth, path.positions)
+    key = lambda cs: np.lexsort(cs.positions.T)  # noqa: E731
+    a, b = from_path.subset(key(from_path)), from_captures.subset(key(from_captures))
+    assert a.positions == pytest.approx(b.positions)
+    assert a.yaw == pytest.approx(b.yaw) and a.pitch == pytest.approx(b.pitch)
+
+
+def test_screening_recommends_a_lever_only_where_its_viewpoints_matter():
+    """A score where the lever helps only at views 2 and 5 beats its placebos; one where it helps anywhere does
+    not (the placebos gain as much)."""
+    path = ring_path()
+    flights = [captures_from_path(path) for _ in range(30)]
+    noise = np.random.default_rng(1).normal(0, 1e-4, 30)
+    base = 0.02 + noise
+
+    def score_targeted(sets):
+        return np.array([0.02 + noise[k] - 0.001 * (np.linalg.norm(cs.positions[[2, 5], :2], axis=1) > 30.5).sum()
+                         for k, cs in enumerate(sets)])
+
+    def change(cs, at):
+        return captures_with_lever(cs, "standoff", at, 0.1, np.full(len(path), 25.0), path.positions)
+
+    def windfree(at):        # the plan itself is as good with or without the lever
+        return 0.02
+
+    rng = np.random.default_rng(0)
+    targeted = screen_lever(score_targeted, flights, base, change, windfree, "standoff", np.array([2, 5]),
+                            len(path), 20, rng, 500, 0.95)
+    assert targeted.verdict.recommended, targeted.verdict.reason
+    assert targeted.verdict.gain_m == pytest.approx(0.002) and targeted.error_gain_m == pytest.approx(0.002)
+    assert targeted.windfree_gain_m == 0 and len(targeted.placebo_p95_gains_m) == 20
+
+    def windfree_too(at):    # the same gain already without wind: a better plan, not a wind-resistant one
+        return 0.02 - (0.002 if at is not None and set(at.tolist()) == {2, 5} else 0.0)
+
+    planned = screen_lever(score_targeted, flights, base, change, windfree_too, "standoff", np.array([2, 5]),
+                           len(path), 20, rng, 500, 0.95)
+    assert planned.error_gain_m == pytest.approx(0.002) and planned.windfree_gain_m == pytest.approx(0.002)
+    assert planned.verdict.gain_m == pytest.approx(0.0, abs=1e-12) and not planned.verdict.recommended
+
+    def score_anywhere(sets):
+        return np.array([0.02 + noise[k] - 0.001 * (np.linalg.norm(cs.positions[:, :2], axis=1) > 30.5).sum()
+                         for k, cs in enumerate(sets)])
+
+    anywhere = screen_lever(score_anywhere, flights, base, change, windfree, "standoff", np.array([2, 5]),
+                            len(path), 20, rng, 500, 0.95)
+    assert not anywhere.verdict.recommended
+    assert "placebo" in anywhere.verdict.reason

@@ -1,0 +1,193 @@
+"""Levers beyond moving a viewpoint (issue 30), screened with the oracle against their placebos.
+
+At close range the error's spread is which views register (the inspection experiment: Spearman -0.52 between
+a flight's error and its registered fraction, +0.01 with the wind speed). So the risk of viewpoint i is how
+much its failing to register moves the error, measured on the initial path's own campaign flights:
+
+* u_ki = 1 when the oracle left view i of flight k out of the reconstruction (or the flight did not take it);
+* risk_i = cov_k(u_ki, e_k) (m): the error a flight loses on average with view i out, times p_i (1 - p_i)
+  (a view always or never registered carries no risk: nothing the flight does changes it).
+
+A lever is a change at the ``count`` riskiest viewpoints, applied the same way to the planned path (what would
+be flown) and, for screening, to stored flights' capture sets (what those flights would have photographed):
+
+* ``redundant``: one more view at the midpoint of the shorter leg at each chosen viewpoint (its pose the mean
+  of the two ends': a second, overlapping image where registration is marginal; photogrammetry practice adds
+  overlap where matching is weak, e.g. Pix4D's "image acquisition plan" advice for low-texture areas);
+* ``standoff``: each chosen viewpoint moved back along its optical axis by ``standoff_fraction`` of its depth
+  (so its GSD grows by that fraction: within the planner's GSD bound when the fraction is the bound's slack).
+
+Screening (counterfactual, exact on the oracle): the same flights' capture sets with and without the lever,
+the same oracle seeds; gain_k = e_k(initial) - e_k(lever). In a screened flight a redundant view inherits the
+mean of its two ends' flown errors (position, heading, pitch, roll, prior, blur): a stand-in for the flight
+that would have taken it, stated in the result. Its control: ``placebos`` levers of the same kind at as many
+viewpoints chosen at random. The verdict is the evaluation's (:func:`wrp_eval.wrp.evaluate.robustness_verdict`):
+recommended when the gain's CI excludes 0 and the gain exceeds the placebos' 95th percentile.
+
+Risk and screening use disjoint flights (the risk's first, seeded), so a lever is never judged on the flights
+that chose its viewpoints.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable, Sequence
+from dataclasses import dataclass, replace
+from typing import Any
+
+import numpy as np
+
+from wrp_eval.camera import optical_axes
+from wrp_eval.planning.path import FlightPath
+from wrp_eval.sim.captures import CaptureSet
+from wrp_eval.wrp.evaluate import robustness_verdict
+from wrp_eval.wrp.evaluation import RobustnessVerdict
+
+LEVERS = ("redundant", "standoff")
+
+
+@dataclass(frozen=True)
+class RegistrationRisk:
+    """p_unregistered (n,): share of the flights that lost view i (not taken or not registered); risk_m (n,):
+    cov(lost_i, error) over those flights (m); errors_m (k,): the flights' errors."""
+
+    p_unregistered: np.ndarray
+    risk_m: np.ndarray
+    errors_m: np.ndarray
+
+
+def registration_risk(registered: np.ndarray, errors_m: np.ndarray) -> RegistrationRisk:
+    """The risk map (module docstring) from ``registered`` (k flights, n views) bool and the flights' errors (k,) m."""
+    lost = ~np.asarray(registered, dtype=bool)
+    e = np.asarray(errors_m, dtype=float)
+    risk = ((lost - lost.mean(axis=0)) * (e - e.mean())[:, None]).mean(axis=0)
+    return RegistrationRisk(lost.mean(axis=0), risk, e)
+
+
+def riskiest(risk: RegistrationRisk, count: int) -> np.ndarray:
+    """The ``count`` viewpoints of highest risk (positive risk only), sorted by index."""
+    order = np.argsort(-risk.risk_m, kind="stable")[:count]
+    return np.sort(order[risk.risk_m[order] > 0])
+
+
+def leg_partners(positions: np.ndarray, views: np.ndarray) -> np.ndarray:
+    """For each of ``views`` the tour neighbour (i - 1 or i + 1) at the end of the shorter leg."""
+    positions = np.asarray(positions, dtype=float)
+    n = len(positions)
+    prev, nxt = np.clip(views - 1, 0, n - 1), np.clip(views + 1, 0, n - 1)
+    d_prev = np.where(views > 0, np.linalg.norm(positions[prev] - positions[views], axis=1), np.inf)
+    d_next = np.where(views < n - 1, np.linalg.norm(positions[nxt] - positions[views], axis=1), np.inf)
+    return np.where(d_prev <= d_next, prev, nxt)
+
+
+def _mean_angle(a: np.ndarray, b: np.ndarray) -> np.ndarray:
+    return np.angle(np.exp(1j * a) + np.exp(1j * b))
+
+
+def path_with_lever(path: FlightPath, lever: str, views: np.ndarray, standoff_fraction: float,
+                    depths_m: np.ndarray) -> FlightPath:
+    """``path`` with ``lever`` at ``views``; ``depths_m`` (n,): each view's distance to the ship along its axis."""
+    views = np.asarray(views, dtype=int)
+    if lever == "standoff":
+        back = np.zeros(len(path))
+        back[views] = standoff_fraction * np.nan_to_num(depths_m[views])
+        axes = optical_axes(path.yaw, path.pitch)
+        return replace(path, positions=np.asarray(path.positions) - back[:, None] * axes,
+                       metadata={**path.metadata, "lever": {"standoff": views.tolist()}})
+    partner = leg_partners(path.positions, views)
+    new = {"positions": (path.positions[views] + path.positions[partner]) / 2,
+           "yaw": _mean_angle(path.yaw[views], path.yaw[partner]),
+           "pitch": (path.pitch[views] + path.pitch[partner]) / 2,
+           "face_id": path.face_id[views], "kind": path.kind[views], "sortie": path.sortie[views]}
+    # the new view goes between its two ends in the tour
+    slot = np.maximum(views, partner)
+    fields: dict[str, Any] = {name: np.insert(np.asarray(getattr(path, name)), slot, value, axis=0)
+                              for name, value in new.items()}
+    return replace(path, **fields, metadata={**path.metadata, "lever": {"redundant": views.tolist()}})
+
+
+def captures_with_lever(cs: CaptureSet, lever: str, views: np.ndarray, standoff_fraction: float,
+                        depths_m: np.ndarray, planned_positions: np.ndarray) -> CaptureSet:
+    """A flight's capture set ``cs`` as it would have been with ``lever`` at ``views`` (module docstring)."""
+    index = np.full(len(planned_positions), -1)
+    index[cs.planned_index] = np.arange(len(cs))
+    if lever == "standoff":
+        back = np.zeros(len(cs))
+        taken = index[views] >= 0
+        back[index[views][taken]] = standoff_fraction * np.nan_to_num(depths_m[views][taken])
+        shift = back[:, None] * optical_axes(cs.yaw, cs.pitch)
+        prior = None if cs.prior_positions is None else cs.prior_positions - shift
+        return replace(cs, positions=cs.positions - shift, prior_positions=prior)
+    partner = leg_partners(planned_positions, views)
+    both = (index[views] >= 0) & (index[partner] >= 0)
+    a, b = index[views][both], index[partner][both]
+
+    def mid(values: np.ndarray) -> np.ndarray:
+        return np.concatenate([values, (values[a] + values[b]) / 2])
+
+    def optional_mid(values: np.ndarray | None) -> np.ndarray | None:
+        return None if values is None else mid(values)
+
+    return CaptureSet(mid(cs.positions), np.concatenate([cs.yaw, _mean_angle(cs.yaw[a], cs.yaw[b])]),
+                      mid(cs.pitch), np.concatenate([cs.planned_index, len(planned_positions) + np.arange(a.size)]),
+                      cs.camera, optional_mid(cs.roll), optional_mid(cs.prior_positions), optional_mid(cs.blur_px))
+
+
+@dataclass(frozen=True)
+class LeverScreen:
+    """One lever's screening: the viewpoints it acts on, the flights it was screened on, its verdict against its
+    placebos on the robustness gain (mean, CI, placebo 95th percentile, recommended and why), and beside it the
+    raw error gains: mean (m), p95 (m), and the wind-free path's own gain (m); the placebos' raw mean and p95
+    gains."""
+
+    lever: str
+    views: tuple[int, ...]
+    flights: int
+    verdict: RobustnessVerdict
+    error_gain_m: float
+    p95_gain_m: float
+    windfree_gain_m: float
+    placebo_error_gains_m: tuple[float, ...]
+    placebo_p95_gains_m: tuple[float, ...]
+
+    def to_json_dict(self) -> dict:
+        return {"lever": self.lever, "views": list(self.views), "flights": self.flights,
+                "verdict": self.verdict.to_json_dict(), "error_gain_m": self.error_gain_m,
+                "p95_gain_m": self.p95_gain_m, "windfree_gain_m": self.windfree_gain_m,
+                "placebo_error_gains_m": list(self.placebo_error_gains_m),
+                "placebo_p95_gains_m": list(self.placebo_p95_gains_m)}
+
+
+@dataclass(frozen=True)
+class _Gains:
+    robustness: np.ndarray      # (k,) m per flight: raw gain - the wind-free path's gain
+    error_m: float
+    p95_m: float
+    windfree_m: float
+
+
+def screen_lever(score: Callable[[Sequence[CaptureSet]], np.ndarray], flights: Sequence[CaptureSet],
+                 base_errors_m: np.ndarray, change: Callable[[CaptureSet, np.ndarray], CaptureSet],
+                 windfree_error: Callable[[np.ndarray | None], float], lever: str, views: np.ndarray, n_views: int,
+                 placebos: int, rng: np.random.Generator, resamples: int, confidence: float) -> LeverScreen:
+    """Screen ``change(capture set, views)`` at ``views`` against ``placebos`` of it at as many random viewpoints
+    (of ``n_views``) on ``flights`` (their errors without it: ``base_errors_m``); ``score(capture sets) -> (k,)``
+    errors with each flight's own oracle seed; ``windfree_error(views)``: the wind-free path's error with the lever
+    at ``views`` (None: without it). The verdict is on the robustness gain, as the evaluation's
+    (:func:`wrp_eval.wrp.evaluate.robustness_gains`): per flight, the raw gain minus the wind-free path's gain."""
+    base = np.asarray(base_errors_m, dtype=float)
+    windfree_base = windfree_error(None)
+
+    def gains(at: np.ndarray) -> _Gains:
+        errors = score([change(cs, at) for cs in flights])
+        ok = np.isfinite(errors) & np.isfinite(base)
+        raw = base[ok] - errors[ok]
+        windfree = windfree_base - windfree_error(at)
+        p95 = float(np.percentile(base[ok], 95) - np.percentile(errors[ok], 95)) if ok.any() else float("nan")
+        return _Gains(raw - windfree, float(raw.mean()) if raw.size else float("nan"), p95, windfree)
+
+    mine = gains(views)
+    placebo = [gains(np.sort(rng.choice(n_views, views.size, replace=False))) for _ in range(placebos)]
+    verdict = robustness_verdict(mine.robustness, np.array([g.robustness.mean() if g.robustness.size else np.nan
+                                                            for g in placebo]), rng, resamples, confidence)
+    return LeverScreen(lever, tuple(int(v) for v in views), len(flights), verdict, mine.error_m, mine.p95_m,
+                       mine.windfree_m, tuple(g.error_m for g in placebo), tuple(g.p95_m for g in placebo))
