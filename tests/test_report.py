@@ -82,7 +82,9 @@ def _ev(recommended: bool) -> EvaluationResult:
         "confidence": 0.95, "bootstrap_resamples": 200, "paths": [{**row, "path": "initial"}, {**row, "path": "iswrp"}],
         "paired": [{"path": "iswrp", "versus": "initial", "paired_trials": 16, "both_succeeded": 16,
                     "mean_error_diff_m": -0.0004, "mean_error_diff_ci": [-0.0006, -0.0002], "wins": 12, "losses": 4,
-                    "failure_rate_diff": 0.0, "failure_rate_diff_ci": None}],
+                    "failure_rate_diff": 0.0, "failure_rate_diff_ci": None, "p95_error_diff_m": -0.0002,
+                    "p95_error_diff_ci": [-0.0005, 0.0001], "p_meets_spec_diff": 0.0625,
+                    "p_meets_spec_diff_ci": [0.0, 0.125]}],
         "windfree_error_m": {"initial": 0.0252, "iswrp": 0.0250},
         "robustness": {"iswrp": {"gain_m": 0.0004, "gain_ci_m": [0.0002, 0.0006], "paired_trials": 16,
                                  "placebos_flown": 2, "placebo_gains_m": [0.0, 0.0001], "placebo_gain_p95_m": 0.0001,
@@ -93,7 +95,9 @@ def _ev(recommended: bool) -> EvaluationResult:
 def test_the_robustness_table_states_each_verdict_and_the_path_to_fly():
     text = "\n".join(robustness_section(_ev(True)))
     assert "| iswrp | +0.40 | [+0.20, +0.60] | +0.10 | 2 | **recommended** |" in text
-    assert "**Path to fly: iswrp.**" in text and "| iswrp | -0.0004 | [-0.0006, -0.0002] | 16 | +0.0 points |" in text
+    assert "**Path to fly: iswrp.**" in text
+    assert ("| iswrp | -0.0004 | [-0.0006, -0.0002] | -0.0002 | [-0.0005, 0.0001] | 0.0625 | [0, 0.125] | 16 | "
+            "+0.0 points |") in text
     kept = "\n".join(robustness_section(_ev(False)))
     assert "not recommended: its gain's CI includes 0" in kept and "**Path to fly: initial.**" in kept
 

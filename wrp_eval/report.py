@@ -6,6 +6,7 @@ scene, ContextCapture, a Xeon + RTX 3090): they are printed beside what we measu
 
 from __future__ import annotations
 
+import json
 import os
 from pathlib import Path
 from typing import Any
@@ -18,7 +19,7 @@ from mpl_toolkits.mplot3d.art3d import Poly3DCollection
 from wrp_eval.atomic import atomic_path, write_text_atomic
 from wrp_eval.envelope.jobs import boundary_text
 from wrp_eval.envelope.result import Envelope
-from wrp_eval.experiment import ExperimentContext
+from wrp_eval.experiment import ExperimentContext, evaluated_wrp_dir
 from wrp_eval.run_summary import CampaignRun, RunSummary, SurrogateFit
 from wrp_eval.surrogate.data import TrialData
 from wrp_eval.wind.field import sample_mean_field
@@ -227,9 +228,18 @@ def write_report(ctx: ExperimentContext, path, summary: RunSummary, trials: Tria
              *ship_section(ctx.ship.complexity, path, summary.plan), *WIND_SECTION,
              *campaign_section(summary.campaign, config.campaign.perturbation.design, summary.surrogate),
              *surrogate_section(summary.surrogate), *wrp_section(ev.wrp or {}), *robustness_section(ev),
+             *levers_lines(ctx),
              *(risk_section(risk) if risk is not None else []),
              *missions_section(summary.missions, out), *timings_section(summary.timings_s, out)]
     return write_text_atomic(out / "report.md", "\n".join(lines))
+
+
+def levers_lines(ctx: ExperimentContext) -> list[str]:
+    """The levers section of the evaluation's robust levers.json; none when the evaluation flew no robust path."""
+    file = evaluated_wrp_dir(ctx.folders.evaluate, "robust") / "levers.json"
+    if not (ctx.config.wrp.evaluate.robust and file.is_file()):
+        return []
+    return levers_section(json.loads(file.read_text()))
 
 
 def _figures(ctx: ExperimentContext, path, trials: TrialData, risk: ViewRisk | None) -> None:
@@ -322,10 +332,13 @@ def robustness_section(ev: EvaluationResult) -> list[str]:
     lines += [f"| {row.path} | {row.trials} | {fmt(row.mean_error_m, 4)} | "
               f"{_ci(row.mean_error_m_ci)} | {fmt(row.std_error_m)} | {fmt(row.p95_error_m, 4)} | "
               f"{100 * row.failure_rate:.1f} % |" for row in ev.paths]
-    lines += ["", "| paired vs initial | mean error difference (m) | CI | pairs | failure-rate difference |",
-              "|---|---|---|---|---|"]
+    lines += ["", "| paired vs initial | mean error difference (m) | CI | p95 error difference (m) | CI | "
+                  "P(meets spec) difference | CI | pairs | failure-rate difference |",
+              "|---|---|---|---|---|---|---|---|---|"]
     lines += [f"| {pair.path} | {pair.mean_error_diff_m:+.4f} | {_ci(pair.mean_error_diff_ci)} | "
-              f"{pair.both_succeeded} | {100 * pair.failure_rate_diff:+.1f} points |" for pair in ev.paired]
+              f"{fmt(pair.p95_error_diff_m, 4)} | {_ci(pair.p95_error_diff_ci)} | {fmt(pair.p_meets_spec_diff, 3)} | "
+              f"{_ci(pair.p_meets_spec_diff_ci)} | {pair.both_succeeded} | {100 * pair.failure_rate_diff:+.1f} points |"
+              for pair in ev.paired]
     if ev.robustness is not None:
         lines += _verdict_lines(ev)
     return lines + [
@@ -359,6 +372,29 @@ def _verdict_lines(ev: EvaluationResult) -> list[str]:
                         "- [E_wind - E_windfree](WRP) per paired trial; a WRP is recommended only when its gain's CI "
                         "excludes 0 and exceeds the 95th percentile of its placebo paths' gains (as many viewpoints "
                         "moved by the same magnitudes, chosen at random, flown under the same winds)."]
+
+
+def levers_section(levers: dict) -> list[str]:
+    """The robust kind's levers (levers.json, :mod:`wrp_eval.wrp.robust`): each lever's screened gains against its
+    placebo band, its verdict, and what the robust path applied."""
+    lines = ["", "## Levers beyond moving a viewpoint (the robust kind, screened on stored flights)", "",
+             f"At the {len(levers['views'])} viewpoints of highest registration risk ({levers['risk_source']}), "
+             f"each lever screened on {len(levers['screen_flights'])} other flights against placebos (the same "
+             "lever at as many random viewpoints).", "",
+             "| lever | robustness gain (mm) | CI | placebo 95th pct (mm) | error gain (mm) | p95 gain (mm) | "
+             "wind-free gain (mm) | placebo p95 gains (mm, min / max) | verdict |",
+             "|---|---|---|---|---|---|---|---|---|"]
+    for name, screen in levers["levers"].items():
+        v, ci, p95s = screen["verdict"], screen["verdict"]["gain_ci_m"], screen["placebo_p95_gains_m"]
+        lines.append(f"| {name} | {1e3 * v['gain_m']:+.3f} | "
+                     + (f"[{1e3 * ci[0]:+.3f}, {1e3 * ci[1]:+.3f}]" if ci else "-")
+                     + f" | {1e3 * v['placebo_gain_p95_m']:+.3f} | {1e3 * screen['error_gain_m']:+.3f} | "
+                     f"{1e3 * screen['p95_gain_m']:+.3f} | {1e3 * screen['windfree_gain_m']:+.3f} | "
+                     f"{1e3 * min(p95s):+.3f} / {1e3 * max(p95s):+.3f} | "
+                     + ("**recommended**" if v["recommended"] else f"not recommended: {v['reason']}") + " |")
+    applied = ", ".join(levers["applied"]) or "none (the robust path is the initial path)"
+    return lines + ["", f"Applied ({levers.get('apply', 'recommended')}): {applied}. Placing the levers took "
+                        f"{levers['robust_s']:.1f} s, screening them {levers['screen_s']:.1f} s.", ""]
 
 
 def risk_section(risk: ViewRisk, top_views: int = 5) -> list[str]:

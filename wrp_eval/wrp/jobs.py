@@ -303,21 +303,7 @@ def evaluate_job(ctx: ExperimentContext, out: Path | None = None, *, n_trials: i
     inputs = resolve_inputs(ctx, section, checkpoint, campaign, surrogate=surrogate, trials=trials)
     paths, optimised = _optimise_both(ctx, out, inputs, e_original)
     flown = evaluation_trial(ctx.trial_config, n_trials or ev.n_trials)
-    unmoved = [kind for kind in optimised if not Table3Row.from_json_dict(optimised[kind]["table3"]).moved]
-    # a WRP that moved nothing is the initial path: its placebos would all be the initial path too
-    placebo_paths, infeasible = placebo_paths_of(ctx, {k: p for k, p in paths.items() if k not in unmoved},
-                                                 ev.placebos)
-    if ev.robust:
-        robust_dir = evaluated_wrp_dir(out, "robust")
-        levers = robust_job(ctx, section, robust_dir, inputs.campaign_dir)
-        paths["robust"] = FlightPath.load(robust_dir / "path.json")
-        if levers["moved"]:
-            rng = np.random.default_rng(np.random.SeedSequence(ctx.campaign_seed, spawn_key=(11, len(WRP_KINDS))))
-            placebo_paths["robust"] = robust_placebo_paths(
-                inputs.path, levers, ev.placebos, view_depths(inputs.path, ctx.flight_proxy.bounds),
-                section.robust.standoff_fraction, rng)
-        else:
-            unmoved.append("robust")
+    placebo_paths, infeasible, unmoved = _placebos(ctx, out, inputs, paths, optimised)
 
     def fly(name: str, path: FlightPath, trial=flown) -> PathTrials:
         folder = evaluated_campaign_dir(out, name)
@@ -357,6 +343,40 @@ def evaluate_job(ctx: ExperimentContext, out: Path | None = None, *, n_trials: i
     box_plot(flown_trials, out / "boxplot.png")
     _log_evaluation(result)
     return result
+
+
+def _placebos(ctx: ExperimentContext, out: Path, inputs: WrpInputs, paths: dict[str, FlightPath],
+              optimised: dict[str, dict]) -> tuple[dict[str, dict[str, FlightPath]], int, list[str]]:
+    """The placebo paths of every WRP that moved (WRP -> {name -> path}), the placebo moves without a flyable
+    direction, and the WRPs that moved nothing; with ``wrp.evaluate.robust`` the robust kind is optimised
+    into ``paths`` first."""
+    ev = ctx.config.wrp.evaluate
+    unmoved = [kind for kind in optimised if not Table3Row.from_json_dict(optimised[kind]["table3"]).moved]
+    # a WRP that moved nothing is the initial path: its placebos would all be the initial path too
+    placebo_paths, infeasible = placebo_paths_of(ctx, {k: p for k, p in paths.items() if k not in unmoved},
+                                                 ev.placebos)
+    if ev.robust:
+        paths["robust"], robust_placebos = _robust_and_placebos(ctx, out, inputs)
+        if robust_placebos is None:
+            unmoved.append("robust")
+        else:
+            placebo_paths["robust"] = robust_placebos
+    return placebo_paths, infeasible, unmoved
+
+
+def _robust_and_placebos(ctx: ExperimentContext, out: Path, inputs: WrpInputs
+                         ) -> tuple[FlightPath, dict[str, FlightPath] | None]:
+    """The robust kind of ``inputs`` into ``out`` and its placebo paths (None when it applied no lever), seeded from
+    the campaign seed."""
+    section, robust_dir = ctx.config.wrp, evaluated_wrp_dir(out, "robust")
+    levers = robust_job(ctx, section, robust_dir, inputs.campaign_dir)
+    path = FlightPath.load(robust_dir / "path.json")
+    if not levers["moved"]:
+        return path, None
+    rng = np.random.default_rng(np.random.SeedSequence(ctx.campaign_seed, spawn_key=(11, len(WRP_KINDS))))
+    return path, robust_placebo_paths(inputs.path, levers, section.evaluate.placebos,
+                                      view_depths(inputs.path, ctx.flight_proxy.bounds),
+                                      section.robust.standoff_fraction, rng)
 
 
 def _optimise_both(ctx: ExperimentContext, out: Path, inputs: WrpInputs,
