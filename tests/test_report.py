@@ -192,3 +192,23 @@ def test_the_missions_and_timings_sections_list_files_relative_to_the_run():
     timings = timings_section({"plan": 0.42, "campaign": 61.26}, out)
     assert "| plan | 0.4 |" in timings and "| campaign | 61.3 |" in timings
     assert "Recording: `rerun /runs/demo/run.rrd`" in timings
+
+
+def test_the_levers_section_gives_each_levers_band_and_what_each_capture_error_costs():
+    from wrp_eval.report import levers_section
+    verdict = {"gain_m": 0.00001, "gain_ci_m": [-0.00001, 0.00003], "paired_trials": 24, "placebos_flown": 20,
+               "placebo_gains_m": [0.0] * 20, "placebo_gain_p95_m": 0.0004, "recommended": False,
+               "reason": "the gain does not exceed the placebo 95th percentile"}
+    screen = {"lever": "redundant", "views": [3, 9], "flights": 24, "verdict": verdict, "error_gain_m": 0.00005,
+              "p95_gain_m": 0.00003, "windfree_gain_m": 0.00004, "placebo_error_gains_m": [0.0] * 20,
+              "placebo_p95_gains_m": [-0.00001, 0.005]}
+    row = {"mean_m": 0.0157, "std_m": 0.0002, "p95_m": 0.016, "mean_gain_m": 0.00026, "p95_gain_m": 0.0028}
+    text = "\n".join(levers_section({
+        "views": [3, 9], "risk_source": "the campaign's view_registered column, 64 flights",
+        "screen_flights": list(range(24)), "levers": {"redundant": screen}, "applied": [], "apply": "recommended",
+        "robust_s": 0.8, "screen_s": 348.0,
+        "error_sources": {"flown": {"mean_m": 0.016, "std_m": 0.0015, "p95_m": 0.0189}, "position": row}}))
+    assert ("| redundant | +0.010 | [-0.010, +0.030] | +0.400 | +0.050 | +0.030 | +0.040 | -0.010 / +5.000 | "
+            "not recommended: the gain does not exceed the placebo 95th percentile |") in text
+    assert "| position | 15.700 | 0.200 | 16.000 | +0.260 | +2.800 |" in text
+    assert "none (the robust path is the initial path)" in text and "screening them 348.0 s" in text

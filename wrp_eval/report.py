@@ -392,9 +392,25 @@ def levers_section(levers: dict) -> list[str]:
                      f"{1e3 * screen['p95_gain_m']:+.3f} | {1e3 * screen['windfree_gain_m']:+.3f} | "
                      f"{1e3 * min(p95s):+.3f} / {1e3 * max(p95s):+.3f} | "
                      + ("**recommended**" if v["recommended"] else f"not recommended: {v['reason']}") + " |")
+    lines += _error_source_lines(levers.get("error_sources"))
     applied = ", ".join(levers["applied"]) or "none (the robust path is the initial path)"
     return lines + ["", f"Applied ({levers.get('apply', 'recommended')}): {applied}. Placing the levers took "
                         f"{levers['robust_s']:.1f} s, screening them {levers['screen_s']:.1f} s.", ""]
+
+
+def _error_source_lines(sources: dict | None) -> list[str]:
+    """What each capture error costs the screened flights (the bound on any lever acting on it)."""
+    if not sources:
+        return []
+    flown = sources["flown"]
+    lines = ["", f"What each capture error costs these flights (re-scored without it; flown: mean "
+                 f"{1e3 * flown['mean_m']:.2f} mm, std {1e3 * flown['std_m']:.2f}, p95 {1e3 * flown['p95_m']:.2f}):",
+             "", "| removed | mean (mm) | std (mm) | p95 (mm) | mean gain (mm) | p95 gain (mm) |",
+             "|---|---|---|---|---|---|"]
+    lines += [f"| {name} | {1e3 * row['mean_m']:.3f} | {1e3 * row['std_m']:.3f} | {1e3 * row['p95_m']:.3f} | "
+              f"{1e3 * row['mean_gain_m']:+.3f} | {1e3 * row['p95_gain_m']:+.3f} |"
+              for name, row in sources.items() if name != "flown"]
+    return lines
 
 
 def risk_section(risk: ViewRisk, top_views: int = 5) -> list[str]:

@@ -129,3 +129,37 @@ def test_screening_recommends_a_lever_only_where_its_viewpoints_matter():
                             len(path), 20, rng, 500, 0.95)
     assert not anywhere.verdict.recommended
     assert "placebo" in anywhere.verdict.reason
+
+
+def test_each_capture_error_is_removed_alone():
+    from dataclasses import replace
+
+    from wrp_eval.wrp.levers import CAPTURE_ERRORS, capture_error_sources, without_capture_error
+    path = ring_path()
+    planned = captures_from_path(path)
+    rng = np.random.default_rng(3)
+    flown = replace(planned.subset(np.arange(1, len(path))), blur_px=rng.random(len(path) - 1))
+    flown = replace(flown, positions=flown.positions + rng.normal(0, 1, (len(flown), 3)),
+                    yaw=flown.yaw + 0.05, pitch=flown.pitch - 0.02, roll=np.full(len(flown), 0.01),
+                    prior_positions=flown.positions + 0.5)
+    fields = {"blur": {"blur_px"}, "heading": {"yaw"}, "attitude": {"pitch", "roll"},
+              "position": {"positions", "prior_positions"}}
+    names = ("positions", "yaw", "pitch", "roll", "prior_positions", "blur_px")
+    for source, changed in fields.items():
+        out = without_capture_error(flown, source, planned)
+        for name in names:
+            assert np.array_equal(getattr(out, name), getattr(flown, name)) == (name not in changed), (source, name)
+    clean = without_capture_error(flown, "all", planned)
+    assert np.array_equal(clean.positions, path.positions[1:]) and np.array_equal(clean.yaw, path.yaw[1:])
+    assert np.all(clean.blur_px == 0) and np.all(clean.roll == 0)
+
+    def score(sets):      # an error that grows with the position error only
+        return np.array([0.01 + 0.001 * np.linalg.norm(cs.positions - path.positions[cs.planned_index], axis=1).mean()
+                         for cs in sets])
+
+    base = score([flown])
+    sources = capture_error_sources(score, [flown], base, planned)
+    assert set(sources) == {"flown", *CAPTURE_ERRORS}
+    assert sources["position"]["mean_gain_m"] == pytest.approx(base[0] - 0.01)
+    assert sources["all"]["mean_m"] == pytest.approx(0.01)
+    assert sources["blur"]["mean_gain_m"] == 0 and sources["heading"]["mean_gain_m"] == 0

@@ -26,6 +26,10 @@ recommended when the gain's CI excludes 0 and the gain exceeds the placebos' 95t
 
 Risk and screening use disjoint flights (the risk's first, seeded), so a lever is never judged on the flights
 that chose its viewpoints.
+
+What any lever could gain is bounded by what the capture errors cost: :func:`capture_error_sources` re-scores the
+screened flights with one error removed at a time (blur, heading, attitude, position, all): a lever acting on
+blur (capture mode, speed per leg) cannot gain more than the flights lose to blur.
 """
 
 from __future__ import annotations
@@ -191,3 +195,43 @@ def screen_lever(score: Callable[[Sequence[CaptureSet]], np.ndarray], flights: S
                                                             for g in placebo]), rng, resamples, confidence)
     return LeverScreen(lever, tuple(int(v) for v in views), len(flights), verdict, mine.error_m, mine.p95_m,
                        mine.windfree_m, tuple(g.error_m for g in placebo), tuple(g.p95_m for g in placebo))
+
+
+def without_capture_error(cs: CaptureSet, source: str, planned: CaptureSet) -> CaptureSet:
+    """``cs`` with one capture error removed (``planned``: the path's views as planned, indexed by view):
+    "blur" (sharp images), "heading" (yaw as planned), "attitude" (pitch as planned, no roll), "position" (the
+    planned positions, priors with them), "all" (every one of these)."""
+    at = cs.planned_index
+    if source == "blur":
+        return replace(cs, blur_px=np.zeros(len(cs)))
+    if source == "heading":
+        return replace(cs, yaw=planned.yaw[at])
+    if source == "attitude":
+        return replace(cs, pitch=planned.pitch[at], roll=np.zeros(len(cs)))
+    if source == "position":
+        return replace(cs, positions=planned.positions[at], prior_positions=planned.positions[at])
+    if source == "all":
+        return replace(planned.subset(at), roll=np.zeros(len(cs)), blur_px=np.zeros(len(cs)))
+    raise ValueError(f"unknown capture error {source!r}; choose from {CAPTURE_ERRORS}")
+
+
+CAPTURE_ERRORS = ("blur", "heading", "attitude", "position", "all")
+
+
+def capture_error_sources(score: Callable[[Sequence[CaptureSet]], np.ndarray], flights: Sequence[CaptureSet],
+                          base_errors_m: np.ndarray, planned: CaptureSet) -> dict[str, dict[str, float]]:
+    """What each capture error costs the flights (counterfactual, the oracle exact): per source of
+    :data:`CAPTURE_ERRORS`, the flights re-scored without it: mean, std and p95 of their errors (m) and the mean
+    and p95 gains against ``base_errors_m`` (m). The bound on what any lever acting on that error can gain."""
+    base = np.asarray(base_errors_m, dtype=float)
+
+    def std(x: np.ndarray) -> float:
+        return float(x.std(ddof=1)) if x.size > 1 else float("nan")
+
+    out = {"flown": {"mean_m": float(base.mean()), "std_m": std(base), "p95_m": float(np.percentile(base, 95))}}
+    for source in CAPTURE_ERRORS:
+        errors = score([without_capture_error(cs, source, planned) for cs in flights])
+        out[source] = {"mean_m": float(errors.mean()), "std_m": std(errors),
+                       "p95_m": float(np.percentile(errors, 95)), "mean_gain_m": float((base - errors).mean()),
+                       "p95_gain_m": float(np.percentile(base, 95) - np.percentile(errors, 95))}
+    return out

@@ -33,6 +33,7 @@ from wrp_eval.wrp.config import WrpSection
 from wrp_eval.wrp.levers import (
     LeverScreen,
     RegistrationRisk,
+    capture_error_sources,
     captures_with_lever,
     path_with_lever,
     registration_risk,
@@ -114,11 +115,15 @@ def _risk_map(camp: _Campaign, risk_ids: np.ndarray, config_dir: str | Path) -> 
 
 
 def _screen_levers(camp: _Campaign, section: WrpSection, views: np.ndarray, depths: np.ndarray,
-                   screen_ids: np.ndarray, config_dir: str | Path, rng: np.random.Generator) -> dict[str, LeverScreen]:
-    """Each lever of ``section.robust`` at ``views`` screened on the flights ``screen_ids`` against its placebos."""
+                   screen_ids: np.ndarray, config_dir: str | Path, rng: np.random.Generator
+                   ) -> tuple[dict[str, LeverScreen], dict]:
+    """Each lever of ``section.robust`` at ``views`` screened on the flights ``screen_ids`` against its placebos,
+    and what each capture error costs those flights (:func:`capture_error_sources`)."""
     rob, path = section.robust, camp.path
     flights = list(flight_captures(camp.folder, screen_ids, config_dir).values())
     base = camp.score(flights, screen_ids)
+    sources = capture_error_sources(lambda sets: camp.score(sets, screen_ids), flights, base,
+                                    captures_from_path(path))
     screens: dict[str, LeverScreen] = {}
     for lever in rob.levers:
         def change(cs: CaptureSet, at: np.ndarray, lever: str = lever) -> CaptureSet:
@@ -131,7 +136,7 @@ def _screen_levers(camp: _Campaign, section: WrpSection, views: np.ndarray, dept
         screens[lever] = screen_lever(lambda sets: camp.score(sets, screen_ids), flights, base, change, windfree,
                                       lever, views, len(path), rob.placebos, rng, section.evaluate.bootstrap,
                                       section.evaluate.confidence)
-    return screens
+    return screens, sources
 
 
 def robust_job(ctx: ExperimentContext, section: WrpSection, out: Path, campaign: str | Path | None = None) -> dict:
@@ -149,7 +154,7 @@ def robust_job(ctx: ExperimentContext, section: WrpSection, out: Path, campaign:
     views = riskiest(risk, max(1, math.ceil(rob.views_fraction * len(path))))
     depths = view_depths(path, ctx.flight_proxy.bounds)
     placed_s = time.perf_counter() - start
-    screens = _screen_levers(camp, section, views, depths, screen_ids, ctx.config_dir, rng)
+    screens, sources = _screen_levers(camp, section, views, depths, screen_ids, ctx.config_dir, rng)
     screen_s = time.perf_counter() - start - placed_s
     chosen = [name for name in APPLY_ORDER if name in screens
               and (rob.apply == "all" or screens[name].verdict.recommended)]
@@ -161,7 +166,8 @@ def robust_job(ctx: ExperimentContext, section: WrpSection, out: Path, campaign:
     doc = {"kind": "robust", "campaign": str(camp.folder), "seed": seed, "views": views.tolist(),
            "risk_flights": risk_ids.tolist(), "risk_source": risk_source, "screen_flights": screen_ids.tolist(),
            "p_unregistered": risk.p_unregistered.tolist(), "risk_m": risk.risk_m.tolist(),
-           "levers": {k: v.to_json_dict() for k, v in screens.items()}, "applied": chosen, "apply": rob.apply,
+           "levers": {k: v.to_json_dict() for k, v in screens.items()}, "error_sources": sources,
+           "applied": chosen, "apply": rob.apply,
            "moved": bool(chosen), "robust_s": time.perf_counter() - start - screen_s, "screen_s": screen_s,
            "screening": "counterfactual: the screened flights' own capture sets with the lever applied, the same "
                         "oracle seeds; a redundant view takes the mean of its two ends' flown errors"}
