@@ -57,6 +57,10 @@ def test_run_writes_report_recording_and_missions_and_is_reproducible(tmp_path, 
     assert first["envelope"]["path"] == first["evaluate"]["recommended_path"]
     assert set(first["envelope"]["boundaries_m_s"]) == {"bow", "stern"}
     assert f"Path to fly: {first['evaluate']['recommended_path']}" in report
+    sources = json.loads((out / "error_sources.json").read_text())
+    assert set(sources["flights"]) <= set(range(12))
+    if sources["sources"]:       # the flights that did not fail, re-scored without each capture error
+        assert "## Where the error's spread comes from" in report and "| position |" in report
 
     assert main(["run", str(cfg)]) == 0
     second = json.loads((out / "run_summary.json").read_text())

@@ -33,6 +33,7 @@ from wrp_eval.study.runner import run_study
 from wrp_eval.surrogate.train import CHECKPOINT_NAME, train_from_campaign
 from wrp_eval.wrp.jobs import EVALUATED_PATHS, evaluate_job
 from wrp_eval.wrp.risk import campaign_flown_offsets, save_risk_recording, view_risk
+from wrp_eval.wrp.robust import campaign_error_sources
 
 log = logging.getLogger(__name__)
 
@@ -76,11 +77,15 @@ def run_pipeline(ctx: ExperimentContext, *, smallest: bool = False) -> RunSummar
     trials, envelope = _flights(ctx, path, summary, timings)
     with Step(timings, "export", "missions of the three paths"):
         summary["missions"] = export_missions(ctx)
+    with Step(timings, "error sources", "the campaign's flights re-scored without each capture error"):
+        sources = campaign_error_sources(ctx.folders.campaign, ctx.config.wrp.robust.screen_flights, ctx.run_seed,
+                                         ctx.config_dir)
+        write_json_atomic(out / "error_sources.json", sources)
     with Step(timings, "report", "report.md, figures and run.rrd"):
         risk = _risk_and_recording(ctx, path, summary, envelope is not None)
         timings["total"] = time.perf_counter() - job_start
         run = RunSummary(**summary, timings_s=timings)
-        report = write_report(ctx, path, run, trials, risk, envelope)
+        report = write_report(ctx, path, run, trials, risk, envelope, sources)
     timings["total"] = time.perf_counter() - job_start
     write_json_atomic(out / "run_summary.json", run.to_json_dict())
     return replace(run, report=str(report))

@@ -208,11 +208,12 @@ def envelope_section(env: Envelope, path_name: str, figure: str, risk_figure: st
 
 
 def write_report(ctx: ExperimentContext, path, summary: RunSummary, trials: TrialData, risk: ViewRisk | None = None,
-                 envelope: Envelope | None = None) -> Path:
+                 envelope: Envelope | None = None, error_sources: dict | None = None) -> Path:
     """Figures under ``<run>/figures`` and ``<run>/report.md``; returns the report's path. path: the planned
     FlightPath; summary: the run summary so far; trials: the campaign's trials (as the surrogate was trained on);
     risk: the per-view risk map (:mod:`wrp_eval.wrp.risk`), None: no risk section; envelope: the run's wind
-    envelope (the first page), None: the forecast flights of the evaluation open the report instead."""
+    envelope (the first page), None: the forecast flights of the evaluation open the report instead;
+    error_sources: :func:`wrp_eval.wrp.robust.campaign_error_sources`, None: no such section."""
     config, out = ctx.config, ctx.folders.root
     _figures(ctx, path, trials, risk)
     ev = summary.evaluate
@@ -228,6 +229,7 @@ def write_report(ctx: ExperimentContext, path, summary: RunSummary, trials: Tria
              *ship_section(ctx.ship.complexity, path, summary.plan), *WIND_SECTION,
              *campaign_section(summary.campaign, config.campaign.perturbation.design, summary.surrogate),
              *surrogate_section(summary.surrogate), *wrp_section(ev.wrp or {}), *robustness_section(ev),
+             *(error_sources_section(error_sources) if error_sources and error_sources["sources"] else []),
              *levers_lines(ctx),
              *(risk_section(risk) if risk is not None else []),
              *missions_section(summary.missions, out), *timings_section(summary.timings_s, out)]
@@ -396,6 +398,21 @@ def levers_section(levers: dict) -> list[str]:
     applied = ", ".join(levers["applied"]) or "none (the robust path is the initial path)"
     return lines + ["", f"Applied ({levers.get('apply', 'recommended')}): {applied}. Placing the levers took "
                         f"{levers['robust_s']:.1f} s, screening them {levers['screen_s']:.1f} s.", ""]
+
+
+def error_sources_section(error_sources: dict) -> list[str]:
+    """Why a WRP has (or has not) something to work on: what each capture error costs the campaign's flights."""
+    sources = error_sources["sources"]
+    flown, worst = sources["flown"], max((k for k in sources if k not in ("flown", "all")),
+                                         key=lambda k: sources[k]["p95_gain_m"])
+    return ["", "## Where the error's spread comes from", "",
+            f"{len(error_sources['flights'])} of the campaign's flights re-scored by the oracle with one capture error "
+            f"removed. With every capture error removed the error's std goes {1e3 * flown['std_m']:.2f} -> "
+            f"{1e3 * sources['all']['std_m']:.2f} mm and its p95 {1e3 * flown['p95_m']:.2f} -> "
+            f"{1e3 * sources['all']['p95_m']:.2f} mm: about the most a wind-resistant path could win. The largest "
+            f"share is the {worst} error's (p95 {1e3 * sources[worst]['p95_gain_m']:+.2f} mm); a lever on another "
+            "error (blur: capture mode, speed per leg) can gain no more than its row.",
+            *_error_source_lines(sources)[1:], ""]
 
 
 def _error_source_lines(sources: dict | None) -> list[str]:

@@ -199,3 +199,20 @@ def robust_placebo_paths(initial: FlightPath, levers: dict, count: int, depths_m
             path = path_with_lever(path, name, views, standoff_fraction, depths_m)
         out[f"placebo-robust-{k:02d}"] = replace(path, metadata={**path.metadata, "placebo_of": "robust"})
     return out
+
+
+def campaign_error_sources(folder: str | Path, flights: int, seed: int, config_dir: str | Path = ".") -> dict:
+    """What each capture error costs a campaign's flights (:func:`wrp_eval.wrp.levers.capture_error_sources`) on
+    ``flights`` of its trials that did not fail (seeded; all of them when fewer), with the trial ids used
+    (``sources`` None when every trial failed)."""
+    camp = _read_campaign(Path(folder), config_dir)
+    ok = ~camp.table.column("failed").to_numpy(zero_copy_only=False).astype(bool)
+    ids = camp.table.column("trial_id").to_numpy()[ok]
+    rng = np.random.default_rng(np.random.SeedSequence(seed, spawn_key=(14,)))
+    chosen = np.sort(rng.choice(ids, min(flights, ids.size), replace=False))
+    if chosen.size == 0:
+        return {"flights": [], "sources": None}
+    sets = list(flight_captures(camp.folder, chosen, config_dir).values())
+    sources = capture_error_sources(lambda s: camp.score(s, chosen), sets, camp.score(sets, chosen),
+                                    captures_from_path(camp.path))
+    return {"flights": chosen.tolist(), "sources": sources}
