@@ -2,7 +2,8 @@
 
 ship -> plan -> campaign (perturbed flights scored by the oracle) -> surrogate -> ISWRP and SWRP ->
 evaluation of the three paths under the same winds -> the wind envelope of the recommended path
-(``envelope.run_grid``) -> mission export -> report.md (opening with the envelope's go / no-go) + run.rrd.
+(``envelope.run_grid``) -> mission export -> what each capture error costs the campaign's flights
+(error_sources.json) -> report.md (opening with the envelope's go / no-go) + run.rrd.
 
 Each step calls the stage's own function (the same code as the stage's sub-command) and writes where that
 sub-command would, so a step can be re-run or inspected on its own. The campaign steps resume: re-running

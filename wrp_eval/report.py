@@ -412,7 +412,7 @@ def error_sources_section(error_sources: dict) -> list[str]:
             f"{1e3 * sources['all']['p95_m']:.2f} mm: about the most a wind-resistant path could win. The largest "
             f"share is the {worst} error's (p95 {1e3 * sources[worst]['p95_gain_m']:+.2f} mm); a lever on another "
             "error (blur: capture mode, speed per leg) can gain no more than its row.",
-            *_error_source_lines(sources)[1:], ""]
+            *_error_source_lines(sources), ""]
 
 
 def _error_source_lines(sources: dict | None) -> list[str]:
