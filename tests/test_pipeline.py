@@ -20,7 +20,8 @@ campaign:
   backend: {kind: local, workers: 1}
 surrogate: {epochs: 20, use_failed_trials: true, validation_moves: 8}   # the fishing path registers 8-10 of 17
                                                                         # views: most trials fail
-wrp: {iterations: 50, acceptance: paper, evaluate: {n_trials: 4, placebos: 2, forecast_trials: 4}}
+wrp: {iterations: 50, acceptance: paper, evaluate: {n_trials: 4, placebos: 2, forecast_trials: 4},
+      robust: {screen_flights: 4}}
 envelope: {run_grid: {speeds_m_s: [0, 8], directions: 2, max_flights: 4, look_flights: 4, resolution_m_s: 8}}
 """
 

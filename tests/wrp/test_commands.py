@@ -129,11 +129,12 @@ def test_optimize_robust_screens_each_lever_on_flights_apart_from_the_risk_map(t
         assert np.array_equal(robust.positions, original.positions) and doc["moved"] is False
 
 
-def test_campaign_error_sources_rescore_chosen_flights_without_each_capture_error(trained_campaign):
+def test_campaign_error_sources_rescore_chosen_flights_without_each_capture_error(tmp_path):
     from wrp_eval.wrp.levers import CAPTURE_ERRORS
     from wrp_eval.wrp.robust import campaign_error_sources
-    _, _, campaign = trained_campaign
-    first = campaign_error_sources(campaign, 4, seed=5)
-    assert len(first["flights"]) == 4 and set(first["sources"]) == {"flown", *CAPTURE_ERRORS}
-    assert first == campaign_error_sources(campaign, 4, seed=5)            # seeded: the same flights and numbers
-    assert len(campaign_error_sources(campaign, 1000, seed=5)["flights"]) == 60   # all of them when fewer
+    helpers.make_campaign(tmp_path / "campaign", 6, 6, seed=1, failed_trials=(2,))
+    first = campaign_error_sources(tmp_path / "campaign", 3, seed=5)
+    assert len(first["flights"]) == 3 and 2 not in first["flights"]
+    assert set(first["sources"]) == {"flown", *CAPTURE_ERRORS}
+    assert first == campaign_error_sources(tmp_path / "campaign", 3, seed=5)     # seeded: the same flights, numbers
+    assert campaign_error_sources(tmp_path / "campaign", 100, seed=5)["flights"] == [0, 1, 3, 4, 5]   # all that flew
