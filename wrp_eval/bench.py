@@ -34,6 +34,7 @@ BENCH_GROUPS: dict[str, str] = {
     "surrogate": "wrp_eval.surrogate.bench",
     "wrp": "wrp_eval.wrp.bench",
     "robustness": "wrp_eval.wrp.robustness_bench",
+    "robust": "wrp_eval.wrp.robust_bench",
     "envelope": "wrp_eval.envelope.bench",
     "scaling": "wrp_eval.campaign.scaling_bench",
     "views": "wrp_eval.campaign.view_scaling",

@@ -47,7 +47,8 @@ def target_anchor(target: str, value: float, applies: bool) -> tuple[str | None,
     return (target, value) if applies else (None, None)
 
 
-def _at_gsd(ctx, gsd_mm: float):
+def at_gsd(ctx, gsd_mm: float):
+    """``ctx`` with the planner's ground sampling distance set to ``gsd_mm`` (the same ship, another view count)."""
     doc = ctx.config.model_dump(mode="json")
     doc["planning"]["gsd_mm"] = gsd_mm
     return ctx.with_config(ExperimentConfig.model_validate(doc))
@@ -69,13 +70,13 @@ def view_count_points(gsds=GSDS_MM, flights: int = FLIGHTS) -> list[dict]:
     """One dict per GSD: views, plan timings (s), oracle_s, trials_per_min, and the median flight, oracle and
     trial seconds per trial (medians: a worker's first trial also loads its kernels)."""
     base = quickstart_context()
-    warm = _at_gsd(base, gsds[0])
+    warm = at_gsd(base, gsds[0])
     _ = warm.planned  # warm-up, untimed: the ship, the compiled kernels and each worker's start load once
     with tempfile.TemporaryDirectory() as tmp:
         quickstart_campaign(warm, WIND_M_S, Path(tmp) / "warm", flights=2)
     points = []
     for gsd in gsds:
-        ctx = _at_gsd(base, gsd)
+        ctx = at_gsd(base, gsd)
         start = time.perf_counter()
         planned = ctx.planned
         plan_wall = time.perf_counter() - start
@@ -131,7 +132,7 @@ def view_count_records(points: list[dict]) -> list[BenchRecord]:
 
 def large_campaign_record(flights: int = LARGE_CAMPAIGN_FLIGHTS) -> BenchRecord:
     """Trials per minute of ``flights`` physical flights of the inspection path (gsd ``INSPECTION_GSD_MM``)."""
-    ctx = _at_gsd(quickstart_context(), INSPECTION_GSD_MM)
+    ctx = at_gsd(quickstart_context(), INSPECTION_GSD_MM)
     path = ctx.planned.path
     with tempfile.TemporaryDirectory() as tmp:
         summary, table = quickstart_campaign(ctx, WIND_M_S, Path(tmp) / "c", flights=flights)
