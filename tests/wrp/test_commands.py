@@ -109,7 +109,8 @@ def test_optimize_robust_screens_each_lever_on_flights_apart_from_the_risk_map(t
     robust_cfg = tmp_path / "robust.yaml"
     robust_cfg.write_text(cfg.read_text().replace(
         "oracle_error: false}",
-        "oracle_error: false, robust: {risk_flights: 8, screen_flights: 4, placebos: 3, views_fraction: 0.3}}"))
+        "oracle_error: false, seed: 1, robust: {risk_flights: 8, screen_flights: 4, placebos: 3, "
+        "views_fraction: 0.3}}"))      # seed 1 draws risk flights in which two views carry risk
     out = tmp_path / "wrp-robust"
     assert main(["optimize", str(robust_cfg), "--kind", "robust", "--out", str(out), "--campaign", str(campaign),
                  "--quiet"]) == 0
@@ -121,12 +122,19 @@ def test_optimize_robust_screens_each_lever_on_flights_apart_from_the_risk_map(t
     for screen in doc["levers"].values():
         assert screen["flights"] == 4 and screen["views"] == doc["views"]
         assert screen["verdict"]["placebos_flown"] == 3 and len(screen["placebo_p95_gains_m"]) == 3
-    assert len(doc["views"]) <= 2 and all(0 <= v < 6 for v in doc["views"])   # ceil(0.3 x 6), positive risk only
+    assert 1 <= len(doc["views"]) <= 2 and all(0 <= v < 6 for v in doc["views"])   # ceil(0.3 x 6), positive risk
     original, robust = FlightPath.load(campaign / "path.json"), FlightPath.load(out / "path.json")
     added = len(doc["views"]) if "redundant" in doc["applied"] else 0
     assert len(robust) == len(original) + added
     if not doc["applied"]:
         assert np.array_equal(robust.positions, original.positions) and doc["moved"] is False
+    # seed 0 draws risk flights in which no view carries risk: nothing to place, nothing screened, nothing moved
+    robust_cfg.write_text(robust_cfg.read_text().replace("seed: 1,", "seed: 0,"))
+    assert main(["optimize", str(robust_cfg), "--kind", "robust", "--out", str(tmp_path / "none"), "--campaign",
+                 str(campaign), "--quiet"]) == 0
+    none = json.loads((tmp_path / "none" / "levers.json").read_text())
+    assert none["views"] == [] and none["levers"] == {} and none["moved"] is False
+    assert set(none["error_sources"]) == {"flown", "blur", "heading", "attitude", "position", "all"}
 
 
 def test_campaign_error_sources_rescore_chosen_flights_without_each_capture_error(tmp_path):

@@ -76,12 +76,33 @@ def test_standoff_moves_only_the_chosen_views_back_along_their_axes():
     assert np.all(np.linalg.norm(out.positions[[2, 5], :2], axis=1) > 30.0)     # farther from the ship
 
 
+def test_two_chosen_neighbours_sharing_their_shorter_leg_get_one_redundant_view():
+    path = ring_path()
+    partner = leg_partners(path.positions, np.arange(len(path)))
+    v = next(i for i in range(len(path) - 1) if partner[i] == i + 1 and partner[i + 1] == i)
+    out = path_with_lever(path, "redundant", np.array([v, v + 1]), 0.1, np.zeros(len(path)))
+    assert len(out) == len(path) + 1
+    assert out.positions[v + 1] == pytest.approx((path.positions[v] + path.positions[v + 1]) / 2)
+    cs = captures_with_lever(captures_from_path(path), "redundant", np.array([v, v + 1]), 0.1, np.zeros(len(path)),
+                             path)
+    assert len(cs) == len(path) + 1 and cs.planned_index[-1] == len(path)   # numbered after the path's views
+
+
+def test_standoff_on_a_flown_capture_moves_it_along_its_planned_axis():
+    from dataclasses import replace
+    path = ring_path()
+    flown = replace(captures_from_path(path), yaw=np.asarray(path.yaw) + 0.3)     # the airframe turned 17 deg
+    out = captures_with_lever(flown, "standoff", np.array([4]), 0.1, np.full(len(path), 20.0), path)
+    assert (flown.positions - out.positions)[4] == pytest.approx(2.0 * optical_axes(path.yaw, path.pitch)[4])
+    assert np.array_equal(out.positions[np.arange(len(path)) != 4], flown.positions[np.arange(len(path)) != 4])
+
+
 @pytest.mark.parametrize("lever", ["redundant", "standoff"])
 def test_a_lever_on_the_planned_captures_is_the_lever_on_the_path(lever):
     path = ring_path()
     views, depth = np.array([3, 7]), np.full(len(path), 25.0)
     from_path = captures_from_path(path_with_lever(path, lever, views, 0.1, depth))
-    from_captures = captures_with_lever(captures_from_path(path), lever, views, 0.1, depth, path.positions)
+    from_captures = captures_with_lever(captures_from_path(path), lever, views, 0.1, depth, path)
     key = lambda cs: np.lexsort(cs.positions.T)  # noqa: E731
     a, b = from_path.subset(key(from_path)), from_captures.subset(key(from_captures))
     assert a.positions == pytest.approx(b.positions)
@@ -101,7 +122,7 @@ def test_screening_recommends_a_lever_only_where_its_viewpoints_matter():
                          for k, cs in enumerate(sets)])
 
     def change(cs, at):
-        return captures_with_lever(cs, "standoff", at, 0.1, np.full(len(path), 25.0), path.positions)
+        return captures_with_lever(cs, "standoff", at, 0.1, np.full(len(path), 25.0), path)
 
     def windfree(at):        # the plan itself is as good with or without the lever
         return 0.02

@@ -29,6 +29,7 @@ Issue 18 adds what tells a WRP's gain from chance (``robustness`` of :func:`summ
 
 from __future__ import annotations
 
+import zlib
 from collections.abc import Collection
 from dataclasses import dataclass, replace
 from pathlib import Path
@@ -265,10 +266,14 @@ def summarise(paths: list[PathTrials], seed: int, resamples: int, confidence: fl
     ``windfree_m`` (path name -> wind-free error, placebos included) and ``placebos`` (WRP name -> its placebo
     paths' trials) the robustness gain of every other path and its verdict (module docstring). A path named in
     ``unmoved`` (a WRP that moved no viewpoint: the first path again) is never recommended, for that reason."""
-    rng = np.random.default_rng(np.random.SeedSequence(seed, spawn_key=(7,)))
+    # one bootstrap stream per statistic and path (by name): a path added to the evaluation changes no other
+    # path's intervals
+    def rng_for(kind: int, name: str) -> np.random.Generator:
+        return np.random.default_rng(np.random.SeedSequence(seed, spawn_key=(7, kind, zlib.crc32(name.encode()))))
+
     result = EvaluationResult(confidence, resamples,
-                              tuple(path_summary(p, rng, resamples, confidence, spec) for p in paths),
-                              tuple(paired_difference(paths[0], p, rng, resamples, confidence, spec)
+                              tuple(path_summary(p, rng_for(0, p.name), resamples, confidence, spec) for p in paths),
+                              tuple(paired_difference(paths[0], p, rng_for(1, p.name), resamples, confidence, spec)
                                     for p in paths[1:]))
     if windfree_m is None:
         return result
@@ -279,7 +284,8 @@ def summarise(paths: list[PathTrials], seed: int, resamples: int, confidence: fl
         placebo_gains = [robustness_gains(base, q, windfree_m[base.name], windfree_m[q.name])
                          for q in (placebos or {}).get(p.name, [])]
         placebo_means = [g.mean() if g.size else np.nan for g in placebo_gains]
-        verdict = replace(robustness_verdict(gains, np.array(placebo_means), rng, resamples, confidence),
+        verdict = replace(robustness_verdict(gains, np.array(placebo_means), rng_for(2, p.name), resamples,
+                                             confidence),
                           windfree_error_m=windfree_m[p.name])
         if p.name in unmoved:
             verdict = replace(verdict, recommended=False, reason="it moved no viewpoint: it is the initial path")

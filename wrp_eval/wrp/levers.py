@@ -87,43 +87,57 @@ def _mean_angle(a: np.ndarray, b: np.ndarray) -> np.ndarray:
     return np.angle(np.exp(1j * a) + np.exp(1j * b))
 
 
+def redundant_legs(positions: np.ndarray, views: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """(ends, partners): one leg per chosen view, the shorter one at it (:func:`leg_partners`); a leg two chosen
+    neighbours share gets one redundant view, not two."""
+    views = np.asarray(views, dtype=int)
+    partner = leg_partners(positions, views)
+    leg = np.minimum(views, partner) * len(positions) + np.maximum(views, partner)
+    keep = np.sort(np.unique(leg, return_index=True)[1])
+    return views[keep], partner[keep]
+
+
 def path_with_lever(path: FlightPath, lever: str, views: np.ndarray, standoff_fraction: float,
                     depths_m: np.ndarray) -> FlightPath:
     """``path`` with ``lever`` at ``views``; ``depths_m`` (n,): each view's distance to the ship along its axis."""
     views = np.asarray(views, dtype=int)
+    lever_note = {**path.metadata.get("lever", {}), lever: views.tolist()}
     if lever == "standoff":
         back = np.zeros(len(path))
         back[views] = standoff_fraction * np.nan_to_num(depths_m[views])
         axes = optical_axes(path.yaw, path.pitch)
         return replace(path, positions=np.asarray(path.positions) - back[:, None] * axes,
-                       metadata={**path.metadata, "lever": {"standoff": views.tolist()}})
-    partner = leg_partners(path.positions, views)
-    new = {"positions": (path.positions[views] + path.positions[partner]) / 2,
-           "yaw": _mean_angle(path.yaw[views], path.yaw[partner]),
-           "pitch": (path.pitch[views] + path.pitch[partner]) / 2,
-           "face_id": path.face_id[views], "kind": path.kind[views], "sortie": path.sortie[views]}
+                       metadata={**path.metadata, "lever": lever_note})
+    ends, partner = redundant_legs(path.positions, views)
+    new = {"positions": (path.positions[ends] + path.positions[partner]) / 2,
+           "yaw": _mean_angle(path.yaw[ends], path.yaw[partner]),
+           "pitch": (path.pitch[ends] + path.pitch[partner]) / 2,
+           "face_id": path.face_id[ends], "kind": path.kind[ends], "sortie": path.sortie[ends]}
     # the new view goes between its two ends in the tour
-    slot = np.maximum(views, partner)
+    slot = np.maximum(ends, partner)
     fields: dict[str, Any] = {name: np.insert(np.asarray(getattr(path, name)), slot, value, axis=0)
                               for name, value in new.items()}
-    return replace(path, **fields, metadata={**path.metadata, "lever": {"redundant": views.tolist()}})
+    return replace(path, **fields, metadata={**path.metadata, "lever": lever_note})
 
 
 def captures_with_lever(cs: CaptureSet, lever: str, views: np.ndarray, standoff_fraction: float,
-                        depths_m: np.ndarray, planned_positions: np.ndarray) -> CaptureSet:
-    """A flight's capture set ``cs`` as it would have been with ``lever`` at ``views`` (module docstring)."""
-    index = np.full(len(planned_positions), -1)
+                        depths_m: np.ndarray, planned: FlightPath) -> CaptureSet:
+    """A flight's capture set ``cs`` as it would have been with ``lever`` at ``views`` of the ``planned`` path
+    (module docstring): standoff moves each chosen capture back along its view's planned axis; a redundant view
+    is numbered after the path's views (n, n + 1, ...)."""
+    n = len(planned)
+    index = np.full(n, -1)
     index[cs.planned_index] = np.arange(len(cs))
     if lever == "standoff":
-        back = np.zeros(len(cs))
+        back = np.zeros((len(cs), 3))
         taken = index[views] >= 0
-        back[index[views][taken]] = standoff_fraction * np.nan_to_num(depths_m[views][taken])
-        shift = back[:, None] * optical_axes(cs.yaw, cs.pitch)
-        prior = None if cs.prior_positions is None else cs.prior_positions - shift
-        return replace(cs, positions=cs.positions - shift, prior_positions=prior)
-    partner = leg_partners(planned_positions, views)
-    both = (index[views] >= 0) & (index[partner] >= 0)
-    a, b = index[views][both], index[partner][both]
+        axes = optical_axes(planned.yaw, planned.pitch)[views][taken]
+        back[index[views][taken]] = standoff_fraction * np.nan_to_num(depths_m[views][taken])[:, None] * axes
+        prior = None if cs.prior_positions is None else cs.prior_positions - back
+        return replace(cs, positions=cs.positions - back, prior_positions=prior)
+    ends, partner = redundant_legs(planned.positions, views)
+    both = (index[ends] >= 0) & (index[partner] >= 0)
+    a, b = index[ends][both], index[partner][both]
 
     def mid(values: np.ndarray) -> np.ndarray:
         return np.concatenate([values, (values[a] + values[b]) / 2])
@@ -132,7 +146,7 @@ def captures_with_lever(cs: CaptureSet, lever: str, views: np.ndarray, standoff_
         return None if values is None else mid(values)
 
     return CaptureSet(mid(cs.positions), np.concatenate([cs.yaw, _mean_angle(cs.yaw[a], cs.yaw[b])]),
-                      mid(cs.pitch), np.concatenate([cs.planned_index, len(planned_positions) + np.arange(a.size)]),
+                      mid(cs.pitch), np.concatenate([cs.planned_index, n + np.arange(a.size)]),
                       cs.camera, optional_mid(cs.roll), optional_mid(cs.prior_positions), optional_mid(cs.blur_px))
 
 
@@ -225,13 +239,17 @@ def capture_error_sources(score: Callable[[Sequence[CaptureSet]], np.ndarray], f
     and p95 gains against ``base_errors_m`` (m). The bound on what any lever acting on that error can gain."""
     base = np.asarray(base_errors_m, dtype=float)
 
-    def std(x: np.ndarray) -> float:
-        return float(x.std(ddof=1)) if x.size > 1 else float("nan")
+    def stats(x: np.ndarray) -> dict[str, float]:        # over the flights the oracle could score
+        x = x[np.isfinite(x)]
+        nan = float("nan")
+        return {"mean_m": float(x.mean()) if x.size else nan, "std_m": float(x.std(ddof=1)) if x.size > 1 else nan,
+                "p95_m": float(np.percentile(x, 95)) if x.size else nan}
 
-    out = {"flown": {"mean_m": float(base.mean()), "std_m": std(base), "p95_m": float(np.percentile(base, 95))}}
+    out = {"flown": stats(base)}
     for source in CAPTURE_ERRORS:
         errors = score([without_capture_error(cs, source, planned) for cs in flights])
-        out[source] = {"mean_m": float(errors.mean()), "std_m": std(errors),
-                       "p95_m": float(np.percentile(errors, 95)), "mean_gain_m": float((base - errors).mean()),
-                       "p95_gain_m": float(np.percentile(base, 95) - np.percentile(errors, 95))}
+        row = stats(errors)
+        both = np.isfinite(base) & np.isfinite(errors)
+        out[source] = {**row, "mean_gain_m": float((base - errors)[both].mean()) if both.any() else float("nan"),
+                       "p95_gain_m": out["flown"]["p95_m"] - row["p95_m"]}
     return out

@@ -84,6 +84,13 @@ class _Campaign:
     def path(self) -> FlightPath:
         return self.scorer.path
 
+    def scored_ids(self) -> np.ndarray:
+        """Sorted ids of the trials that did not fail and have an error (the draws depend on the config and seed
+        only, not on the order the chunks were stored in)."""
+        ok = ~self.table.column("failed").to_numpy(zero_copy_only=False).astype(bool)
+        ok &= np.isfinite(self.table.column("error_m").to_numpy(zero_copy_only=False).astype(float))
+        return np.sort(self.table.column("trial_id").to_numpy()[ok])
+
     def score(self, sets: Sequence[CaptureSet], trial_ids: np.ndarray) -> np.ndarray:
         """(k,) the oracle's errors of ``sets``, each with its trial's oracle seed."""
         return np.array([self.scorer.ship.score(cs, seed=self.seed_of[int(t)]).error_m
@@ -122,16 +129,19 @@ def _screen_levers(camp: _Campaign, section: WrpSection, views: np.ndarray, dept
     rob, path = section.robust, camp.path
     flights = list(flight_captures(camp.folder, screen_ids, config_dir).values())
     base = camp.score(flights, screen_ids)
-    sources = capture_error_sources(lambda sets: camp.score(sets, screen_ids), flights, base,
-                                    captures_from_path(path))
+    planned_sets = captures_from_path(path)
+    sources = capture_error_sources(lambda sets: camp.score(sets, screen_ids), flights, base, planned_sets)
     screens: dict[str, LeverScreen] = {}
-    for lever in rob.levers:
+    for lever in rob.levers if views.size else ():       # no view at risk: nothing to screen
         def change(cs: CaptureSet, at: np.ndarray, lever: str = lever) -> CaptureSet:
-            return captures_with_lever(cs, lever, at, rob.standoff_fraction, depths, path.positions)
+            return captures_with_lever(cs, lever, at, rob.standoff_fraction, depths, path)
 
         def windfree(at: np.ndarray | None, lever: str = lever) -> float:
-            planned = path if at is None else path_with_lever(path, lever, at, rob.standoff_fraction, depths)
-            return float(camp.scorer.ship.score(captures_from_path(planned), seed=0).error_m)
+            # the planned captures changed as the flights' are (a redundant view numbered after the path's): the
+            # oracle draws each view's noise by its number, so renumbering the views after an insertion would
+            # reshuffle it
+            planned = planned_sets if at is None else change(planned_sets, at)
+            return float(camp.scorer.ship.score(planned, seed=0).error_m)
 
         screens[lever] = screen_lever(lambda sets: camp.score(sets, screen_ids), flights, base, change, windfree,
                                       lever, views, len(path), rob.placebos, rng, section.evaluate.bootstrap,
@@ -147,16 +157,14 @@ def robust_job(ctx: ExperimentContext, section: WrpSection, out: Path, campaign:
     path = camp.path
     seed = section.seed if section.seed is not None else ctx.run_seed
     rng = np.random.default_rng(np.random.SeedSequence(seed, spawn_key=(13,)))
-    ok = ~camp.table.column("failed").to_numpy(zero_copy_only=False).astype(bool)
-    risk_ids, screen_ids = split_flights(camp.table.column("trial_id").to_numpy()[ok], rob.risk_flights,
-                                         rob.screen_flights, rng)
+    risk_ids, screen_ids = split_flights(camp.scored_ids(), rob.risk_flights, rob.screen_flights, rng)
     risk, risk_source = _risk_map(camp, risk_ids, ctx.config_dir)
     views = riskiest(risk, max(1, math.ceil(rob.views_fraction * len(path))))
     depths = view_depths(path, ctx.flight_proxy.bounds)
     placed_s = time.perf_counter() - start
     screens, sources = _screen_levers(camp, section, views, depths, screen_ids, ctx.config_dir, rng)
     screen_s = time.perf_counter() - start - placed_s
-    chosen = [name for name in APPLY_ORDER if name in screens
+    chosen = [name for name in APPLY_ORDER if name in screens and views.size
               and (rob.apply == "all" or screens[name].verdict.recommended)]
     robust_path = path
     for name in chosen:
@@ -206,8 +214,7 @@ def campaign_error_sources(folder: str | Path, flights: int, seed: int, config_d
     ``flights`` of its trials that did not fail (seeded; all of them when fewer), with the trial ids used
     (``sources`` None when every trial failed)."""
     camp = _read_campaign(Path(folder), config_dir)
-    ok = ~camp.table.column("failed").to_numpy(zero_copy_only=False).astype(bool)
-    ids = camp.table.column("trial_id").to_numpy()[ok]
+    ids = camp.scored_ids()
     rng = np.random.default_rng(np.random.SeedSequence(seed, spawn_key=(14,)))
     chosen = np.sort(rng.choice(ids, min(flights, ids.size), replace=False))
     if chosen.size == 0:
