@@ -223,3 +223,13 @@ def test_five_perfect_forecast_flights_are_not_enough_to_go():
     v = forecast_verdict(five, EvaluateSection(go_probability=0.8), (0.03, 0.95), 0,
                          SimpleNamespace(speed_10m_m_s=6.0, direction_deg=270.0))
     assert v.row.p_meets_spec == 1.0 and not v.go
+
+
+def test_a_paired_difference_from_before_the_p95_columns_still_loads_and_a_broken_one_does_not():
+    from wrp_eval.wrp.evaluation import PairedDifference
+    old = {"path": "iswrp", "versus": "initial", "paired_trials": 4, "both_succeeded": 4, "mean_error_diff_m": 0.1,
+           "mean_error_diff_ci": None, "wins": 1, "losses": 3, "failure_rate_diff": 0.0, "failure_rate_diff_ci": None}
+    loaded = PairedDifference.from_json_dict(old)
+    assert loaded.p95_error_diff_m is None and loaded.p_meets_spec_diff_ci is None and loaded.wins == 1
+    with pytest.raises(KeyError):
+        PairedDifference.from_json_dict({k: v for k, v in old.items() if k != "wins"})

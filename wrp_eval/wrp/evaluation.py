@@ -9,7 +9,7 @@ groups a path's campaign cannot give (no spec, no views-not-taken column, no sor
 
 from __future__ import annotations
 
-from dataclasses import asdict, dataclass, fields
+from dataclasses import MISSING, asdict, dataclass, fields
 from typing import Any
 
 from wrp_eval.wrp.optimize import Table3Row
@@ -109,7 +109,9 @@ class PairedDifference:
 
     @classmethod
     def from_json_dict(cls, doc: dict) -> "PairedDifference":
-        kwargs: dict[str, Any] = {f.name: doc.get(f.name) for f in fields(cls)}
+        # the fields with a default came later: older documents lack them
+        kwargs: dict[str, Any] = {f.name: doc[f.name] if f.default is MISSING else doc.get(f.name, f.default)
+                                  for f in fields(cls)}
         return cls(**kwargs)
 
 
