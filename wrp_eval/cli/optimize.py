@@ -7,6 +7,8 @@ Writes <out>/path.json (the WRP) and <out>/wrp_metrics.json (the paper's Table 3
 total position / rotation offset, time, and the WRP's error from the ORACLE; plus the surrogate's figures,
 per-viewpoint offsets and where E_original and r_s came from). With the default acceptance (validated) the
 oracle confirms every move; --no-oracle leaves the moves unconfirmed and wrp_metrics.json says so.
+--kind robust (levers beyond moving a viewpoint, screened with the oracle on the campaign's stored flights
+against placebos; no surrogate needed) writes <out>/path.json and <out>/levers.json instead.
 """
 
 from __future__ import annotations
@@ -28,7 +30,8 @@ def _optimize(args: argparse.Namespace) -> int:
 
 
 def register(sub: argparse._SubParsersAction) -> None:
-    p = sub.add_parser("optimize", help="wind-resistance path (ISWRP/SWRP, paper Alg. 3/4) from a surrogate",
+    p = sub.add_parser("optimize", help="wind-resistance path (ISWRP/SWRP, paper Alg. 3/4, from a surrogate; "
+                                        "or the robust kind's levers)",
                        description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     p.add_argument("config", metavar="CONFIG")
     p.add_argument("--kind", choices=("iswrp", "swrp", "robust"), default=None, help="overrides wrp.kind")

@@ -46,17 +46,14 @@ from wrp_eval.sim.captures import CaptureSet
 from wrp_eval.wrp.evaluate import robustness_verdict
 from wrp_eval.wrp.evaluation import RobustnessVerdict
 
-LEVERS = ("redundant", "standoff")
-
 
 @dataclass(frozen=True)
 class RegistrationRisk:
     """p_unregistered (n,): share of the flights that lost view i (not taken or not registered); risk_m (n,):
-    cov(lost_i, error) over those flights (m); errors_m (k,): the flights' errors."""
+    cov(lost_i, error) over those flights (m)."""
 
     p_unregistered: np.ndarray
     risk_m: np.ndarray
-    errors_m: np.ndarray
 
 
 def registration_risk(registered: np.ndarray, errors_m: np.ndarray) -> RegistrationRisk:
@@ -64,7 +61,7 @@ def registration_risk(registered: np.ndarray, errors_m: np.ndarray) -> Registrat
     lost = ~np.asarray(registered, dtype=bool)
     e = np.asarray(errors_m, dtype=float)
     risk = ((lost - lost.mean(axis=0)) * (e - e.mean())[:, None]).mean(axis=0)
-    return RegistrationRisk(lost.mean(axis=0), risk, e)
+    return RegistrationRisk(lost.mean(axis=0), risk)
 
 
 def riskiest(risk: RegistrationRisk, count: int) -> np.ndarray:

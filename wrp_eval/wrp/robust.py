@@ -109,8 +109,7 @@ def _read_campaign(folder: Path, config_dir: str | Path) -> _Campaign:
 def _risk_map(camp: _Campaign, risk_ids: np.ndarray, config_dir: str | Path) -> tuple[RegistrationRisk, str]:
     """The risk map of ``risk_ids``' flights, from the stored ``view_registered`` column or, for a campaign stored
     before it, the oracle again; and where it came from."""
-    ids = camp.table.column("trial_id").to_numpy()
-    rows = np.argsort(ids)[np.searchsorted(ids, risk_ids, sorter=np.argsort(ids))]
+    rows = np.flatnonzero(np.isin(camp.table.column("trial_id").to_numpy(), risk_ids))   # any order: a covariance
     stored = column_array(camp.table.take(rows), "view_registered")
     if not np.all(np.isnan(stored), axis=1).any():
         return (registration_risk(stored == 1.0, camp.table.column("error_m").to_numpy()[rows]),
@@ -130,6 +129,7 @@ def _screen_levers(camp: _Campaign, section: WrpSection, views: np.ndarray, dept
     flights = list(flight_captures(camp.folder, screen_ids, config_dir).values())
     base = camp.score(flights, screen_ids)
     planned_sets = captures_from_path(path)
+    windfree_base = float(camp.scorer.ship.score(planned_sets, seed=0).error_m)
     sources = capture_error_sources(lambda sets: camp.score(sets, screen_ids), flights, base, planned_sets)
     screens: dict[str, LeverScreen] = {}
     for lever in rob.levers if views.size else ():       # no view at risk: nothing to screen
@@ -140,8 +140,9 @@ def _screen_levers(camp: _Campaign, section: WrpSection, views: np.ndarray, dept
             # the planned captures changed as the flights' are (a redundant view numbered after the path's): the
             # oracle draws each view's noise by its number, so renumbering the views after an insertion would
             # reshuffle it
-            planned = planned_sets if at is None else change(planned_sets, at)
-            return float(camp.scorer.ship.score(planned, seed=0).error_m)
+            if at is None:
+                return windfree_base
+            return float(camp.scorer.ship.score(change(planned_sets, at), seed=0).error_m)
 
         screens[lever] = screen_lever(lambda sets: camp.score(sets, screen_ids), flights, base, change, windfree,
                                       lever, views, len(path), rob.placebos, rng, section.evaluate.bootstrap,
