@@ -103,6 +103,23 @@ def test_settings_outside_the_flight_do_not_orphan_stored_trials(tmp_path, path_
         run_analytic(make_config(path_file, n_trials=7), out)
 
 
+def test_a_store_flown_by_other_code_is_refused_but_stays_readable(tmp_path, path_file, make_config, run_analytic):
+    """Trials flown by another version of the flight / oracle code are never extended by today's (the config alone
+    does not decide a trial); a store without a recorded code digest counts as other code."""
+    out = tmp_path / "c"
+    assert run_analytic(make_config(path_file, n_trials=3), out).ran == 3
+    meta_file = out / "campaign.json"
+    meta = json.loads(meta_file.read_text())
+    assert run_analytic(make_config(path_file, n_trials=4), out).ran == 1       # same code: resumed
+    for stored in ("0123456789abcdef", None):
+        changed = {**json.loads(meta_file.read_text()), "fingerprint": "0123456789abcdef", "code_digest": stored}
+        meta_file.write_text(json.dumps(changed))
+        with pytest.raises(InputError, match="other flight / oracle code"):
+            run_analytic(make_config(path_file, n_trials=5), out)
+        assert campaign_status(out)["done"] == 4                                  # nothing lost, still readable
+    assert meta["code_digest"] and len(meta["code_digest"]) == 16
+
+
 def test_status_counts(tmp_path, path_file, make_config, comparable, run_analytic, tiny_path):
     run_analytic(make_config(path_file, n_trials=5), tmp_path / "c", fail_trial_ids=[1])
     status = campaign_status(tmp_path / "c")
@@ -161,7 +178,7 @@ def test_a_store_of_the_renamed_flight_evaluator_keeps_its_fingerprint(tmp_path,
     meta = json.loads((tmp_path / "c" / "campaign.json").read_text())
     (old_name,) = [old for old, new in RENAMED_EVALUATORS.items() if new == DEFAULT_EVALUATOR]
     today = fingerprint(meta["config"], meta["path_digest"], meta["root_seed"], DEFAULT_EVALUATOR,
-                        meta.get("evaluator_options") or {})
+                        meta.get("evaluator_options") or {}, meta["code_digest"])
     assert stored_fingerprint({**meta, "evaluator": old_name}) == today          # resumable under today's name
     assert stored_fingerprint({**meta, "evaluator": "other:factory"}) != today
     assert resolve_factory(old_name) is resolve_factory(DEFAULT_EVALUATOR)

@@ -18,6 +18,7 @@ from pathlib import Path
 import numpy as np
 
 from wrp_eval.campaign import backends
+from wrp_eval.campaign.code_digest import trial_code_digest
 from wrp_eval.campaign.config import CampaignSection, TrialConfig
 from wrp_eval.campaign.evaluators import (
     DEFAULT_EVALUATOR,
@@ -73,11 +74,12 @@ def with_overrides(trial: TrialConfig, *, n_trials: int | None = None, backend: 
     return trial.model_copy(update={"campaign": CampaignSection.model_validate(section)})
 
 
-def fingerprint(config_doc: dict, digest: str, root_seed: int, evaluator: str, options: dict) -> str:
+def fingerprint(config_doc: dict, digest: str, root_seed: int, evaluator: str, options: dict, code: str) -> str:
     """Hash of everything that decides a trial's result: the config sections a flight and its scoring read
     (:data:`_TRIAL_SECTIONS`), the path digest, the root seed, the evaluator (an LHS design also depends on
-    n_trials). The surrogate, wrp, export, planning (the path has its own digest) and study sections are left
-    out: retuning the surrogate must not make thousands of stored flights unusable."""
+    n_trials) and ``code``, the digest of the evaluator's sources (:func:`trial_code_digest`). The surrogate,
+    wrp, export, planning (the path has its own digest) and study sections are left out: retuning the
+    surrogate must not make thousands of stored flights unusable."""
     doc = {name: json.loads(json.dumps(config_doc.get(name))) for name in _TRIAL_SECTIONS}
     campaign = doc["campaign"]
     design = campaign["perturbation"]
@@ -85,7 +87,8 @@ def fingerprint(config_doc: dict, digest: str, root_seed: int, evaluator: str, o
     for key in _NEUTRAL_KEYS:
         if not (key == "n_trials" and lhs):
             campaign.pop(key, None)
-    hashed = {"config": doc, "path": digest, "seed": root_seed, "evaluator": evaluator, "options": options}
+    hashed = {"config": doc, "path": digest, "seed": root_seed, "evaluator": evaluator, "options": options,
+              "code": code}
     return hashlib.sha256(json.dumps(hashed, sort_keys=True, default=str).encode()).hexdigest()[:16]
 
 
@@ -95,14 +98,15 @@ def stored_fingerprint(meta: dict) -> str | None:
     new setting) and a change in which sections count do not orphan the stored trials. None when the stored
     inputs no longer validate, and for a store flown before ``sim.mission`` existed (battery swaps,
     the headway rule and the wind rules changed what ends a flight, so its trials cannot be extended by today's
-    flights; the store still loads for reading)."""
+    flights; the store still loads for reading). None too for a store without a code digest (flown before the
+    fingerprint held one: by which code is unknown)."""
     try:
-        if "mission" not in meta["config"]["sim"]:
+        if "mission" not in meta["config"]["sim"] or not meta.get("code_digest"):
             return None
         doc = TrialConfig.from_stored(meta["config"]).model_dump(mode="json")
         evaluator = meta.get("evaluator", DEFAULT_EVALUATOR)
         return fingerprint(doc, meta["path_digest"], meta["root_seed"], RENAMED_EVALUATORS.get(evaluator, evaluator),
-                           meta.get("evaluator_options") or {})
+                           meta.get("evaluator_options") or {}, meta["code_digest"])
     except (KeyError, TypeError, ValueError):   # pydantic's ValidationError is a ValueError
         return None
 
@@ -119,19 +123,30 @@ def versions() -> dict:
     return {"machine": platform.machine(), "system": platform.platform(), "versions": found}
 
 
+def _how_it_differs(meta: dict, code: str) -> str:
+    """What makes a stored campaign (campaign.json) another campaign than today's, in words."""
+    stored = meta.get("code_digest")
+    if stored != code:
+        return f"flown by other flight / oracle code (code digest {stored or 'not recorded'} vs {code})"
+    return "with a different config, path or seed"
+
+
 def open_store(store: TrialStore, trial: TrialConfig, path_doc: dict, *, root_seed: int, evaluator: str,
                evaluator_options: dict) -> tuple[str, np.ndarray]:
     """Check that the (locked) ``store`` holds nothing but this campaign's trials and (re)write its meta;
     returns (the fingerprint, the stored trial ids). A folder of another campaign is an :class:`InputError`."""
     digest = digest_of_document(path_doc)
     config_doc = trial.model_dump(mode="json")
-    print_ = fingerprint(config_doc, digest, root_seed, evaluator, evaluator_options)
+    code = trial_code_digest(evaluator)
+    print_ = fingerprint(config_doc, digest, root_seed, evaluator, evaluator_options, code)
     previous = store.read_meta()
     if previous is not None and previous.get("fingerprint") != print_ and stored_fingerprint(previous) != print_:
-        raise InputError(store.out_dir, "holds a campaign with a different config, path or seed "
-                                        f"(fingerprint {previous.get('fingerprint')} vs {print_}); use another "
-                                        "--out (or campaign.outputs.dir), or remove the folder")
+        raise InputError(store.out_dir, f"holds a campaign {_how_it_differs(previous, code)} (fingerprint "
+                                        f"{previous.get('fingerprint')} vs {print_}); its trials stay readable, "
+                                        "but use another --out (or campaign.outputs.dir) to fly more, or remove "
+                                        "the folder")
     store.write_meta({"fingerprint": print_, "config": config_doc, "root_seed": root_seed, "path_digest": digest,
+                      "code_digest": code,
                       "n_views": len(path_doc["viewpoints"]),
                       "n_trials": trial.campaign.n_trials, "evaluator": evaluator,
                       "evaluator_options": evaluator_options, "environment": versions(),

@@ -19,6 +19,7 @@ from pathlib import Path
 import numpy as np
 
 from wrp_eval.campaign.backends import TrialPool, split_batches
+from wrp_eval.campaign.code_digest import trial_code_digest
 from wrp_eval.campaign.config import TrialConfig
 from wrp_eval.campaign.evaluators import DEFAULT_EVALUATOR, resolve_factory
 from wrp_eval.campaign.runner import (
@@ -96,7 +97,7 @@ class _Flying:
             self.cells[key] = cell
             if self.worker is None:          # one evaluator per worker for every cell: they differ only in wind
                 print_ = fingerprint(trial.model_dump(mode="json"), "envelope", self.ctx.campaign_seed,
-                                     self.evaluator, self.evaluator_options)
+                                     self.evaluator, self.evaluator_options, trial_code_digest(self.evaluator))
                 self.worker = worker_spec(trial, self.path, key=f"envelope-{print_}-{self.workers}",
                                         root_seed=self.ctx.campaign_seed, config_dir=self.ctx.config_dir,
                                         evaluator=self.evaluator, evaluator_options=self.evaluator_options)
