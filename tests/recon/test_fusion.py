@@ -8,7 +8,8 @@ import numpy as np
 import pytest
 
 from wrp_eval.recon.config import OracleSection, SyntheticOracleSection
-from wrp_eval.recon.fusion import sample_pairs
+from wrp_eval.recon.fusion import _best_per_sample, _pair_evidence
+from wrp_eval.recon.image_effects import PARALLAX_MAX_RAMP_DEG, PARALLAX_MIN_RAMP_DEG, parallax_weights
 from wrp_eval.recon.synthetic import SyntheticOracle
 
 from .conftest import ring_views
@@ -18,9 +19,57 @@ def _ring():
     return ring_views((0, 0, 0), 22.0, (3.0, 16.0), 16, target=(0, 0, 1.5))
 
 
-def test_sample_pairs_lists_every_pair_within_a_sample_once():
-    a, b = sample_pairs(np.array([0, 0, 0, 2, 5, 5]))
-    assert sorted(zip(a.tolist(), b.tolist(), strict=True)) == [(0, 1), (0, 2), (1, 2), (4, 5)]
+def _pairs(sample: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Every unordered pair (a, b), a < b, of observations of the same sample (sorted): the reference listing."""
+    pairs = [(a, b) for a in range(len(sample)) for b in range(a + 1, len(sample)) if sample[a] == sample[b]]
+    return np.array([p[0] for p in pairs], dtype=int), np.array([p[1] for p in pairs], dtype=int)
+
+
+@pytest.mark.parametrize("p_min_deg, p_max_deg", [(5.0, 40.0), (1.0, 178.0), (20.0, 22.0)])
+def test_pair_evidence_matches_the_pairwise_numpy_formulas(p_min_deg, p_max_deg):
+    """The compiled pass over each sample's pairs against the vectorised formulas it replaced (session 18):
+    parallax_weights on every pair, the log-sums by bincount. Same terms; only the rounding of arccos / log1p
+    and the order of the three-term dot product may differ: equal to 1e-12. Also with ramps reaching past 0 or
+    pi and with overlapping ramps (the cosine shortcuts must not decide there)."""
+    rng = np.random.default_rng(3)
+    sample = np.sort(rng.integers(0, 40, 300))
+    rel = rng.normal(size=(300, 3)) * 20.0
+    dist = np.linalg.norm(rel, axis=1)
+    weight = rng.uniform(0.0, 1.0, 300)
+    weight[::7] = 0.0
+    p_min, p_max = np.radians(p_min_deg), np.radians(p_max_deg)
+    a, b = _pairs(sample)
+    alpha = np.arccos(np.clip(np.einsum("kj,kj->k", rel[a], rel[b]) / (dist[a] * dist[b]), -1.0, 1.0))
+    m_pair, t_pair = parallax_weights(alpha, p_min, p_max)
+    both = weight[a] * weight[b]
+
+    def log_none(prob, groups, n):
+        return np.bincount(groups, weights=np.log1p(-np.minimum(prob, 1.0 - 1e-12)), minlength=n)
+
+    tri, unmatched = _pair_evidence(sample, rel, dist, weight, p_min, p_max, np.radians(PARALLAX_MIN_RAMP_DEG),
+                                    np.radians(PARALLAX_MAX_RAMP_DEG), 45)
+    assert len(a) > 1000 and np.ptp(t_pair) > 0.1 and np.ptp(m_pair) > 0.1      # both ramps are crossed
+    np.testing.assert_allclose(tri, log_none(both * t_pair, sample[a], 45), rtol=1e-12, atol=1e-15)
+    np.testing.assert_allclose(unmatched, log_none(np.r_[both * m_pair, both * m_pair], np.r_[a, b], 300),
+                               rtol=1e-12, atol=1e-15)
+    assert np.all(tri[np.setdiff1d(np.arange(45), sample)] == 0.0)         # samples without observations
+
+
+def test_best_per_sample_is_the_lexsort_selection_it_replaced():
+    """The compiled selection against the numpy one it replaced (session 18): the usable observations sorted by
+    sample, then by decreasing weight, ties in index order (np.lexsort is stable), the first ``max_views`` of
+    each sample. Identical indices, ties included."""
+    rng = np.random.default_rng(5)
+    sample = np.sort(rng.integers(0, 50, 2000))
+    weight = rng.choice([0.0, 0.25, 0.5, 0.75, 1.0], 2000)            # many ties
+    usable = rng.random(2000) > 0.3
+    idx = np.flatnonzero(usable)
+    order = idx[np.lexsort((-weight[idx], sample[idx]))]
+    first = np.searchsorted(sample[order], sample[order], side="left")
+    expected = order[np.arange(len(order)) - first < 24]
+    got = _best_per_sample(sample, usable, weight, 24)
+    assert np.bincount(sample[usable]).max() > 24                      # the cap bites
+    np.testing.assert_array_equal(got, expected)
 
 
 def test_error_is_its_hole_part_plus_its_accuracy_part(box_on_water, fast_section):

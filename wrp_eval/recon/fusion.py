@@ -58,10 +58,11 @@ from wrp_eval.open3d_arrays import o3d_tensor
 from wrp_eval.recon.config import OracleSection
 from wrp_eval.recon.image_effects import (
     INCIDENCE_RAMP_DEG,
+    PARALLAX_MAX_RAMP_DEG,
+    PARALLAX_MIN_RAMP_DEG,
     border_weight,
     incidence_weight,
     keypoint_fraction,
-    parallax_weights,
     patch_match_probability,
     pixel_noise_px,
 )
@@ -128,10 +129,12 @@ def _in_view(samples: np.ndarray, normals: np.ndarray, centres: np.ndarray, rot:
 
 
 @kernel
-def _view_candidates(samples, normals, centres, rot, focal_px, width_px, height_px, max_dist_m, cos_incidence_min):
+def _view_candidates(samples, normals, centres, rot, focal_px, width_px, height_px, max_dist_m, cos_incidence_min,
+                     offset_m):
     """The pairs :func:`_in_view` keeps, sample-major, with what step 1 needs of them: sample index (k,),
     view index (k,) into ``centres``, rel = sample - centre (k, 3) m, its length (k,) m, the camera-frame point
-    R^T rel (k, 3) m and the incidence cosine |n . rel| / |rel| (k,)."""
+    R^T rel (k, 3) m, the incidence cosine |n . rel| / |rel| (k,), the image point (u, v) (k, 2) px and the
+    occlusion ray (k, 6) float32: from ``offset_m`` off the sample towards the camera (origin, unit direction)."""
     keep = _in_view(samples, normals, centres, rot, focal_px, width_px, height_px, max_dist_m, cos_incidence_min)
     count = int(keep.sum())
     s_idx = np.empty(count, dtype=np.int64)
@@ -140,6 +143,8 @@ def _view_candidates(samples, normals, centres, rot, focal_px, width_px, height_
     dist = np.empty(count)
     cam = np.empty((count, 3))
     cos_inc = np.empty(count)
+    pixel = np.empty((count, 2))
+    rays = np.empty((count, 6), dtype=np.float32)
     k = 0
     for s in range(samples.shape[0]):
         for v in range(centres.shape[0]):
@@ -154,8 +159,42 @@ def _view_candidates(samples, normals, centres, rot, focal_px, width_px, height_
             for c in range(3):
                 cam[k, c] = rx * rot[v, 0, c] + ry * rot[v, 1, c] + rz * rot[v, 2, c]
             cos_inc[k] = abs(rx * normals[s, 0] + ry * normals[s, 1] + rz * normals[s, 2]) / max(dist[k], 1e-9)
+            pixel[k, 0] = focal_px * cam[k, 0] / cam[k, 2] + width_px / 2
+            pixel[k, 1] = focal_px * cam[k, 1] / cam[k, 2] + height_px / 2
+            for c in range(3):
+                toward = -rel[k, c] / dist[k]
+                rays[k, c] = samples[s, c] + offset_m * toward
+                rays[k, 3 + c] = toward
             k += 1
-    return s_idx, v_idx, rel, dist, cam, cos_inc
+    return s_idx, v_idx, rel, dist, cam, cos_inc, pixel, rays
+
+
+@kernel
+def _best_per_sample(sample, usable, weight, max_views):
+    """Indices (m,) of the ``max_views`` usable observations of highest weight of each sample, sample-major and
+    by decreasing weight (ties in index order: np.lexsort((-weight, sample)) restricted to ``usable``).
+    ``sample`` (k,) sorted."""
+    k = sample.shape[0]
+    out = np.empty(k, dtype=np.int64)
+    m = 0
+    start = 0
+    while start < k:
+        end = start + 1
+        while end < k and sample[end] == sample[start]:
+            end += 1
+        first = m
+        for i in range(start, end):         # stable insertion by decreasing weight
+            if not usable[i]:
+                continue
+            j = m
+            while j > first and weight[out[j - 1]] < weight[i]:
+                out[j] = out[j - 1]
+                j -= 1
+            out[j] = i
+            m += 1
+        m = min(m, first + max_views)
+        start = end
+    return out[:m]
 
 
 def observe_samples(capture_set: CaptureSet, gt: GroundTruth, registered: np.ndarray, section: OracleSection,
@@ -168,53 +207,101 @@ def observe_samples(capture_set: CaptureSet, gt: GroundTruth, registered: np.nda
     centres = np.asarray(capture_set.positions, dtype=float)[views]
     rot = np.ascontiguousarray(capture_set.rotations()[views])
     inc_max = np.radians(p.incidence_max_deg)
-    s_idx, v_idx, rel_k, dist_k, cam_k, cos_k = _view_candidates(
+    s_idx, v_idx, rel_k, dist_k, cam_k, cos_k, pixel, rays = _view_candidates(
         gt.samples, gt.sample_normals, centres, rot, f, float(cam_model.image_width_px),
         float(cam_model.image_height_px), float(cam_model.distance_for_gsd(p.max_gsd_m)),
-        float(np.cos(inc_max + np.radians(INCIDENCE_RAMP_DEG))))                # sample-major
-    u_k = f * cam_k[:, 0] / cam_k[:, 2] + cam_model.image_width_px / 2
-    v_k = f * cam_k[:, 1] / cam_k[:, 2] + cam_model.image_height_px / 2
+        float(np.cos(inc_max + np.radians(INCIDENCE_RAMP_DEG))), OCCLUSION_OFFSET_M)          # sample-major
     # occlusion: is the segment from the sample (just off the surface) to the camera free?
-    toward = -rel_k / dist_k[:, None]
-    origins = gt.samples[s_idx] + OCCLUSION_OFFSET_M * toward
-    rays = np.concatenate([origins, toward], axis=1).astype(np.float32)
     t_hit = gt.occluder_scene.cast_rays(o3d_tensor(rays))["t_hit"].numpy()
     free = t_hit >= dist_k - 2 * OCCLUSION_OFFSET_M
-    s_idx, v_idx, rel_k, dist_k = s_idx[free], v_idx[free], rel_k[free], dist_k[free]
-    u_k, v_k, cos_k, cam_k = u_k[free], v_k[free], cos_k[free], cam_k[free]
     view = views[v_idx]
     blur = capture_set.blur()[view]
     gsd = np.asarray(cam_model.gsd_m(dist_k))
     keep_frac = keypoint_fraction(blur, gsd, p.texture_m)
     patch_px2 = sample_area_m2 * cos_k / gsd ** 2 * keep_frac
-    weight = (border_weight(u_k, v_k, cam_model.image_width_px, cam_model.image_height_px)
+    weight = (border_weight(pixel[:, 0], pixel[:, 1], cam_model.image_width_px, cam_model.image_height_px)
               * incidence_weight(cos_k, inc_max) * patch_match_probability(patch_px2))
-    # the best MAX_VIEWS_PER_SAMPLE observations of each sample (by weight; still sorted by sample)
-    order = np.lexsort((-weight, s_idx))
-    first = np.searchsorted(s_idx[order], s_idx[order], side="left")
-    keep = order[np.arange(len(order)) - first < MAX_VIEWS_PER_SAMPLE]
+    # the best MAX_VIEWS_PER_SAMPLE free observations of each sample (by weight; still sorted by sample)
+    keep = _best_per_sample(s_idx, free, weight, MAX_VIEWS_PER_SAMPLE)
     return SampleObservations(s_idx[keep], view[keep], rel_k[keep], dist_k[keep], cam_k[keep], weight[keep],
                               pixel_noise_px(p.sigma_px, blur[keep]), patch_px2[keep], gsd[keep])
 
 
-def sample_pairs(sample: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """Every unordered pair (a, b), a < b, of observations of the same sample (``sample`` sorted, (k,))."""
-    k = len(sample)
-    if k == 0:
-        return np.zeros(0, dtype=np.int64), np.zeros(0, dtype=np.int64)
-    starts = np.flatnonzero(np.r_[True, sample[1:] != sample[:-1]])
-    ends = np.r_[starts[1:], k]
-    group_end = np.repeat(ends, ends - starts)
-    counts = group_end - np.arange(k) - 1
-    a = np.repeat(np.arange(k), counts)
-    b = a + 1 + np.arange(len(a)) - np.repeat(np.cumsum(counts) - counts, counts)
-    return a, b
+@kernel
+def _cos_end(angle, beyond):
+    """The cosine of a ramp's end ``angle`` rad; ``beyond`` (a cosine outside [-1, 1], never reached) for an end
+    outside [0, pi], where alpha in [0, pi] is always on one side of it: the ramp's formula decides there."""
+    return np.cos(angle) if 0.0 < angle < np.pi else beyond
 
 
-def _any_of(prob: np.ndarray, groups: np.ndarray, n_groups: int) -> np.ndarray:
-    """1 - prod(1 - prob) per group: the probability that at least one of independent events happens."""
-    logs = np.log1p(-np.minimum(prob, 1.0 - 1e-12))
-    return 1.0 - np.exp(np.bincount(groups, weights=logs, minlength=n_groups))
+@kernel
+def _parallax_row(cos_alpha, min_lo, min_hi, max_lo, max_hi, cos_min_lo, cos_min_hi, cos_max_lo, cos_max_hi):
+    """(matchable, triangulates) of one pair from the cosine of its parallax angle: image_effects.parallax_weights,
+    with the arccos taken only inside a ramp (outside a ramp its value is 0 or 1: the cosine decides)."""
+    alpha = -1.0
+    if cos_alpha >= cos_max_lo:
+        matchable = 1.0
+    elif cos_alpha <= cos_max_hi:
+        return 0.0, 0.0
+    else:
+        alpha = np.arccos(min(max(cos_alpha, -1.0), 1.0))
+        matchable = 1.0 - min(max((alpha - max_lo) / (max_hi - max_lo), 0.0), 1.0)
+    if cos_alpha >= cos_min_lo:
+        return matchable, 0.0
+    if cos_alpha <= cos_min_hi:
+        return matchable, matchable
+    if alpha < 0.0:
+        alpha = np.arccos(min(max(cos_alpha, -1.0), 1.0))
+    return matchable, matchable * min(max((alpha - min_lo) / (min_hi - min_lo), 0.0), 1.0)
+
+
+@kernel
+def _pair_evidence(sample, rel, dist, weight, parallax_min, parallax_max, min_ramp, max_ramp, n_samples):
+    """Steps 2-3 over every unordered pair (a, b), a < b, of observations of the same sample (``sample`` sorted,
+    (k,)): alpha = the angle between their rays, matchable m = 1 - ramp(alpha; parallax_max -+ max_ramp),
+    triangulates t = m ramp(alpha; parallax_min -+ min_ramp) (image_effects.parallax_weights), both = w_a w_b.
+    Returns (S,) sum of log(1 - both t) per sample and (k,) sum of log(1 - both m) per observation over the pairs
+    it is in (1 - exp of either: the probability that at least one pair triangulates / matches, the pairs taken
+    as independent). Sums run in pair order (a, then b), every pair's matching term first at its a, then at its
+    b; zero terms are skipped (adding 0 changes no sum)."""
+    k = sample.shape[0]
+    max_lo, max_hi = parallax_max - max_ramp, parallax_max + max_ramp      # the ramps' ends as ramp() has them
+    min_lo, min_hi = parallax_min - min_ramp, parallax_min + min_ramp
+    cosines = (_cos_end(min_lo, 2.0), _cos_end(min_hi, -2.0), _cos_end(max_lo, 2.0), _cos_end(max_hi, -2.0))
+    cap = 1.0 - 1e-12
+    log_untriangulated = np.zeros(n_samples)
+    log_unmatched = np.zeros(k)
+    terms = np.zeros(0)
+    start = 0
+    while start < k:
+        end = start + 1
+        while end < k and sample[end] == sample[start]:
+            end += 1
+        n = end - start
+        if terms.shape[0] < n * (n - 1) // 2:
+            terms = np.zeros(n * (n - 1) // 2)
+        j = 0
+        for a in range(start, end):
+            for b in range(a + 1, end):
+                both = weight[a] * weight[b]
+                terms[j] = 0.0
+                if both > 0.0:
+                    dot = rel[a, 0] * rel[b, 0] + rel[a, 1] * rel[b, 1] + rel[a, 2] * rel[b, 2]
+                    m, t = _parallax_row(dot / (dist[a] * dist[b]), min_lo, min_hi, max_lo, max_hi, *cosines)
+                    if m > 0.0:
+                        terms[j] = np.log1p(-min(both * m, cap))
+                        log_unmatched[a] += terms[j]
+                    if t > 0.0:
+                        log_untriangulated[sample[a]] += np.log1p(-min(both * t, cap))
+                j += 1
+        j = 0
+        for a in range(start, end):
+            for b in range(a + 1, end):
+                if terms[j] != 0.0:
+                    log_unmatched[b] += terms[j]
+                j += 1
+        start = end
+    return log_untriangulated, log_unmatched
 
 
 @kernel
@@ -363,15 +450,11 @@ def fuse(capture_set: CaptureSet, gt: GroundTruth, registered: np.ndarray, secti
     # each sample stands for the patch 1 / density of the surface it was drawn on
     obs = observe_samples(capture_set, gt, registered, section, 1.0 / section.gt_density_per_m2)
     f = capture_set.camera.focal_px
-    a, b = sample_pairs(obs.sample)
-    cos_alpha = np.einsum("kj,kj->k", obs.rel[a], obs.rel[b]) / (obs.dist[a] * obs.dist[b])
-    alpha = np.arccos(np.clip(cos_alpha, -1.0, 1.0))
-    m_pair, t_pair = parallax_weights(alpha, np.radians(p.parallax_min_deg), np.radians(p.parallax_max_deg))
-    both = obs.weight[a] * obs.weight[b]
-    existence = _any_of(both * t_pair, obs.sample[a], n_samples)
-    k = len(obs.sample)
-    pair_match = both * m_pair
-    matched = _any_of(np.r_[pair_match, pair_match], np.r_[a, b], k)   # each pair counts for both its ends
+    log_untriangulated, log_unmatched = _pair_evidence(
+        obs.sample, obs.rel, obs.dist, obs.weight, np.radians(p.parallax_min_deg), np.radians(p.parallax_max_deg),
+        np.radians(PARALLAX_MIN_RAMP_DEG), np.radians(PARALLAX_MAX_RAMP_DEG), n_samples)
+    existence = 1.0 - np.exp(log_untriangulated)
+    matched = 1.0 - np.exp(log_unmatched)
     phi, dc, pose_sigma = pose_errors(obs, matched, existence, capture_set, section, z_views)
 
     # step 4: weighted least-squares intersection of the matched rays

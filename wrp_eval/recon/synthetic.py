@@ -103,7 +103,7 @@ def observe(capture_set: CaptureSet, gt: GroundTruth, rays_x: int, rays_y: int, 
     cam_dirs, _ = ray_grid(capture_set.camera, rays_x, rays_y)
     r = len(cam_dirs)
     rot = capture_set.rotations()  # roll included: a rolled view's ray grid turns about its optical axis
-    dirs = np.einsum("nij,rj->nri", rot, cam_dirs)
+    dirs = np.einsum("nij,rj->nri", rot, cam_dirs, optimize=True)      # BLAS: 0.3 vs 22 ms at 141 views
     origins = np.broadcast_to(np.asarray(capture_set.positions, dtype=float)[:, None, :], (n, r, 3))
     rays = np.concatenate([origins, dirs], axis=2).astype(np.float32).reshape(-1, 6)
     ans = gt.occluder_scene.cast_rays(o3d_tensor(rays))
