@@ -107,3 +107,72 @@ def test_registration_threshold_counts_distinct_rays_on_triangulated_points(m_ra
 def test_seed_pair_needs_the_threshold_too():
     mask, order = register_incremental(**_two_view_seed_and_a_third(5), min_rays=21)
     assert not mask.any() and order == []
+
+
+def _numpy_mapper(n, n_hits, hit_view, h, p, g, t, rays_per_view, ray_weight, seed, min_rays):
+    """The vectorised-per-step mapper the compiled loop replaced (session 18), kept as the reference."""
+    v_of = hit_view[h]
+    registered, order = np.zeros(n, dtype=bool), []
+    hit_ptr = np.searchsorted(h, np.arange(n_hits + 1))
+    view_ptr = np.searchsorted(v_of, np.arange(n + 1))
+    by_partner = np.argsort(p, kind="stable")
+    partner_ptr = np.searchsorted(p[by_partner], np.arange(n + 1))
+    tri_hit, corr_ray = np.zeros(n_hits, dtype=bool), np.zeros(n * rays_per_view, dtype=bool)
+    corr_count = np.zeros(n)
+
+    def distinct(idx):
+        last = {int(x): i for i, x in enumerate(idx)}
+        return idx[[last[int(x)] == i for i, x in enumerate(idx)]] if len(idx) else idx
+
+    def register(v):
+        registered[v] = True
+        order.append(v)
+        own = np.arange(view_ptr[v], view_ptr[v + 1])
+        own = own[t[own] & registered[p[own]]]
+        seen = by_partner[partner_ptr[v]:partner_ptr[v + 1]]
+        seen = seen[t[seen] & registered[v_of[seen]]]
+        new = np.concatenate([h[own], h[seen]])
+        new = distinct(new[~tri_hit[new]])
+        if len(new) == 0:
+            return
+        tri_hit[new] = True
+        rays = np.concatenate([g[hit_ptr[x]:hit_ptr[x + 1]] for x in new])
+        rays = distinct(rays[~corr_ray[rays]])
+        corr_ray[rays] = True
+        corr_count[:] += np.bincount(rays // rays_per_view, weights=ray_weight[rays], minlength=n)
+
+    for v in seed:
+        register(v)
+    while True:
+        cand = np.where(registered, -1, corr_count)
+        v = int(np.argmax(cand))
+        if cand[v] < min_rays:
+            break
+        register(v)
+    return registered, order
+
+
+@pytest.mark.parametrize("seed", [0, 1, 2])
+def test_the_compiled_mapper_registers_what_the_numpy_mapper_did(seed):
+    """Random candidate pairs (many hits per view, repeated rays, weights): the same registered views in the same
+    order as the per-step numpy mapper the compiled loop replaced (the threshold's stop: the tests above)."""
+    rng = np.random.default_rng(seed)
+    n, rays_per_view, n_hits = 14, 60, 3000
+    share = 0.75 ** np.arange(n)                                             # later views see less
+    hit_view = np.sort(rng.choice(n, n_hits, p=share / share.sum()))
+    hit = np.sort(rng.integers(0, n_hits, 20000))
+    partner = (hit_view[hit] + rng.integers(1, 4, hit.size)) % n             # neighbours in a ring
+    grid = partner * rays_per_view + rng.integers(0, rays_per_view, hit.size)
+    triangulates = rng.random(hit.size) < 0.6
+    ray_weight = rng.uniform(0.2, 1.0, n * rays_per_view)
+    hit_ray = hit_view * rays_per_view + rng.integers(0, rays_per_view, n_hits)
+    mask, order = register_incremental(n, n_hits, hit_view, hit, partner, np.ones(hit.size, dtype=bool),
+                                       triangulates, grid, rays_per_view, 30, hit_ray=hit_ray, ray_weight=ray_weight)
+    pair_weight = np.minimum(ray_weight[hit_ray[hit]], ray_weight[grid])
+    tri = np.bincount(hit_view[hit][triangulates] * n + partner[triangulates], weights=pair_weight[triangulates],
+                      minlength=n * n).reshape(n, n)
+    first = divmod(int(np.argmax(np.triu(tri + tri.T, k=1))), n)
+    ref_mask, ref_order = _numpy_mapper(n, n_hits, hit_view, hit, partner, grid, triangulates, rays_per_view,
+                                        ray_weight, first, 30)
+    assert len(order) == n and order != sorted(order)                         # the picking order matters
+    assert order == ref_order and np.array_equal(mask, ref_mask)

@@ -197,17 +197,6 @@ def register_components(n_views: int, pair_view: np.ndarray, partner: np.ndarray
     return labels == best_comp, int(n_comp)
 
 
-def _ranges(ptr: np.ndarray, rows: np.ndarray) -> np.ndarray:
-    """Concatenated index ranges ptr[r]:ptr[r+1] for every r in ``rows`` (CSR gather, no Python loop)."""
-    lo, hi = ptr[rows], ptr[rows + 1]
-    counts = hi - lo
-    total = int(counts.sum())
-    if total == 0:
-        return np.zeros(0, dtype=np.int64)
-    starts = np.repeat(lo - np.cumsum(counts) + counts, counts)
-    return starts + np.arange(total)
-
-
 def register_incremental(n_views: int, n_hits: int, hit_view: np.ndarray, hit: np.ndarray, partner: np.ndarray,
                          matchable: np.ndarray, triangulates: np.ndarray, grid_index: np.ndarray,
                          rays_per_view: int, min_rays: int, hit_ray: np.ndarray | None = None,
@@ -226,7 +215,7 @@ def register_incremental(n_views: int, n_hits: int, hit_view: np.ndarray, hit: n
 
     Bookkeeping is incremental: per-hit "triangulated" and per-ray "has a 2D-3D correspondence" flags are
     updated only from the pairs of the newly registered view, so the whole run touches each pair O(1)
-    times (a loop over registration steps, vectorised within a step). Ties go to the lowest view index,
+    times (one compiled pass per registration step, `_register_view`). Ties go to the lowest view index,
     so the result is deterministic.
 
     hit_view (h,) view of every hit; hit, partner, matchable, triangulates, grid_index (k,): candidate pairs
@@ -245,80 +234,114 @@ def register_incremental(n_views: int, n_hits: int, hit_view: np.ndarray, hit: n
         hit_ray = np.zeros(n_hits, dtype=np.int64)  # with unit weights any ray index gives weight 1
     elif hit_ray is None:
         raise ValueError("ray_weight needs hit_ray, each hit's own flat ray index")
-    mapper = _IncrementalMapper(n_views, n_hits, hit_view, hit[mi], partner[mi], grid_index[mi], triangulates[mi],
-                                rays_per_view, ray_weight)
-    seed = mapper.seed_pair(hit_ray, min_rays)
+    h, p, g, t = hit[mi], partner[mi], grid_index[mi], triangulates[mi]
+    v_of = hit_view[h]
+    seed = _seed_pair(n_views, h, p, g, t, v_of, np.minimum(ray_weight[hit_ray[h]], ray_weight[g]), min_rays)
     if seed is None:
-        return mapper.registered, mapper.order
-    for v in seed:
-        mapper.register(v)
+        return np.zeros(n_views, dtype=bool), []
+    # CSR views of the matchable pairs: by hit (sorted already), by the hit's view (sorted with the hits), by
+    # partner (one stable sort; on 16-bit keys numpy's stable sort is a linear radix sort)
+    by_partner = np.argsort(p.astype(np.int16) if n_views < 2**15 else p, kind="stable")
+    registered, order = _register_loop(
+        h, p, g, t, v_of, np.searchsorted(h, np.arange(n_hits + 1)), np.searchsorted(v_of, np.arange(n_views + 1)),
+        by_partner, np.searchsorted(p[by_partner], np.arange(n_views + 1)), np.asarray(ray_weight, dtype=float),
+        rays_per_view, seed[0], seed[1], float(min_rays))
+    return registered, [int(v) for v in order]
+
+
+def _seed_pair(n: int, h: np.ndarray, p: np.ndarray, g: np.ndarray, t: np.ndarray, v_of: np.ndarray,
+               pair_weight: np.ndarray, min_rays: float) -> tuple[int, int] | None:
+    """The view pair with the most triangulating rays over both directions (ties: lowest (i, j)), or None below
+    ``min_rays``; ``pair_weight`` (m,): a pair's ray weighs the smaller of its two rays' weights."""
+    tri = np.bincount(v_of[t] * n + p[t], weights=pair_weight[t], minlength=n * n).reshape(n, n)
+    tri = np.triu(tri + tri.T, k=1)
+    seed = int(np.argmax(tri))
+    return None if tri.flat[seed] < min_rays else divmod(seed, n)
+
+
+@kernel
+def _distinct(idx, stamp):
+    """idx without repeats, each kept at its last occurrence, in order; ``stamp`` scratch as long as the ids."""
+    for i in range(idx.shape[0]):
+        stamp[idx[i]] = i
+    keep = np.zeros(idx.shape[0], dtype=np.bool_)
+    for i in range(idx.shape[0]):
+        keep[i] = stamp[idx[i]] == i
+    return idx[keep]
+
+
+@kernel
+def _register_view(v, h, p, g, t, v_of, hit_ptr, view_ptr, by_partner, partner_ptr, ray_weight, rays_per_view,
+                   registered, tri_hit, corr_ray, corr_count, stamp_hit, stamp_ray):
+    """Register view ``v`` (:func:`register_incremental`): its pairs with registered views triangulate new hits,
+    whose matching rays in every view become 2D-3D correspondences (the state arrays are updated in place)."""
+    registered[v] = True
+    a, b = partner_ptr[v], partner_ptr[v + 1]
+    new = np.empty(view_ptr[v + 1] - view_ptr[v] + b - a, dtype=np.int64)
+    m = 0
+    for i in range(view_ptr[v], view_ptr[v + 1]):            # v's hits x their registered partners
+        if t[i] and registered[p[i]] and not tri_hit[h[i]]:
+            new[m] = h[i]
+            m += 1
+    for j in by_partner[a:b]:                                # others' registered hits x partner v
+        if t[j] and registered[v_of[j]] and not tri_hit[h[j]]:
+            new[m] = h[j]
+            m += 1
+    new = _distinct(new[:m], stamp_hit)
+    if new.shape[0] == 0:
+        return
+    total = 0
+    for x in new:
+        tri_hit[x] = True
+        total += hit_ptr[x + 1] - hit_ptr[x]
+    rays = np.empty(total, dtype=np.int64)                  # every view's ray that matches a newly triangulated hit
+    m = 0
+    for x in new:
+        for k in range(hit_ptr[x], hit_ptr[x + 1]):
+            if not corr_ray[g[k]]:
+                rays[m] = g[k]
+                m += 1
+    rays = _distinct(rays[:m], stamp_ray)
+    added = np.zeros(corr_count.shape[0])
+    for r in rays:
+        corr_ray[r] = True
+        added[r // rays_per_view] += ray_weight[r]
+    corr_count += added
+
+
+@kernel
+def _register_loop(h, p, g, t, v_of, hit_ptr, view_ptr, by_partner, partner_ptr, ray_weight, rays_per_view,
+                   seed_a, seed_b, min_rays):
+    """The mapper of :func:`register_incremental` from its seed pair on: register the unregistered view with the
+    most correspondences (ties: lowest index) while that count reaches ``min_rays``. Returns the registered mask
+    (n,) and the registration order."""
+    n = view_ptr.shape[0] - 1
+    n_hits = hit_ptr.shape[0] - 1
+    registered = np.zeros(n, dtype=np.bool_)
+    tri_hit = np.zeros(n_hits, dtype=np.bool_)                   # triangulated by two registered views
+    corr_ray = np.zeros(n * rays_per_view, dtype=np.bool_)      # a view's ray matches a triangulated hit
+    corr_count = np.zeros(n)
+    stamp_hit = np.zeros(n_hits, dtype=np.int64)                # scratch for duplicate removal without sorting
+    stamp_ray = np.zeros(n * rays_per_view, dtype=np.int64)
+    order = np.empty(n, dtype=np.int64)
+    count = 0
+    v = seed_a
     while True:
-        cand = np.where(mapper.registered, -1, mapper.corr_count)
-        v = int(np.argmax(cand))  # ties -> lowest index
-        if cand[v] < min_rays:
+        _register_view(v, h, p, g, t, v_of, hit_ptr, view_ptr, by_partner, partner_ptr, ray_weight, rays_per_view,
+                       registered, tri_hit, corr_ray, corr_count, stamp_hit, stamp_ray)
+        order[count] = v
+        count += 1
+        if count == 1:
+            v = seed_b
+            continue
+        best, best_count = -1, -1.0
+        for c in range(n):
+            if not registered[c] and corr_count[c] > best_count:
+                best, best_count = c, corr_count[c]
+        if best < 0 or best_count < min_rays:
             break
-        mapper.register(v)
-    return mapper.registered, mapper.order
-
-
-class _IncrementalMapper:
-    """The state of :func:`register_incremental` over the matchable pairs (m): h, p, g, t (m,) their hit, partner,
-    partner's ray and triangulation flag; the registered views in order; per hit "triangulated", per ray "has a
-    2D-3D correspondence", per view its correspondence count."""
-
-    def __init__(self, n_views: int, n_hits: int, hit_view: np.ndarray, h: np.ndarray, p: np.ndarray, g: np.ndarray,
-                 t: np.ndarray, rays_per_view: int, ray_weight: np.ndarray):
-        self.n, self.rays_per_view, self.ray_weight = n_views, rays_per_view, ray_weight
-        self.h, self.p, self.g, self.t, self.v = h, p, g, t, hit_view[h]
-        self.registered = np.zeros(n_views, dtype=bool)
-        self.order: list[int] = []
-        # CSR views of the matchable pairs: by hit (sorted already), by the hit's view (sorted with the hits),
-        # by partner (one stable sort; on 16-bit keys numpy's stable sort is a linear radix sort)
-        self.hit_ptr = np.searchsorted(h, np.arange(n_hits + 1))
-        self.view_ptr = np.searchsorted(self.v, np.arange(n_views + 1))
-        self.by_partner = np.argsort(p.astype(np.int16) if n_views < 2**15 else p, kind="stable")
-        self.partner_ptr = np.searchsorted(p[self.by_partner], np.arange(n_views + 1))
-        self.tri_hit = np.zeros(n_hits, dtype=bool)                    # triangulated by two registered views
-        self.corr_ray = np.zeros(n_views * rays_per_view, dtype=bool)  # a view's ray matches a triangulated hit
-        self.corr_count = np.zeros(n_views)
-        self.stamp_hit = np.zeros(n_hits, dtype=np.int64)           # scratch for duplicate removal without sorting
-        self.stamp_ray = np.zeros(n_views * rays_per_view, dtype=np.int64)
-
-    def seed_pair(self, hit_ray: np.ndarray, min_rays: float) -> tuple[int, int] | None:
-        """The view pair with the most triangulating rays over both directions (ties: lowest (i, j)), or None
-        below ``min_rays``; a pair's ray weighs the smaller of its two rays' weights."""
-        n, t = self.n, self.t
-        pair_weight = np.minimum(self.ray_weight[hit_ray[self.h]], self.ray_weight[self.g])
-        tri = np.bincount(self.v[t] * n + self.p[t], weights=pair_weight[t], minlength=n * n).reshape(n, n)
-        tri = np.triu(tri + tri.T, k=1)
-        seed = int(np.argmax(tri))
-        return None if tri.flat[seed] < min_rays else divmod(seed, n)
-
-    @staticmethod
-    def _distinct(idx: np.ndarray, stamp: np.ndarray) -> np.ndarray:
-        """idx without repeats (the last occurrence of each kept), O(len(idx))."""
-        pos = np.arange(len(idx))
-        stamp[idx] = pos
-        return idx[stamp[idx] == pos]
-
-    def register(self, v: int) -> None:
-        """Register view ``v``: its pairs with registered views triangulate new hits, whose matching rays in
-        every view become 2D-3D correspondences."""
-        self.registered[v] = True
-        self.order.append(v)
-        own = np.arange(self.view_ptr[v], self.view_ptr[v + 1])                   # v's hits x their partners
-        own = own[self.t[own] & self.registered[self.p[own]]]
-        seen = self.by_partner[self.partner_ptr[v]:self.partner_ptr[v + 1]]    # others' hits x partner v
-        seen = seen[self.t[seen] & self.registered[self.v[seen]]]
-        new = np.concatenate([self.h[own], self.h[seen]])
-        new = self._distinct(new[~self.tri_hit[new]], self.stamp_hit)
-        if len(new) == 0:
-            return
-        self.tri_hit[new] = True
-        g = self.g[_ranges(self.hit_ptr, new)]  # every view's ray that matches a newly triangulated hit
-        g = self._distinct(g[~self.corr_ray[g]], self.stamp_ray)
-        self.corr_ray[g] = True
-        self.corr_count[:] += np.bincount(g // self.rays_per_view, weights=self.ray_weight[g], minlength=self.n)
+        v = best
+    return registered, order[:count]
 
 
 DROPPED, CANDIDATE, MATCHABLE, TRIANGULATES = 0, 1, 2, 3   # _match_pairs' status codes, in increasing order
