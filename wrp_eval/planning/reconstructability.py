@@ -77,6 +77,69 @@ def masked_first_columns(mask: NDArray[np.bool_], width: int) -> NDArray[np.int6
     return cols
 
 
+@kernel
+def _slot_layout(visible, points, normals, positions):
+    """The arrays of :class:`SlotTable` from a visibility (n_v, n_s) bool, in one pass over it in memory order
+    (view-major): a sample's slots hold its views in increasing order, and the view-major pass meets each view's
+    (sample, slot) entries sorted by sample, which is the CSR from a view. Returns slot_view, ray, dist,
+    cos_theta, view_ptr, view_sample, view_slot and the views per sample (n_s,)."""
+    n_v, n_s = visible.shape
+    counts = np.zeros(n_s, dtype=np.int64)
+    view_ptr = np.zeros(n_v + 1, dtype=np.int64)
+    for v in range(n_v):
+        for s in range(n_s):
+            if visible[v, s]:
+                counts[s] += 1
+                view_ptr[v + 1] += 1
+    view_ptr = np.cumsum(view_ptr)
+    width = max(counts.max() if n_s else 0, 1)
+    slot_view = np.full((n_s, width), -1, dtype=np.int64)
+    ray = np.zeros((n_s, width, 3))
+    dist = np.full((n_s, width), np.inf)
+    cos_theta = np.zeros((n_s, width))
+    view_sample = np.empty(view_ptr[-1], dtype=np.int64)
+    view_slot = np.empty(view_ptr[-1], dtype=np.int64)
+    filled = np.zeros(n_s, dtype=np.int64)
+    k = 0
+    for v in range(n_v):
+        for s in range(n_s):
+            if not visible[v, s]:
+                continue
+            slot = filled[s]
+            filled[s] += 1
+            slot_view[s, slot] = v
+            r0, r1, r2 = positions[v, 0] - points[s, 0], positions[v, 1] - points[s, 1], positions[v, 2] - points[s, 2]
+            d = np.sqrt(r0 * r0 + r1 * r1 + r2 * r2)
+            dist[s, slot] = d
+            ray[s, slot, 0], ray[s, slot, 1], ray[s, slot, 2] = r0 / d, r1 / d, r2 / d
+            cos_theta[s, slot] = (ray[s, slot, 0] * normals[s, 0] + ray[s, slot, 1] * normals[s, 1]
+                                  + ray[s, slot, 2] * normals[s, 2])
+            view_sample[k], view_slot[k] = s, slot
+            k += 1
+    return slot_view, ray, dist, cos_theta, view_ptr, view_sample, view_slot, counts
+
+
+@kernel
+def _pair_cache(ray, dist, cos_theta, counts, d_max):
+    """(n_s, M, M) float32: q of every pair of the occupied slots of each sample (slots 0..counts[s]-1), 0 for
+    padding and on the diagonal. The formula of :func:`pair_reconstructability`, each pair computed once (q is
+    symmetric: the same products and sums in either order)."""
+    n_s, width = dist.shape
+    out = np.zeros((n_s, width, width), dtype=np.float32)
+    for s in range(n_s):
+        for a in range(counts[s]):
+            for b in range(a + 1, counts[s]):
+                dot = ray[s, a, 0] * ray[s, b, 0] + ray[s, a, 1] * ray[s, b, 1] + ray[s, a, 2] * ray[s, b, 2]
+                alpha = np.arccos(min(max(dot, -1.0), 1.0))
+                w1 = 1.0 / (1.0 + np.exp(-K1 * (alpha - ALPHA1)))
+                w2 = 1.0 - min(max(dist[s, a], dist[s, b]) / d_max, 1.0)
+                w3 = 1.0 - 1.0 / (1.0 + np.exp(-K3 * (alpha - ALPHA3)))
+                q = w1 * w2 * w3 * min(cos_theta[s, a], cos_theta[s, b])
+                out[s, a, b] = q
+                out[s, b, a] = q
+    return out
+
+
 @dataclass
 class SlotTable:
     """Per-sample view slots of a visibility matrix.
@@ -100,30 +163,12 @@ class SlotTable:
     def build(cls, visible: np.ndarray, points: np.ndarray, normals: np.ndarray, positions: np.ndarray,
               d_max: float, cache: bool = False) -> "SlotTable":
         """From a boolean visibility (n_v, n_s) and the geometry."""
-        n_v, n_s = visible.shape
-        si, vi = np.nonzero(visible.T)                     # sorted by sample, then view
-        counts = np.bincount(si, minlength=n_s)
-        width = max(int(counts.max(initial=0)), 1)
-        starts = np.concatenate([[0], np.cumsum(counts)[:-1]])
-        slot = np.arange(si.size) - starts[si]
-        slot_view = np.full((n_s, width), -1, dtype=np.int64)
-        slot_view[si, slot] = vi
-        rel = positions[vi] - points[si]
-        d = np.linalg.norm(rel, axis=1)
-        ray = np.zeros((n_s, width, 3))
-        dist = np.full((n_s, width), np.inf)
-        cos_theta = np.zeros((n_s, width))
-        ray[si, slot] = rel / d[:, None]
-        dist[si, slot] = d
-        cos_theta[si, slot] = np.einsum("ni,ni->n", ray[si, slot], normals[si])
-        order = np.argsort(vi, kind="stable")
-        view_ptr = np.concatenate([[0], np.cumsum(np.bincount(vi, minlength=n_v))])
-        table = cls(slot_view, ray, dist, cos_theta, view_ptr, si[order], slot[order], float(d_max))
+        slot_view, ray, dist, cos_theta, view_ptr, view_sample, view_slot, counts = _slot_layout(
+            np.ascontiguousarray(visible, dtype=np.bool_), np.asarray(points, dtype=float),
+            np.asarray(normals, dtype=float), np.asarray(positions, dtype=float))
+        table = cls(slot_view, ray, dist, cos_theta, view_ptr, view_sample, view_slot, float(d_max))
         if cache:
-            # the rows of the views' own slots only: a padding slot's row is never read (and is all zeros)
-            rows = table.q_rows(si, slot)
-            table.cache = np.zeros((n_s, width, width), dtype=np.float32)
-            table.cache[si, slot] = rows
+            table.cache = _pair_cache(table.ray, table.dist, table.cos_theta, counts, float(d_max))
         return table
 
     @property
