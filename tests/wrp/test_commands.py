@@ -135,6 +135,24 @@ def test_optimize_robust_screens_each_lever_on_flights_apart_from_the_risk_map(t
     none = json.loads((tmp_path / "none" / "levers.json").read_text())
     assert none["views"] == [] and none["levers"] == {} and none["moved"] is False
     assert set(none["error_sources"]) == {"flown", "blur", "heading", "attitude", "position", "all"}
+    # per-face standoff does not need a view at risk: one lever per face of the path, each at that face's surface
+    # views, applied whatever its verdict with apply: all (every view of the face moved back, none added)
+    robust_cfg.write_text(robust_cfg.read_text().replace("views_fraction: 0.3}", "views_fraction: 0.3, levers: "
+                                                         "[redundant, face_standoff], apply: all}"))
+    assert main(["optimize", str(robust_cfg), "--kind", "robust", "--out", str(tmp_path / "faces"), "--campaign",
+                 str(campaign), "--quiet"]) == 0
+    faces = json.loads((tmp_path / "faces" / "levers.json").read_text())
+    from wrp_eval.ship.proxy import FACE_NAMES
+    from wrp_eval.wrp.levers import face_views
+    expected = {f"standoff_face_{FACE_NAMES[f]}": at.tolist() for f, at in face_views(original).items()}
+    assert expected and {k: v["views"] for k, v in faces["levers"].items()} == expected
+    assert faces["views"] == [] and faces["applied"] == list(expected) and faces["moved"] is True
+    moved_back = FlightPath.load(tmp_path / "faces" / "path.json")
+    assert len(moved_back) == len(original)
+    shift = np.linalg.norm(moved_back.positions - original.positions, axis=1)
+    surface = np.concatenate(list(expected.values()))
+    assert np.any(shift[surface] > 0) and np.all(np.delete(shift, surface) == 0)   # (a view whose axis misses
+                                                                                  # the ship has no depth: stays)
 
 
 def test_campaign_error_sources_rescore_chosen_flights_without_each_capture_error(tmp_path):

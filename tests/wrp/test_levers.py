@@ -184,3 +184,29 @@ def test_each_capture_error_is_removed_alone():
     assert sources["position"]["mean_gain_m"] == pytest.approx(base[0] - 0.01)
     assert sources["all"]["mean_m"] == pytest.approx(0.01)
     assert sources["blur"]["mean_gain_m"] == 0 and sources["heading"]["mean_gain_m"] == 0
+
+
+def test_face_views_are_each_faces_surface_views_and_a_face_lever_is_a_standoff():
+    from wrp_eval.planning.path import KIND_TRANSITION
+    from wrp_eval.wrp.levers import face_views, lever_kind
+
+    path = ring_path(12)                         # faces 0, 1, 2 in turn
+    kind = np.zeros(12, int)
+    kind[[4, 7]] = KIND_TRANSITION
+    path = FlightPath(path.positions, path.yaw, path.pitch, np.where(kind == 0, path.face_id, -1), kind,
+                      np.zeros(12, int))
+    faces = face_views(path)
+    assert {f: v.tolist() for f, v in faces.items()} == {0: [0, 3, 6, 9], 1: [1, 10], 2: [2, 5, 8, 11]}
+    assert lever_kind("standoff_face_port") == "standoff" and lever_kind("redundant") == "redundant"
+
+
+def test_a_face_levers_placebo_moves_as_many_random_views_as_the_face_has():
+    from wrp_eval.wrp.robust import robust_placebo_paths
+
+    path = ring_path(12)
+    levers = {"views": [3], "applied": ["standoff_face_port"],
+              "levers": {"standoff_face_port": {"views": [0, 3, 6, 9]}}}
+    placebos = robust_placebo_paths(path, levers, 5, np.full(12, 30.0), 0.1, np.random.default_rng(2))
+    moved = [np.flatnonzero(np.linalg.norm(p.positions - path.positions, axis=1) > 1e-9) for p in placebos.values()]
+    assert all(m.size == 4 for m in moved) and len({tuple(m) for m in moved}) > 1    # 4 views each, not the same
+    assert all(len(p) == 12 for p in placebos.values())

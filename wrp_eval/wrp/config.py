@@ -40,7 +40,10 @@ class RobustSection(StrictModel):
     """``wrp.kind: robust`` (issue 30): levers beyond moving a viewpoint, each screened with the oracle on the
     initial path's campaign flights against its own placebos (wrp_eval/wrp/levers.py, README)."""
 
-    levers: list[Literal["redundant", "standoff"]] = Field(["redundant", "standoff"], min_length=1)
+    levers: list[Literal["redundant", "standoff", "face_standoff"]] = Field(
+        ["redundant", "standoff"], min_length=1, description="redundant / standoff: at the riskiest viewpoints; "
+        "face_standoff: one lever per face of the proxy, its every surface viewpoint moved back (opt-in: a face "
+        "lever and its placebos cost (1 + placebos) x screen_flights oracle calls each)")
     views_fraction: float = Field(0.05, gt=0, le=0.5, description="each lever acts on this share of the "
                                   "viewpoints (the riskiest; at least one): the view budget a redundant lever adds")
     standoff_fraction: float = Field(0.1, gt=0, le=0.5, description="standoff lever: move back by this share "

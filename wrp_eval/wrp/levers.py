@@ -17,6 +17,10 @@ be flown) and, for screening, to stored flights' capture sets (what those flight
 * ``standoff``: each chosen viewpoint moved back along its optical axis by ``standoff_fraction`` of its depth
   (so its GSD grows by that fraction: within the planner's GSD bound when the fraction is the bound's slack).
 
+* ``face_standoff`` (one lever per face of the proxy): every surface viewpoint of the face moved back as
+  ``standoff`` does (the issue's per-face standoff: a face whose views register marginally gains overlap as a
+  whole); its placebos move as many viewpoints chosen at random.
+
 Screening (counterfactual, exact on the oracle): the same flights' capture sets with and without the lever,
 the same oracle seeds; gain_k = e_k(initial) - e_k(lever). In a screened flight a redundant view inherits the
 mean of its two ends' flown errors (position, heading, pitch, roll, prior, blur): a stand-in for the flight
@@ -41,7 +45,7 @@ from typing import Any
 import numpy as np
 
 from wrp_eval.camera import optical_axes
-from wrp_eval.planning.path import FlightPath
+from wrp_eval.planning.path import KIND_SURFACE, FlightPath
 from wrp_eval.sim.captures import CaptureSet
 from wrp_eval.wrp.evaluate import robustness_verdict
 from wrp_eval.wrp.evaluation import RobustnessVerdict
@@ -92,6 +96,19 @@ def redundant_legs(positions: np.ndarray, views: np.ndarray) -> tuple[np.ndarray
     leg = np.minimum(views, partner) * len(positions) + np.maximum(views, partner)
     keep = np.sort(np.unique(leg, return_index=True)[1])
     return views[keep], partner[keep]
+
+
+def face_views(path: FlightPath) -> dict[int, np.ndarray]:
+    """The surface viewpoints (kind KIND_SURFACE) of each face id the path has, indices in path order."""
+    surface = (np.asarray(path.kind) == KIND_SURFACE) & (np.asarray(path.face_id) >= 0)
+    faces = np.asarray(path.face_id)
+    return {int(f): np.flatnonzero(surface & (faces == f)) for f in np.unique(faces[surface])}
+
+
+def lever_kind(name: str) -> str:
+    """The change a screened lever makes: ``standoff`` for a face's standoff (``standoff_face_<name>``), else
+    the name itself."""
+    return "standoff" if name.startswith("standoff_face_") else name
 
 
 def path_with_lever(path: FlightPath, lever: str, views: np.ndarray, standoff_fraction: float,

@@ -11,7 +11,7 @@ from __future__ import annotations
 
 import math
 import time
-from collections.abc import Sequence
+from collections.abc import Callable, Sequence
 from dataclasses import dataclass, replace
 from pathlib import Path
 
@@ -35,6 +35,8 @@ from wrp_eval.wrp.levers import (
     RegistrationRisk,
     capture_error_sources,
     captures_with_lever,
+    face_views,
+    lever_kind,
     path_with_lever,
     registration_risk,
     riskiest,
@@ -120,11 +122,22 @@ def _risk_map(camp: _Campaign, risk_ids: np.ndarray, config_dir: str | Path) -> 
             f"re-scored {risk_ids.size} flights (the campaign has no view_registered column)")
 
 
-def _screen_levers(camp: _Campaign, section: WrpSection, views: np.ndarray, depths: np.ndarray,
+def _lever_targets(section: WrpSection, path: FlightPath, views: np.ndarray, face_names: Sequence[str]
+                   ) -> dict[str, np.ndarray]:
+    """The levers to screen and the viewpoints each acts on: the riskiest ``views`` for redundant / standoff (none
+    when no view is at risk), each face's surface viewpoints for face_standoff."""
+    levers = section.robust.levers
+    targets: dict[str, np.ndarray] = {lever: views for lever in levers if lever != "face_standoff" and views.size}
+    if "face_standoff" in levers:
+        targets |= {f"standoff_face_{face_names[f]}": at for f, at in face_views(path).items()}
+    return targets
+
+
+def _screen_levers(camp: _Campaign, section: WrpSection, targets: dict[str, np.ndarray], depths: np.ndarray,
                    screen_ids: np.ndarray, config_dir: str | Path, rng: np.random.Generator
                    ) -> tuple[dict[str, LeverScreen], dict]:
-    """Each lever of ``section.robust`` at ``views`` screened on the flights ``screen_ids`` against its placebos,
-    and what each capture error costs those flights (:func:`capture_error_sources`)."""
+    """Each lever of ``targets`` (name -> its viewpoints) screened on the flights ``screen_ids`` against its
+    placebos, and what each capture error costs those flights (:func:`capture_error_sources`)."""
     rob, path = section.robust, camp.path
     flights = list(flight_captures(camp.folder, screen_ids, config_dir).values())
     base = camp.score(flights, screen_ids)
@@ -132,11 +145,11 @@ def _screen_levers(camp: _Campaign, section: WrpSection, views: np.ndarray, dept
     windfree_base = float(camp.scorer.ship.score(planned_sets, seed=0).error_m)
     sources = capture_error_sources(lambda sets: camp.score(sets, screen_ids), flights, base, planned_sets)
     screens: dict[str, LeverScreen] = {}
-    for lever in rob.levers if views.size else ():       # no view at risk: nothing to screen
-        def change(cs: CaptureSet, at: np.ndarray, lever: str = lever) -> CaptureSet:
-            return captures_with_lever(cs, lever, at, rob.standoff_fraction, depths, path)
+    for name, views in targets.items():
+        def change(cs: CaptureSet, at: np.ndarray, kind: str = lever_kind(name)) -> CaptureSet:
+            return captures_with_lever(cs, kind, at, rob.standoff_fraction, depths, path)
 
-        def windfree(at: np.ndarray | None, lever: str = lever) -> float:
+        def windfree(at: np.ndarray | None, change: Callable[[CaptureSet, np.ndarray], CaptureSet] = change) -> float:
             # the planned captures changed as the flights' are (a redundant view numbered after the path's): the
             # oracle draws each view's noise by its number, so renumbering the views after an insertion would
             # reshuffle it
@@ -144,10 +157,15 @@ def _screen_levers(camp: _Campaign, section: WrpSection, views: np.ndarray, dept
                 return windfree_base
             return float(camp.scorer.ship.score(change(planned_sets, at), seed=0).error_m)
 
-        screens[lever] = screen_lever(lambda sets: camp.score(sets, screen_ids), flights, base, change, windfree,
-                                      lever, views, len(path), rob.placebos, rng, section.evaluate.bootstrap,
-                                      section.evaluate.confidence)
+        screens[name] = screen_lever(lambda sets: camp.score(sets, screen_ids), flights, base, change, windfree,
+                                     name, views, len(path), rob.placebos, rng, section.evaluate.bootstrap,
+                                     section.evaluate.confidence)
     return screens, sources
+
+
+def _in_apply_order(names: Sequence[str]) -> list[str]:
+    """Levers that keep the view indices (every standoff) before those that insert views (redundant)."""
+    return sorted(names, key=lambda name: APPLY_ORDER.index(lever_kind(name)))
 
 
 def robust_job(ctx: ExperimentContext, section: WrpSection, out: Path, campaign: str | Path | None = None) -> dict:
@@ -162,14 +180,15 @@ def robust_job(ctx: ExperimentContext, section: WrpSection, out: Path, campaign:
     risk, risk_source = _risk_map(camp, risk_ids, ctx.config_dir)
     views = riskiest(risk, max(1, math.ceil(rob.views_fraction * len(path))))
     depths = view_depths(path, ctx.flight_proxy.bounds)
+    targets = _lever_targets(section, path, views, ctx.flight_proxy.face_names)
     placed_s = time.perf_counter() - start
-    screens, sources = _screen_levers(camp, section, views, depths, screen_ids, ctx.config_dir, rng)
+    screens, sources = _screen_levers(camp, section, targets, depths, screen_ids, ctx.config_dir, rng)
     screen_s = time.perf_counter() - start - placed_s
-    chosen = [name for name in APPLY_ORDER if name in screens and views.size
-              and (rob.apply == "all" or screens[name].verdict.recommended)]
+    chosen = [name for name in _in_apply_order(list(screens))
+              if rob.apply == "all" or screens[name].verdict.recommended]
     robust_path = path
     for name in chosen:
-        robust_path = path_with_lever(robust_path, name, views, rob.standoff_fraction, depths)
+        robust_path = path_with_lever(robust_path, lever_kind(name), targets[name], rob.standoff_fraction, depths)
     out.mkdir(parents=True, exist_ok=True)
     robust_path.save(out / "path.json")
     doc = {"kind": "robust", "campaign": str(camp.folder), "seed": seed, "views": views.tolist(),
@@ -199,13 +218,17 @@ def _log_screens(screens: dict[str, LeverScreen], n_views: int) -> None:
 def robust_placebo_paths(initial: FlightPath, levers: dict, count: int, depths_m: np.ndarray,
                          standoff_fraction: float, rng: np.random.Generator) -> dict[str, FlightPath]:
     """``count`` placebos of a robust path (``levers``: its levers.json): the levers it applied, each placebo at
-    as many viewpoints of ``initial`` chosen at random (one draw per placebo, shared by its levers)."""
+    as many viewpoints of ``initial`` chosen at random (one draw per placebo, shared by its levers at the riskiest
+    viewpoints; one more per face lever)."""
     out = {}
     for k in range(count):
         views = np.sort(rng.choice(len(initial), len(levers["views"]), replace=False))
         path = initial
         for name in levers["applied"]:
-            path = path_with_lever(path, name, views, standoff_fraction, depths_m)
+            at = views
+            if lever_kind(name) != name:           # a face's lever: its own draw of as many viewpoints
+                at = np.sort(rng.choice(len(initial), len(levers["levers"][name]["views"]), replace=False))
+            path = path_with_lever(path, lever_kind(name), at, standoff_fraction, depths_m)
         out[f"placebo-robust-{k:02d}"] = replace(path, metadata={**path.metadata, "placebo_of": "robust"})
     return out
 
