@@ -149,3 +149,16 @@ def test_a_nadir_photo_tipped_past_the_vertical_keeps_the_form_near_its_plan():
     turned = camera_rotations(plan_yaw[:1] + np.radians(120.0), np.radians([-89.9]))
     kept = angles_near_plan(*camera_angles(turned), plan_yaw[:1], plan_pitch[:1])
     np.testing.assert_allclose(np.degrees(kept[0] - plan_yaw[:1]), 120.0, atol=1e-9)
+
+
+def test_world_rays_turn_each_direction_by_each_rotation():
+    from scipy.spatial.transform import Rotation
+
+    from wrp_eval.camera import world_rays
+
+    rot = Rotation.random(7, random_state=3).as_matrix()
+    dirs = np.random.default_rng(4).normal(size=(11, 3))
+    out = world_rays(rot, dirs)
+    assert out.shape == (7, 11, 3)
+    np.testing.assert_allclose(out, np.einsum("nij,rj->nri", rot, dirs), rtol=0, atol=1e-15)
+    assert np.array_equal(out[2, 5], rot[2, :, 0] * dirs[5, 0] + rot[2, :, 1] * dirs[5, 1] + rot[2, :, 2] * dirs[5, 2])

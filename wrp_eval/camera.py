@@ -193,6 +193,18 @@ def camera_angles(rotations: ArrayLike) -> tuple[NDArray[np.float64], NDArray[np
     return _angle_rows(np.ascontiguousarray(np.asarray(rotations, dtype=float).reshape(-1, 3, 3)))
 
 
+def world_rays(rotations: NDArray[np.float64], directions: NDArray[np.float64]) -> NDArray[np.float64]:
+    """Camera-frame ``directions`` (r, 3) turned into the world by the world-from-camera ``rotations`` (n, 3, 3):
+    (n, r, 3), out[v, k] = R_v d_k. Plain products and sums in index order: the same bits on every CPU (einsum's
+    default path is ~100x slower here, its BLAS path picks its kernel, and so its rounding, by CPU)."""
+    rot = np.asarray(rotations, dtype=float)[:, None, :, :]
+    d = np.asarray(directions, dtype=float)
+    out = np.empty((rot.shape[0], d.shape[0], 3))
+    for i in range(3):
+        out[..., i] = rot[..., i, 0] * d[:, 0] + rot[..., i, 1] * d[:, 1] + rot[..., i, 2] * d[:, 2]
+    return out
+
+
 def project(points: ArrayLike, positions: ArrayLike, rotations: NDArray[np.float64],
             camera: Camera) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
     """Project points into every camera.

@@ -380,15 +380,16 @@ def levers_section(levers: dict) -> list[str]:
     """The robust kind's levers (levers.json, :mod:`wrp_eval.wrp.robust`): each lever's screened gains against its
     placebo band, its verdict, and what the robust path applied."""
     lines = ["", "## Levers beyond moving a viewpoint (the robust kind, screened on stored flights)", "",
-             f"At the {len(levers['views'])} viewpoints of highest registration risk ({levers['risk_source']}), "
-             f"each lever screened on {len(levers['screen_flights'])} other flights against placebos (the same "
-             "lever at as many random viewpoints).", "",
-             "| lever | robustness gain (mm) | CI | placebo 95th pct (mm) | error gain (mm) | p95 gain (mm) | "
-             "wind-free gain (mm) | placebo p95 gains (mm, min / max) | verdict |",
-             "|---|---|---|---|---|---|---|---|---|"]
+             f"Redundant and standoff at the {len(levers['views'])} viewpoints of highest registration risk "
+             f"({levers['risk_source']}), a face's standoff at its surface viewpoints; each lever screened on "
+             f"{len(levers['screen_flights'])} other flights against placebos (the same lever at as many random "
+             "viewpoints).", "",
+             "| lever | viewpoints | robustness gain (mm) | CI | placebo 95th pct (mm) | error gain (mm) | "
+             "p95 gain (mm) | wind-free gain (mm) | placebo p95 gains (mm, min / max) | verdict |",
+             "|---|---|---|---|---|---|---|---|---|---|"]
     for name, screen in levers["levers"].items():
         v, ci, p95s = screen["verdict"], screen["verdict"]["gain_ci_m"], screen["placebo_p95_gains_m"]
-        lines.append(f"| {name} | {1e3 * v['gain_m']:+.3f} | "
+        lines.append(f"| {name} | {len(screen['views'])} | {1e3 * v['gain_m']:+.3f} | "
                      + (f"[{1e3 * ci[0]:+.3f}, {1e3 * ci[1]:+.3f}]" if ci else "-")
                      + f" | {1e3 * v['placebo_gain_p95_m']:+.3f} | {1e3 * screen['error_gain_m']:+.3f} | "
                      f"{1e3 * screen['p95_gain_m']:+.3f} | {1e3 * screen['windfree_gain_m']:+.3f} | "

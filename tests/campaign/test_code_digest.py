@@ -5,8 +5,11 @@ from __future__ import annotations
 import subprocess
 import sys
 
+import pytest
+
 from wrp_eval.campaign.code_digest import module_closure, trial_code_digest
-from wrp_eval.campaign.evaluators import DEFAULT_EVALUATOR
+from wrp_eval.campaign.evaluators import DEFAULT_EVALUATOR, RENAMED_EVALUATORS
+from wrp_eval.errors import InputError
 
 
 def test_the_closure_holds_every_wrp_eval_module_a_flight_trial_imports():
@@ -42,3 +45,10 @@ def test_an_edit_of_an_imported_source_changes_the_digest_and_others_do_not(tmp_
     assert digest() == before
     _write(tmp_path, {"plug/helper.py": "gain = 2.0\n"})
     assert digest() != before
+
+
+def test_a_renamed_evaluator_digests_todays_module_and_one_without_source_is_refused():
+    (old_name,) = [old for old, new in RENAMED_EVALUATORS.items() if new == DEFAULT_EVALUATOR]
+    assert trial_code_digest(old_name) == trial_code_digest(DEFAULT_EVALUATOR)
+    with pytest.raises(InputError, match="no Python source"):
+        trial_code_digest("wrp_eval.no_such_module:factory")

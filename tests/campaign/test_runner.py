@@ -103,21 +103,29 @@ def test_settings_outside_the_flight_do_not_orphan_stored_trials(tmp_path, path_
         run_analytic(make_config(path_file, n_trials=7), out)
 
 
-def test_a_store_flown_by_other_code_is_refused_but_stays_readable(tmp_path, path_file, make_config, run_analytic):
+def test_a_store_flown_by_other_code_is_never_extended_and_a_complete_one_is_used_as_it_is(
+        tmp_path, path_file, make_config, run_analytic, caplog):
     """Trials flown by another version of the flight / oracle code are never extended by today's (the config alone
-    does not decide a trial); a store without a recorded code digest counts as other code."""
+    does not decide a trial); a store without a recorded code digest counts as other code. A complete one is read
+    as it is (nothing flown, a warning), so re-running a finished job still works."""
     out = tmp_path / "c"
     assert run_analytic(make_config(path_file, n_trials=3), out).ran == 3
     meta_file = out / "campaign.json"
     meta = json.loads(meta_file.read_text())
+    assert meta["code_digest"] and len(meta["code_digest"]) == 16
     assert run_analytic(make_config(path_file, n_trials=4), out).ran == 1       # same code: resumed
     for stored in ("0123456789abcdef", None):
         changed = {**json.loads(meta_file.read_text()), "fingerprint": "0123456789abcdef", "code_digest": stored}
         meta_file.write_text(json.dumps(changed))
-        with pytest.raises(InputError, match="other flight / oracle code"):
+        with pytest.raises(InputError, match="other flight / oracle code .* trials still to fly"):
             run_analytic(make_config(path_file, n_trials=5), out)
         assert campaign_status(out)["done"] == 4                                  # nothing lost, still readable
-    assert meta["code_digest"] and len(meta["code_digest"]) == 16
+        with caplog.at_level("WARNING"):
+            assert run_analytic(make_config(path_file, n_trials=4), out).ran == 0
+        assert "every trial stored" in caplog.text
+        assert json.loads(meta_file.read_text())["code_digest"] == stored         # the store still says whose
+    with pytest.raises(InputError, match="different config"):                     # another config: refused
+        run_analytic(make_config(path_file, n_trials=4, perturbation={"design": "box"}), out)
 
 
 def test_status_counts(tmp_path, path_file, make_config, comparable, run_analytic, tiny_path):

@@ -176,3 +176,11 @@ def test_the_compiled_mapper_registers_what_the_numpy_mapper_did(seed):
                                         ray_weight, first, 30)
     assert len(order) == n and order != sorted(order)                         # the picking order matters
     assert order == ref_order and np.array_equal(mask, ref_mask)
+
+
+def test_nothing_triangulated_registers_nothing_even_with_a_zero_threshold():
+    """No seed pair when no pair triangulates (the argmax of an all-zero table is the diagonal, not a pair)."""
+    hit = np.arange(6)
+    mask, order = register_incremental(3, 6, np.array([0, 0, 1, 1, 2, 2]), hit, (hit // 2 + 1) % 3,
+                                       np.ones(6, dtype=bool), np.zeros(6, dtype=bool), np.arange(6), 4, 0)
+    assert order == [] and not mask.any()

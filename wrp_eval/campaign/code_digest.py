@@ -4,9 +4,10 @@ A campaign folder is resumed when its fingerprint matches (runner.py). The confi
 trial: a change of the simulator or the oracle changes every flight under the same config, and trials flown by
 two versions must not mix in one store (session 17 found stores silently extended across a physics change).
 The digest covers the source of the evaluator's module and of every ``wrp_eval`` module it imports, at any
-depth, found by reading the import statements (function-level imports included: conservative), plus the MJCF
-models. Any edit of those files, even one that keeps the numbers, makes a new digest: the stored trials stay
-readable, and a new folder is needed to fly more.
+depth, found by reading the import statements (function-level imports included: conservative), the MJCF models
+and the versions of the libraries that decide the numbers (MuJoCo, numpy, scipy, open3d, numba). Any edit of
+those files, even one that keeps the numbers, makes a new digest: the stored trials stay readable (a complete
+store is used as it is), and a new folder is needed to fly more.
 """
 
 from __future__ import annotations
@@ -15,8 +16,11 @@ import ast
 import hashlib
 import importlib.util
 from functools import lru_cache
+from importlib.metadata import PackageNotFoundError, version
 from pathlib import Path
 
+from wrp_eval.campaign.evaluators import RENAMED_EVALUATORS
+from wrp_eval.errors import InputError
 from wrp_eval.resources import models_dir
 
 _PACKAGE = "wrp_eval"
@@ -87,14 +91,28 @@ def module_closure(root: str) -> dict[str, Path]:
     return found
 
 
+# the libraries whose numbers a trial's result depends on (physics, random streams, ray casting, kernels)
+LIBRARIES = ("mujoco", "numpy", "scipy", "open3d", "numba")
+
+
 @lru_cache(maxsize=8)
 def trial_code_digest(evaluator: str) -> str:
-    """sha256 (16 hex digits) of the sources a trial of ``evaluator`` ("module:factory") runs and of the MJCF
-    models folder."""
+    """sha256 (16 hex digits) of the sources a trial of ``evaluator`` ("module:factory", a renamed one read as
+    today's) runs, of the MJCF models folder and of the versions of :data:`LIBRARIES`. An evaluator module
+    without Python source is an :class:`InputError` (nothing to digest)."""
+    module = RENAMED_EVALUATORS.get(evaluator, evaluator).partition(":")[0]
+    closure = module_closure(module)
+    if module not in closure:
+        raise InputError("campaign evaluator", f"{module!r} has no Python source to digest")
     h = hashlib.sha256()
-    for name, file in sorted(module_closure(evaluator.partition(":")[0]).items()):
+    for name, file in sorted(closure.items()):
         h.update(name.encode() + b"\0" + file.read_bytes() + b"\0")
     models = models_dir()
-    for file in sorted(p for p in models.rglob("*") if p.is_file()):
+    for file in sorted(p for p in models.rglob("*") if p.is_file() and not p.name.startswith(".")):
         h.update(str(file.relative_to(models)).encode() + b"\0" + file.read_bytes() + b"\0")
+    for name in LIBRARIES:
+        try:
+            h.update(f"{name}=={version(name)}".encode() + b"\0")
+        except PackageNotFoundError:
+            h.update(f"{name} absent".encode() + b"\0")
     return h.hexdigest()[:16]

@@ -30,7 +30,7 @@ from wrp_eval.campaign.progress import CampaignProgress
 from wrp_eval.campaign.rerun_log import CampaignRecorder
 from wrp_eval.campaign.store import TrialStore
 from wrp_eval.errors import InputError
-from wrp_eval.logs import progress_shown
+from wrp_eval.logs import progress_log, progress_shown
 from wrp_eval.planning.path import FlightPath, digest_of_document
 from wrp_eval.ship.resolve import resolve_ship_full
 
@@ -92,21 +92,23 @@ def fingerprint(config_doc: dict, digest: str, root_seed: int, evaluator: str, o
     return hashlib.sha256(json.dumps(hashed, sort_keys=True, default=str).encode()).hexdigest()[:16]
 
 
-def stored_fingerprint(meta: dict) -> str | None:
+def stored_fingerprint(meta: dict, code: str | None = None) -> str | None:
     """The fingerprint of a stored campaign (campaign.json) recomputed by today's code: its stored config is
     validated again, so that a setting added since (whose default keeps the old behaviour, the rule for every
-    new setting) and a change in which sections count do not orphan the stored trials. None when the stored
-    inputs no longer validate, and for a store flown before ``sim.mission`` existed (battery swaps,
-    the headway rule and the wind rules changed what ends a flight, so its trials cannot be extended by today's
-    flights; the store still loads for reading). None too for a store without a code digest (flown before the
-    fingerprint held one: by which code is unknown)."""
+    new setting) and a change in which sections count do not orphan the stored trials. ``code``: the code digest
+    to recompute it with (None: the stored one). None when the stored inputs no longer validate, and for a store
+    flown before ``sim.mission`` existed (battery swaps, the headway rule and the wind rules changed what ends a
+    flight, so its trials cannot be extended by today's flights; the store still loads for reading). None too for
+    a store without a code digest (flown before the fingerprint held one: by which code is unknown) unless
+    ``code`` is given."""
     try:
-        if "mission" not in meta["config"]["sim"] or not meta.get("code_digest"):
+        code = code or meta.get("code_digest")
+        if "mission" not in meta["config"]["sim"] or not code:
             return None
         doc = TrialConfig.from_stored(meta["config"]).model_dump(mode="json")
         evaluator = meta.get("evaluator", DEFAULT_EVALUATOR)
         return fingerprint(doc, meta["path_digest"], meta["root_seed"], RENAMED_EVALUATORS.get(evaluator, evaluator),
-                           meta.get("evaluator_options") or {}, meta["code_digest"])
+                           meta.get("evaluator_options") or {}, code)
     except (KeyError, TypeError, ValueError):   # pydantic's ValidationError is a ValueError
         return None
 
@@ -123,28 +125,32 @@ def versions() -> dict:
     return {"machine": platform.machine(), "system": platform.platform(), "versions": found}
 
 
-def _how_it_differs(meta: dict, code: str) -> str:
-    """What makes a stored campaign (campaign.json) another campaign than today's, in words."""
-    stored = meta.get("code_digest")
-    if stored != code:
-        return f"flown by other flight / oracle code (code digest {stored or 'not recorded'} vs {code})"
-    return "with a different config, path or seed"
-
-
 def open_store(store: TrialStore, trial: TrialConfig, path_doc: dict, *, root_seed: int, evaluator: str,
                evaluator_options: dict) -> tuple[str, np.ndarray]:
     """Check that the (locked) ``store`` holds nothing but this campaign's trials and (re)write its meta;
-    returns (the fingerprint, the stored trial ids). A folder of another campaign is an :class:`InputError`."""
+    returns (the fingerprint, the stored trial ids). A folder of another campaign is an :class:`InputError`, and
+    so is one of this campaign flown by other flight / oracle code (its code digest) with trials still to fly:
+    two versions' trials never mix. Complete, it is used as it is (its trials read, nothing flown), with a
+    warning naming both digests."""
     digest = digest_of_document(path_doc)
     config_doc = trial.model_dump(mode="json")
     code = trial_code_digest(evaluator)
     print_ = fingerprint(config_doc, digest, root_seed, evaluator, evaluator_options, code)
     previous = store.read_meta()
     if previous is not None and previous.get("fingerprint") != print_ and stored_fingerprint(previous) != print_:
-        raise InputError(store.out_dir, f"holds a campaign {_how_it_differs(previous, code)} (fingerprint "
-                                        f"{previous.get('fingerprint')} vs {print_}); its trials stay readable, "
-                                        "but use another --out (or campaign.outputs.dir) to fly more, or remove "
-                                        "the folder")
+        if stored_fingerprint(previous, code) != print_:
+            raise InputError(store.out_dir, "holds a campaign with a different config, path or seed (fingerprint "
+                                            f"{previous.get('fingerprint')} vs {print_}); use another --out (or "
+                                            "campaign.outputs.dir), or remove the folder")
+        stored = store.stored_ids()
+        flown_by = f"flown by other flight / oracle code (code digest {previous.get('code_digest') or 'not recorded'}"
+        if not np.isin(np.arange(trial.campaign.n_trials), stored).all():
+            raise InputError(store.out_dir, f"holds this campaign {flown_by} vs {code}) with trials still to fly: "
+                                            "its trials stay readable, but today's would not mix with them; use "
+                                            "another --out (or campaign.outputs.dir), or remove the folder")
+        progress_log.warning(f"campaign {store.out_dir}: every trial stored, {flown_by} vs {code}): its trials are "
+                             "used as they are; remove the folder to fly them with this code")
+        return str(previous.get("fingerprint")), stored
     store.write_meta({"fingerprint": print_, "config": config_doc, "root_seed": root_seed, "path_digest": digest,
                       "code_digest": code,
                       "n_views": len(path_doc["viewpoints"]),

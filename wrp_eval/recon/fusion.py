@@ -263,7 +263,9 @@ def _pair_evidence(sample, rel, dist, weight, parallax_min, parallax_max, min_ra
     Returns (S,) sum of log(1 - both t) per sample and (k,) sum of log(1 - both m) per observation over the pairs
     it is in (1 - exp of either: the probability that at least one pair triangulates / matches, the pairs taken
     as independent). Sums run in pair order (a, then b), every pair's matching term first at its a, then at its
-    b; zero terms are skipped (adding 0 changes no sum)."""
+    b; zero terms are skipped (adding 0 changes no sum). A NaN weight or ray counts as no evidence (a zero term;
+    the numpy formulas this replaced carried it into the sums): the weights are clipped ramps of finite
+    quantities and the rays have a length, so none arises from a capture set."""
     k = sample.shape[0]
     max_lo, max_hi = parallax_max - max_ramp, parallax_max + max_ramp      # the ramps' ends as ramp() has them
     min_lo, min_hi = parallax_min - min_ramp, parallax_min + min_ramp

@@ -21,7 +21,7 @@ from __future__ import annotations
 import numpy as np
 from scipy.ndimage import convolve1d
 
-from wrp_eval.camera import Camera
+from wrp_eval.camera import Camera, world_rays
 from wrp_eval.open3d_arrays import o3d_tensor
 from wrp_eval.recon.oracle import GroundTruth
 from wrp_eval.sim.captures import CaptureSet
@@ -122,7 +122,7 @@ def render_views(capture_set: CaptureSet, gt: GroundTruth, width_px: int, textur
     per_call = max(1, max_rays_per_call // len(cam_dirs))
     for start in range(0, n, per_call):  # chunks of views, each one batched ray cast
         views = np.arange(start, min(n, start + per_call))
-        dirs = np.einsum("nij,rj->nri", rot[views], cam_dirs, optimize=True).reshape(-1, 3)
+        dirs = world_rays(rot[views], cam_dirs).reshape(-1, 3)
         origins = np.repeat(np.asarray(capture_set.positions, dtype=float)[views], len(cam_dirs), axis=0)
         ans = gt.occluder_scene.cast_rays(o3d_tensor(np.concatenate([origins, dirs], 1).astype(np.float32)))
         t_hit = ans["t_hit"].numpy().astype(np.float64)

@@ -53,7 +53,7 @@ import numpy as np
 import scipy.sparse as sp
 from scipy.sparse.csgraph import connected_components, minimum_spanning_tree
 
-from wrp_eval.camera import Camera, optical_axes
+from wrp_eval.camera import Camera, optical_axes, world_rays
 from wrp_eval.compiled import kernel
 from wrp_eval.open3d_arrays import o3d_tensor
 from wrp_eval.recon.config import OracleSection, SyntheticOracleSection
@@ -103,7 +103,7 @@ def observe(capture_set: CaptureSet, gt: GroundTruth, rays_x: int, rays_y: int, 
     cam_dirs, _ = ray_grid(capture_set.camera, rays_x, rays_y)
     r = len(cam_dirs)
     rot = capture_set.rotations()  # roll included: a rolled view's ray grid turns about its optical axis
-    dirs = np.einsum("nij,rj->nri", rot, cam_dirs, optimize=True)      # BLAS: 0.3 vs 22 ms at 141 views
+    dirs = world_rays(rot, cam_dirs)
     origins = np.broadcast_to(np.asarray(capture_set.positions, dtype=float)[:, None, :], (n, r, 3))
     rays = np.concatenate([origins, dirs], axis=2).astype(np.float32).reshape(-1, 6)
     ans = gt.occluder_scene.cast_rays(o3d_tensor(rays))
@@ -255,8 +255,8 @@ def _seed_pair(n: int, h: np.ndarray, p: np.ndarray, g: np.ndarray, t: np.ndarra
     ``min_rays``; ``pair_weight`` (m,): a pair's ray weighs the smaller of its two rays' weights."""
     tri = np.bincount(v_of[t] * n + p[t], weights=pair_weight[t], minlength=n * n).reshape(n, n)
     tri = np.triu(tri + tri.T, k=1)
-    seed = int(np.argmax(tri))
-    return None if tri.flat[seed] < min_rays else divmod(seed, n)
+    a, b = divmod(int(np.argmax(tri)), n)
+    return None if tri[a, b] < min_rays or a == b else (a, b)        # a == b: no pair triangulates anything
 
 
 @kernel

@@ -112,10 +112,11 @@ def lever_kind(name: str) -> str:
 
 
 def path_with_lever(path: FlightPath, lever: str, views: np.ndarray, standoff_fraction: float,
-                    depths_m: np.ndarray) -> FlightPath:
-    """``path`` with ``lever`` at ``views``; ``depths_m`` (n,): each view's distance to the ship along its axis."""
+                    depths_m: np.ndarray, name: str | None = None) -> FlightPath:
+    """``path`` with ``lever`` (redundant / standoff) at ``views``; ``depths_m`` (n,): each view's distance to the
+    ship along its axis; ``name``: the lever's name in the path's metadata (default ``lever``)."""
     views = np.asarray(views, dtype=int)
-    lever_note = {**path.metadata.get("lever", {}), lever: views.tolist()}
+    lever_note = {**path.metadata.get("lever", {}), name or lever: views.tolist()}
     if lever == "standoff":
         back = np.zeros(len(path))
         back[views] = standoff_fraction * np.nan_to_num(depths_m[views])

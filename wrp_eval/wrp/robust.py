@@ -163,6 +163,20 @@ def _screen_levers(camp: _Campaign, section: WrpSection, targets: dict[str, np.n
     return screens, sources
 
 
+def _with_levers(path: FlightPath, levers: dict[str, np.ndarray], standoff_fraction: float,
+                 depths_m: np.ndarray) -> FlightPath:
+    """``path`` with each of ``levers`` (name -> viewpoints, in apply order): a viewpoint two standoff levers share
+    is moved back once (the fraction is the GSD slack; stacked, nothing screened it)."""
+    moved = np.zeros(len(path), dtype=bool)
+    for name, views in levers.items():
+        kind = lever_kind(name)
+        if kind == "standoff":
+            views = np.asarray(views, dtype=int)
+            views, moved[views] = views[~moved[views]], True
+        path = path_with_lever(path, kind, views, standoff_fraction, depths_m, name)
+    return path
+
+
 def _in_apply_order(names: Sequence[str]) -> list[str]:
     """Levers that keep the view indices (every standoff) before those that insert views (redundant)."""
     return sorted(names, key=lambda name: APPLY_ORDER.index(lever_kind(name)))
@@ -186,9 +200,7 @@ def robust_job(ctx: ExperimentContext, section: WrpSection, out: Path, campaign:
     screen_s = time.perf_counter() - start - placed_s
     chosen = [name for name in _in_apply_order(list(screens))
               if rob.apply == "all" or screens[name].verdict.recommended]
-    robust_path = path
-    for name in chosen:
-        robust_path = path_with_lever(robust_path, lever_kind(name), targets[name], rob.standoff_fraction, depths)
+    robust_path = _with_levers(path, {name: targets[name] for name in chosen}, rob.standoff_fraction, depths)
     out.mkdir(parents=True, exist_ok=True)
     robust_path.save(out / "path.json")
     doc = {"kind": "robust", "campaign": str(camp.folder), "seed": seed, "views": views.tolist(),
@@ -200,16 +212,16 @@ def robust_job(ctx: ExperimentContext, section: WrpSection, out: Path, campaign:
            "screening": "counterfactual: the screened flights' own capture sets with the lever applied, the same "
                         "oracle seeds; a redundant view takes the mean of its two ends' flown errors"}
     write_json_atomic(out / "levers.json", doc)
-    _log_screens(screens, len(views))
+    _log_screens(screens)
     progress_log.info(f"robust: applied {chosen or 'no lever'}; {doc['robust_s']:.1f} s to place the levers "
                       f"({risk_source}), {screen_s:.1f} s to screen them -> {out}")
     return doc
 
 
-def _log_screens(screens: dict[str, LeverScreen], n_views: int) -> None:
+def _log_screens(screens: dict[str, LeverScreen]) -> None:
     for name, s in screens.items():
         v = s.verdict
-        progress_log.info(f"robust lever {name} at {n_views} views: robustness gain {1e3 * v.gain_m:+.3f} mm "
+        progress_log.info(f"robust lever {name} at {len(s.views)} views: robustness gain {1e3 * v.gain_m:+.3f} mm "
                           f"(placebo p95 {1e3 * v.placebo_gain_p95_m:+.3f} mm); error gain {1e3 * s.error_gain_m:+.3f} "
                           f"mm, p95 {1e3 * s.p95_gain_m:+.3f} mm, wind-free {1e3 * s.windfree_gain_m:+.3f} mm -> "
                           + ("RECOMMENDED" if v.recommended else f"not recommended ({v.reason})"))
@@ -223,12 +235,12 @@ def robust_placebo_paths(initial: FlightPath, levers: dict, count: int, depths_m
     out = {}
     for k in range(count):
         views = np.sort(rng.choice(len(initial), len(levers["views"]), replace=False))
-        path = initial
+        drawn = {}
         for name in levers["applied"]:
-            at = views
+            drawn[name] = views
             if lever_kind(name) != name:           # a face's lever: its own draw of as many viewpoints
-                at = np.sort(rng.choice(len(initial), len(levers["levers"][name]["views"]), replace=False))
-            path = path_with_lever(path, lever_kind(name), at, standoff_fraction, depths_m)
+                drawn[name] = np.sort(rng.choice(len(initial), len(levers["levers"][name]["views"]), replace=False))
+        path = _with_levers(initial, drawn, standoff_fraction, depths_m)
         out[f"placebo-robust-{k:02d}"] = replace(path, metadata={**path.metadata, "placebo_of": "robust"})
     return out
 
