@@ -210,3 +210,15 @@ def test_a_face_levers_placebo_moves_as_many_random_views_as_the_face_has():
     moved = [np.flatnonzero(np.linalg.norm(p.positions - path.positions, axis=1) > 1e-9) for p in placebos.values()]
     assert all(m.size == 4 for m in moved) and len({tuple(m) for m in moved}) > 1    # 4 views each, not the same
     assert all(len(p) == 12 for p in placebos.values())
+
+
+def test_a_view_two_applied_standoff_levers_share_is_moved_back_once():
+    from wrp_eval.wrp.robust import _with_levers
+
+    path = ring_path(12)
+    depths = np.full(12, 30.0)
+    both = _with_levers(path, {"standoff": np.array([1, 2]), "standoff_face_port": np.array([2, 3])}, 0.1, depths)
+    shift = np.linalg.norm(both.positions - path.positions, axis=1)
+    np.testing.assert_allclose(shift[[1, 2, 3]], 3.0)                   # 10 % of 30 m, once each
+    assert not shift[np.setdiff1d(np.arange(12), [1, 2, 3])].any()
+    assert both.metadata["lever"] == {"standoff": [1, 2], "standoff_face_port": [3]}
