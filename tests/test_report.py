@@ -208,7 +208,7 @@ def test_the_levers_section_gives_each_levers_band_and_what_each_capture_error_c
         "screen_flights": list(range(24)), "levers": {"redundant": screen}, "applied": [], "apply": "recommended",
         "robust_s": 0.8, "screen_s": 348.0,
         "error_sources": {"flown": {"mean_m": 0.016, "std_m": 0.0015, "p95_m": 0.0189}, "position": row}}))
-    assert ("| redundant | +0.010 | [-0.010, +0.030] | +0.400 | +0.050 | +0.030 | +0.040 | -0.010 / +5.000 | "
+    assert ("| redundant | 2 | +0.010 | [-0.010, +0.030] | +0.400 | +0.050 | +0.030 | +0.040 | -0.010 / +5.000 | "
             "not recommended: the gain does not exceed the placebo 95th percentile |") in text
     assert "| position | 15.700 | 0.200 | 16.000 | +0.260 | +2.800 |" in text
     assert "none (the robust path is the initial path)" in text and "screening them 348.0 s" in text

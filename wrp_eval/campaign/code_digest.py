@@ -15,6 +15,7 @@ from __future__ import annotations
 import ast
 import hashlib
 import importlib.util
+import sys
 from functools import lru_cache
 from importlib.metadata import PackageNotFoundError, version
 from pathlib import Path
@@ -28,7 +29,11 @@ _PACKAGE = "wrp_eval"
 
 def _source_file(module: str) -> Path | None:
     """The source file of ``module`` (a package's ``__init__.py``), found on disk below its top-level package
-    (nothing but that package's ``__init__`` is imported); None when there is none."""
+    (nothing but that package's ``__init__`` is imported); for ``__main__`` (an evaluator defined in the running
+    script) the script's file. None when there is none."""
+    if module == "__main__":
+        loaded = getattr(sys.modules.get(module), "__file__", None)
+        return Path(loaded) if loaded and loaded.endswith(".py") else None
     top, _, rest = module.partition(".")
     try:
         spec = importlib.util.find_spec(top)
