@@ -153,6 +153,17 @@ def test_optimize_robust_screens_each_lever_on_flights_apart_from_the_risk_map(t
     surface = np.concatenate(list(expected.values()))
     assert np.any(shift[surface] > 0) and np.all(np.delete(shift, surface) == 0)   # (a view whose axis misses
                                                                                   # the ship has no depth: stays)
+    # a named lever is applied whatever its verdict; a name no lever has is refused before any screening
+    first = next(iter(expected))
+    robust_cfg.write_text(robust_cfg.read_text().replace("apply: all}", f"apply: [{first}]}}"))
+    assert main(["optimize", str(robust_cfg), "--kind", "robust", "--out", str(tmp_path / "named"), "--campaign",
+                 str(campaign), "--quiet"]) == 0
+    named = json.loads((tmp_path / "named" / "levers.json").read_text())
+    assert named["applied"] == [first] and named["apply"] == [first]
+    robust_cfg.write_text(robust_cfg.read_text().replace(f"apply: [{first}]", "apply: [standoff_face_keel]"))
+    assert main(["optimize", str(robust_cfg), "--kind", "robust", "--out", str(tmp_path / "keel"), "--campaign",
+                 str(campaign), "--quiet"]) == 2
+    assert not (tmp_path / "keel" / "levers.json").exists()
 
 
 def test_campaign_error_sources_rescore_chosen_flights_without_each_capture_error(tmp_path):

@@ -52,9 +52,10 @@ class RobustSection(StrictModel):
     screen_flights: int = Field(24, ge=4, le=100_000, description="other campaign flights each lever and its "
                                 "placebos are screened on")
     placebos: int = Field(20, ge=1, le=10_000, description="placebo levers (as many viewpoints at random)")
-    apply: Literal["recommended", "all"] = Field("recommended", description="the levers the robust path applies: "
-                                                 "those the screening recommends, or all of them whatever their "
-                                                 "verdict (to fly a rejected lever and check the screening)")
+    apply: Literal["recommended", "all"] | list[str] = Field(
+        "recommended", description="the levers the robust path applies: those the screening recommends, all of "
+        "them whatever their verdict, or the named ones (e.g. [standoff_face_port]) whatever their verdict (to fly "
+        "a rejected lever and check the screening); a name no screened lever has is an input error")
 
 
 class WrpSection(StrictModel):

@@ -177,6 +177,13 @@ def _with_levers(path: FlightPath, levers: dict[str, np.ndarray], standoff_fract
     return path
 
 
+def _chosen(screens: dict[str, LeverScreen], apply: str | list[str]) -> list[str]:
+    """The screened levers the robust path applies, in apply order: the recommended ones, all, or those named."""
+    if isinstance(apply, list):
+        return _in_apply_order([name for name in apply if name in screens])
+    return [name for name in _in_apply_order(list(screens)) if apply == "all" or screens[name].verdict.recommended]
+
+
 def _in_apply_order(names: Sequence[str]) -> list[str]:
     """Levers that keep the view indices (every standoff) before those that insert views (redundant)."""
     return sorted(names, key=lambda name: APPLY_ORDER.index(lever_kind(name)))
@@ -195,11 +202,13 @@ def robust_job(ctx: ExperimentContext, section: WrpSection, out: Path, campaign:
     views = riskiest(risk, max(1, math.ceil(rob.views_fraction * len(path))))
     depths = view_depths(path, ctx.flight_proxy.bounds)
     targets = _lever_targets(section, path, views, ctx.flight_proxy.face_names)
+    if isinstance(rob.apply, list) and set(rob.apply) - set(targets):      # before minutes of screening
+        raise InputError("wrp.robust.apply", f"names {sorted(set(rob.apply) - set(targets))}, which is no lever to "
+                                             f"screen here (levers: {sorted(targets)})")
     placed_s = time.perf_counter() - start
     screens, sources = _screen_levers(camp, section, targets, depths, screen_ids, ctx.config_dir, rng)
     screen_s = time.perf_counter() - start - placed_s
-    chosen = [name for name in _in_apply_order(list(screens))
-              if rob.apply == "all" or screens[name].verdict.recommended]
+    chosen = _chosen(screens, rob.apply)
     robust_path = _with_levers(path, {name: targets[name] for name in chosen}, rob.standoff_fraction, depths)
     out.mkdir(parents=True, exist_ok=True)
     robust_path.save(out / "path.json")
