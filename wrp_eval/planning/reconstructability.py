@@ -180,21 +180,6 @@ class SlotTable:
         a, b = self.view_ptr[view], self.view_ptr[view + 1]
         return self.view_sample[a:b], self.view_slot[a:b]
 
-    def q_rows(self, samples: np.ndarray, slots: np.ndarray) -> np.ndarray:
-        """q (T, M) of the view in (samples[t], slots[t]) paired with every slot of that sample (0 for pads
-        and for itself)."""
-        if self.cache is not None:
-            return self.cache[samples, slots].astype(float)
-        ray_a = self.ray[samples, slots]                                   # (T, 3)
-        cos_alpha = np.einsum("ti,tmi->tm", ray_a, self.ray[samples])
-        d_pair = np.maximum(self.dist[samples, slots][:, None], self.dist[samples])
-        cos_t = np.minimum(self.cos_theta[samples, slots][:, None], self.cos_theta[samples])
-        q = pair_reconstructability(cos_alpha, np.where(np.isfinite(d_pair), d_pair, self.d_max), cos_t,
-                                    self.d_max)
-        q[self.slot_view[samples] < 0] = 0.0
-        q[np.arange(len(samples)), slots] = 0.0
-        return q
-
     def q_sums(self, samples: np.ndarray, slots: np.ndarray, mask: np.ndarray) -> np.ndarray:
         """sum over b of q(s_t, slot_t, b) * mask[t, b] (T,): the h contribution of one view against the
         masked (e.g. active) views of its sample. Only masked slots are evaluated: rows are compacted to

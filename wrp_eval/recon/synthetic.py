@@ -236,7 +236,7 @@ def register_incremental(n_views: int, n_hits: int, hit_view: np.ndarray, hit: n
         raise ValueError("ray_weight needs hit_ray, each hit's own flat ray index")
     h, p, g, t = hit[mi], partner[mi], grid_index[mi], triangulates[mi]
     v_of = hit_view[h]
-    seed = _seed_pair(n_views, h, p, g, t, v_of, np.minimum(ray_weight[hit_ray[h]], ray_weight[g]), min_rays)
+    seed = _seed_pair(n_views, p, t, v_of, np.minimum(ray_weight[hit_ray[h]], ray_weight[g]), min_rays)
     if seed is None:
         return np.zeros(n_views, dtype=bool), []
     # CSR views of the matchable pairs: by hit (sorted already), by the hit's view (sorted with the hits), by
@@ -249,10 +249,11 @@ def register_incremental(n_views: int, n_hits: int, hit_view: np.ndarray, hit: n
     return registered, [int(v) for v in order]
 
 
-def _seed_pair(n: int, h: np.ndarray, p: np.ndarray, g: np.ndarray, t: np.ndarray, v_of: np.ndarray,
-               pair_weight: np.ndarray, min_rays: float) -> tuple[int, int] | None:
+def _seed_pair(n: int, p: np.ndarray, t: np.ndarray, v_of: np.ndarray, pair_weight: np.ndarray,
+               min_rays: float) -> tuple[int, int] | None:
     """The view pair with the most triangulating rays over both directions (ties: lowest (i, j)), or None below
-    ``min_rays``; ``pair_weight`` (m,): a pair's ray weighs the smaller of its two rays' weights."""
+    ``min_rays``; over the matchable pairs (m,): p partner view, t triangulates, v_of the hit's view, pair_weight a
+    pair's ray weighing the smaller of its two rays' weights."""
     tri = np.bincount(v_of[t] * n + p[t], weights=pair_weight[t], minlength=n * n).reshape(n, n)
     tri = np.triu(tri + tri.T, k=1)
     a, b = divmod(int(np.argmax(tri)), n)
