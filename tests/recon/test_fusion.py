@@ -189,3 +189,21 @@ def test_compiled_view_test_keeps_the_pairs_the_dense_numpy_test_kept():
     dense = _in_view_numpy(*args)
     assert 0.02 < dense.mean() < 0.5  # a mix of kept and rejected pairs
     np.testing.assert_array_equal(_in_view(*args), dense)
+
+
+def test_a_tour_flown_the_other_way_keeps_each_viewpoints_draws(box_on_water, fast_section):
+    # the views listed in reverse flying order, each with its plan's view id: the same reconstruction; numbered by
+    # flying order alone (no view ids) every view would draw another view's noise
+    oracle = SyntheticOracle(fast_section)
+    ring = _ring()
+    gt = oracle.ground_truth(box_on_water)
+    order = np.arange(len(ring))[::-1]
+    flown_back = dataclasses.replace(ring.subset(order), planned_index=np.arange(len(ring)), view_id=order)
+    np.testing.assert_array_equal(flown_back.view_ids(), order)
+    full = oracle.reconstruct(ring, gt, seed=4)[0]
+    back = oracle.reconstruct(flown_back, gt, seed=4)[0]
+    np.testing.assert_allclose(back.estimates, full.estimates, rtol=0, atol=1e-9)
+    renumbered = oracle.reconstruct(dataclasses.replace(flown_back, view_id=None), gt, seed=4)[0]
+    assert np.abs(renumbered.estimates - full.estimates).max() > 1e-6
+    score = oracle.evaluate(ring, box_on_water, seed=4).error_m
+    assert oracle.evaluate(flown_back, box_on_water, seed=4).error_m == pytest.approx(score, rel=1e-9)

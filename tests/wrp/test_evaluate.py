@@ -4,6 +4,7 @@ import numpy as np
 import pytest
 
 from wrp_eval.config import ExperimentConfig
+from wrp_eval.planning.path import FlightPath
 from wrp_eval.wrp.evaluate import (
     PathTrials,
     paired_difference,
@@ -61,7 +62,7 @@ def test_evaluate_flies_all_paths_with_the_same_winds(tmp_path, acceptance):
         "wrp": {"iterations": 16, "attitude_samples": 3, "neighbourhood_samples": 3, "block_iterations": 8,
                 "oracle_error": False, "threshold_m": 0.2, "acceptance": acceptance,
                 "evaluate": {"n_trials": 6, "bootstrap": 200, "placebos": 2, "forecast_trials": 4,
-                             "robust": acceptance == "paper"},
+                             "robust": acceptance == "paper", "direction": acceptance == "validated"},
                 "robust": {"risk_flights": 8, "screen_flights": 4, "placebos": 2}}})
     result = evaluate_job(ExperimentContext(config, tmp_path), tmp_path / "ev", checkpoint=str(tmp_path / "s.pt"),
                        campaign=str(camp),
@@ -72,7 +73,8 @@ def test_evaluate_flies_all_paths_with_the_same_winds(tmp_path, acceptance):
     assert result.paths[0].path == "initial" and result.paths[0].trials == 6
     assert result.forecast.row.path == result.recommended_path
     doc = written
-    assert [p["path"] for p in doc["paths"]] == ["initial", "iswrp", "swrp"] + ["robust"] * (acceptance == "paper")
+    assert [p["path"] for p in doc["paths"]] == (["initial", "iswrp", "swrp"] + ["robust"] * (acceptance == "paper")
+                                                 + ["reversed"] * (acceptance == "validated"))
     if acceptance == "paper":   # the robust kind beside Alg. 3 as written
         levers = json.loads((tmp_path / "ev" / "wrp-robust" / "levers.json").read_text())
         if levers["moved"]:      # its placebos fly, the same levers elsewhere
@@ -93,6 +95,15 @@ def test_evaluate_flies_all_paths_with_the_same_winds(tmp_path, acceptance):
         assert doc["placebos"]["not_flown_for"] == ["iswrp", "swrp"]
         assert not (tmp_path / "ev" / "campaign-placebo-iswrp-00").exists()
         assert all("moved no viewpoint" in doc["robustness"][k]["reason"] for k in ("iswrp", "swrp"))
+        # the reversed tour: its viewpoints in the other order with their ids, its placebos the tour taking off later
+        reversed_path = FlightPath.load(tmp_path / "ev" / "campaign-reversed" / "path.json")
+        initial_path = FlightPath.load(tmp_path / "ev" / "campaign-initial" / "path.json")
+        np.testing.assert_allclose(reversed_path.positions, initial_path.positions[::-1])
+        np.testing.assert_array_equal(reversed_path.view_ids(), np.arange(len(initial_path))[::-1])
+        starts = [FlightPath.load(tmp_path / "ev" / f"campaign-placebo-reversed-{k:02d}" / "path.json").start_time_s
+                  for k in range(2)]
+        assert all(0.0 <= s <= initial_path.flight_time_s for s in starts) and starts[0] != starts[1]
+        assert doc["robustness"]["reversed"]["placebos_flown"] == 2
         return
     # the placebos of each WRP fly the same winds and enter its verdict
     placebo = TrialStore(tmp_path / "ev" / "campaign-placebo-iswrp-00").read_table(

@@ -7,7 +7,7 @@ from __future__ import annotations
 
 import hashlib
 import json
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from pathlib import Path
 
 import numpy as np
@@ -30,6 +30,11 @@ class FlightPath:
     face_id (n,) int, the proxy face a view photographs (-1 for transition views between faces);
     kind (n,) int, KIND_SURFACE or KIND_TRANSITION; sortie (n,) int, the battery sortie of each view.
     speed_m_s: cruise speed between views; dwell_s: hover time per photo.
+    view_id (n,) int or None: which viewpoint of the plan each view is when the tour is flown in another order
+    (:meth:`reversed`); None: view i is viewpoint i. The oracle keys each view's random draws by it, so the same
+    viewpoint keeps its draws whatever its place in the tour (common random numbers).
+    start_time_s: the take-off on the weather's clock, s (:meth:`started_at`; 0: the campaign's time origin):
+    the same mission flown later in the same weather. Not part of a mission file (the operator's take-off time).
     """
 
     positions: np.ndarray
@@ -43,6 +48,8 @@ class FlightPath:
     dwell_s: float = 2.0
     method: str = "ours"
     metadata: dict = field(default_factory=dict)
+    view_id: np.ndarray | None = None
+    start_time_s: float = 0.0
 
     def __len__(self) -> int:
         return int(self.positions.shape[0])
@@ -61,7 +68,37 @@ class FlightPath:
         """Cruise time at ``speed_m_s`` plus one dwell per photo."""
         return self.length_m / self.speed_m_s + self.dwell_s * len(self)
 
+    def view_ids(self) -> np.ndarray:
+        """(n,) int: the plan's viewpoint of each view (:attr:`view_id`, or 0 .. n - 1)."""
+        return np.arange(len(self)) if self.view_id is None else np.asarray(self.view_id, dtype=int)
+
+    def reversed(self) -> FlightPath:
+        """The same tour flown the other way round: the same viewpoints, legs and transition views, each view
+        keeping its :attr:`view_id`; the sorties renumbered in flying order."""
+        order = np.arange(len(self))[::-1]
+        sortie = np.asarray(self.sortie)[order]
+        return replace(self, positions=np.asarray(self.positions)[order], yaw=np.asarray(self.yaw)[order],
+                       pitch=np.asarray(self.pitch)[order], face_id=np.asarray(self.face_id)[order],
+                       kind=np.asarray(self.kind)[order], sortie=sortie.max(initial=0) - sortie + sortie.min(initial=0),
+                       view_id=self.view_ids()[order], metadata={**self.metadata, "reversed": True})
+
+    def started_at(self, start_time_s: float) -> FlightPath:
+        """The same mission taking off ``start_time_s`` s after the campaign's time origin (>= 0)."""
+        if not start_time_s >= 0:
+            raise ValueError(f"start_time_s must be >= 0, got {start_time_s}")
+        return replace(self, start_time_s=float(start_time_s))
+
     def to_json_dict(self) -> dict:
+        doc = self._json_dict()
+        # written only when set: a path in plan order taking off at 0 keeps the document (and digest) it had
+        if self.view_id is not None:
+            for viewpoint, view in zip(doc["viewpoints"], self.view_ids().tolist(), strict=True):
+                viewpoint["view_id"] = view
+        if self.start_time_s:
+            doc["start_time_s"] = self.start_time_s
+        return doc
+
+    def _json_dict(self) -> dict:
         return {
             "format_version": PATH_FORMAT_VERSION,
             "method": self.method,
@@ -126,20 +163,34 @@ class FlightPath:
             camera = Camera(float(cam["focal_mm"]), float(cam["sensor_width_mm"]),
                             int(cam["image_width_px"]), int(cam["image_height_px"]))
             speed, dwell = float(doc["speed_m_s"]), float(doc["dwell_s"])
+            view_id = _view_ids(vps)
+            start_time = float(doc.get("start_time_s", 0.0))
         except (KeyError, TypeError, ValueError, AttributeError) as err:
             what = f"missing field {err}" if isinstance(err, KeyError) else str(err)
             raise InputError(source, f"bad path file: {what}") from None
         if not (np.all(np.isfinite(positions)) and np.all(np.isfinite(yaw)) and np.all(np.isfinite(pitch))):
             raise InputError(source, "bad path file: non-finite viewpoint coordinates")
-        if speed <= 0 or dwell < 0:
-            raise InputError(source, "bad path file: speed_m_s must be > 0 and dwell_s >= 0")
+        if speed <= 0 or dwell < 0 or not start_time >= 0:
+            raise InputError(source, "bad path file: speed_m_s must be > 0, dwell_s and start_time_s >= 0")
         return cls(positions, yaw, pitch, face_id, kind, sortie, camera, speed, dwell,
-                   str(doc.get("method", "ours")), dict(doc.get("metadata", {})))
+                   str(doc.get("method", "ours")), dict(doc.get("metadata", {})), view_id, start_time)
+
+
+def _view_ids(viewpoints: list) -> np.ndarray | None:
+    """The viewpoints' ``view_id`` (n,) int (every viewpoint has one, distinct), or None when none has one."""
+    have = [("view_id" in v) for v in viewpoints]
+    if not any(have):
+        return None
+    ids = np.array([v["view_id"] for v in viewpoints] if all(have) else [], dtype=int)
+    if ids.size != len(viewpoints) or ids.min() < 0 or np.unique(ids).size != ids.size:
+        raise ValueError("'view_id' must be given for every viewpoint or none, distinct and >= 0")
+    return ids
 
 
 def digest_of_document(doc: dict) -> str:
-    """16-hex content hash of a path.json document's flight-relevant fields (viewpoints, camera, speed,
-    dwell). A stored file's own document may differ in the last float digit from a reloaded path's
-    :meth:`FlightPath.to_json_dict` after a round trip through degrees, so callers matching a file hash both."""
-    key = {k: doc[k] for k in ("viewpoints", "camera", "speed_m_s", "dwell_s")}
+    """16-hex content hash of a path.json document's flight-relevant fields (viewpoints with their view ids,
+    camera, speed, dwell, the start time where set). A stored file's own document may differ in the last float
+    digit from a reloaded path's :meth:`FlightPath.to_json_dict` after a round trip through degrees, so callers
+    matching a file hash both."""
+    key = {k: doc[k] for k in ("viewpoints", "camera", "speed_m_s", "dwell_s", "start_time_s") if k in doc}
     return hashlib.sha256(json.dumps(key, sort_keys=True).encode()).hexdigest()[:16]

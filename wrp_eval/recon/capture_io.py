@@ -39,7 +39,7 @@ def captures_from_path(path: FlightPath, offsets: np.ndarray | None = None, pitc
     if blur_px is not None:
         blur_px = np.asarray(blur_px, dtype=float).reshape(planned_pitch.shape)
     return CaptureSet(pose[:, :3], pose[:, 3], planned_pitch, np.arange(len(path)), path.camera, roll,
-                      prior_positions, blur_px)
+                      prior_positions, blur_px, path.view_id)
 
 
 def _read_columns(file: Path) -> dict[str, np.ndarray]:
@@ -83,4 +83,5 @@ def captures_from_parquet(file: str | Path, trial: int, path: FlightPath) -> Cap
     values = [pos, yaw, pitch] + [a for a in (roll, prior, blur) if a is not None]
     if not all(np.all(np.isfinite(a)) for a in values):
         raise InputError(file, f"trial {trial}: a taken view has non-finite pose values")
-    return CaptureSet(pos, yaw, pitch, view, path.camera, roll, prior, blur)
+    return CaptureSet(pos, yaw, pitch, view, path.camera, roll, prior, blur,
+                      None if path.view_id is None else path.view_ids()[view])

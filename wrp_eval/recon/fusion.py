@@ -441,13 +441,14 @@ class FusedReconstruction:
 def fuse(capture_set: CaptureSet, gt: GroundTruth, registered: np.ndarray, section: OracleSection,
          seed: int = 0) -> FusedReconstruction:
     """Steps 1-4 of the module docstring on the registered views of ``capture_set``. Seeded: one standard
-    normal per ground-truth sample, then six per planned view index (common random numbers: a pose change or
-    a missing view leaves every other draw where it was)."""
+    normal per ground-truth sample, then six per viewpoint of the plan (``capture_set.view_ids()``; common random
+    numbers: a pose change, a missing view or the tour flown in another order leaves every other draw where it
+    was)."""
     p = section.synthetic
     n_samples = len(gt.samples)
     rng = np.random.default_rng(seed)
     z_samples = rng.standard_normal(n_samples)
-    planned = np.asarray(capture_set.planned_index, dtype=int)
+    planned = capture_set.view_ids()
     z_views = rng.standard_normal((int(planned.max(initial=-1)) + 1, 6))[planned]
     # each sample stands for the patch 1 / density of the surface it was drawn on
     obs = observe_samples(capture_set, gt, registered, section, 1.0 / section.gt_density_per_m2)

@@ -27,7 +27,9 @@ class CaptureSet:
     prior_positions (n, 3) m, the position the drone's navigation (GNSS) recorded for each photo, what a
     photogrammetry tool gets as the image's position prior; None = the true positions (a perfect fix);
     blur_px (n,) motion blur during the exposure in pixels of ``camera`` (the length of the image-centre
-    smear, :mod:`wrp_eval.sim.blur`), None = sharp (0).
+    smear, :mod:`wrp_eval.sim.blur`), None = sharp (0); view_id (n,) int, the plan's viewpoint of each view
+    when the path flies its viewpoints in another order (:attr:`wrp_eval.planning.path.FlightPath.view_id`),
+    None = its planned_index.
     Views never taken (a failed flight) are simply absent. The two last fields have defaults, so the
     positional form ``CaptureSet(positions, yaw, pitch, planned_index, camera)`` is unchanged.
     """
@@ -40,6 +42,7 @@ class CaptureSet:
     roll: np.ndarray | None = None
     prior_positions: np.ndarray | None = None
     blur_px: np.ndarray | None = None
+    view_id: np.ndarray | None = None
 
     def __len__(self) -> int:
         return int(self.positions.shape[0])
@@ -56,12 +59,18 @@ class CaptureSet:
         """(n,) px: the recorded motion blur, 0 where none was recorded."""
         return np.zeros(len(self)) if self.blur_px is None else np.asarray(self.blur_px, dtype=float)
 
+    def view_ids(self) -> np.ndarray:
+        """(n,) int: the plan's viewpoint of each view (:attr:`view_id`, else planned_index): what the oracle keys
+        each view's random draws by."""
+        return np.asarray(self.planned_index if self.view_id is None else self.view_id, dtype=int)
+
     def subset(self, keep: np.ndarray) -> CaptureSet:
         """The views selected by ``keep`` (boolean mask (n,) or indices), every field carried along."""
+        def part(values: np.ndarray | None) -> np.ndarray | None:
+            return None if values is None else np.asarray(values)[keep]
         return CaptureSet(self.positions[keep], self.yaw[keep], self.pitch[keep], self.planned_index[keep],
-                          self.camera, None if self.roll is None else np.asarray(self.roll)[keep],
-                          None if self.prior_positions is None else np.asarray(self.prior_positions)[keep],
-                          None if self.blur_px is None else np.asarray(self.blur_px)[keep])
+                          self.camera, part(self.roll), part(self.prior_positions), part(self.blur_px),
+                          part(self.view_id))
 
 
 def pose_columns(capture_sets: Sequence[CaptureSet], n_views: int) -> dict[str, np.ndarray]:

@@ -206,11 +206,13 @@ class CaptureLog:
         self.estimated_offsets[rows, views, 3] = wrap_angle(shot.estimated_yaw - targets.plan_yaw[views])
         self.taken[rows, views] = True
 
-    def capture_sets(self, camera: Camera) -> tuple[CaptureSet, ...]:
-        """One :class:`CaptureSet` per flight, holding only the views it took."""
+    def capture_sets(self, camera: Camera, view_id: np.ndarray | None = None) -> tuple[CaptureSet, ...]:
+        """One :class:`CaptureSet` per flight, holding only the views it took; ``view_id`` (n_views,) int: the
+        path's :attr:`~wrp_eval.planning.path.FlightPath.view_id` (None: in plan order)."""
         return tuple(CaptureSet(self.position[i, taken], self.yaw[i, taken], self.pitch[i, taken],
                                 np.flatnonzero(taken), camera, roll=self.roll[i, taken],
-                                prior_positions=self.estimated_position[i, taken], blur_px=self.blur_px[i, taken])
+                                prior_positions=self.estimated_position[i, taken], blur_px=self.blur_px[i, taken],
+                                view_id=None if view_id is None else np.asarray(view_id)[taken])
                      for i, taken in enumerate(self.taken))
 
 

@@ -33,6 +33,9 @@ class EvaluateSection(StrictModel):
                                   "spec) in the forecast wind reaches this")
     robust: bool = Field(False, description="also optimise and fly the robust kind (wrp.robust) and, when it "
                          "applied a lever, its placebos: the same levers at as many viewpoints chosen at random")
+    direction: bool = Field(False, description="also fly the initial tour reversed (the same viewpoints the other "
+                            "way round) and its placebos: the initial tour taking off later in the same weather "
+                            "(wrp/direction.py)")
     out_dir: str | None = Field(None, description="none: logs/<run.name>/evaluate")
 
 

@@ -36,6 +36,7 @@ from wrp_eval.surrogate.data import TrialData, load_campaign_trials
 from wrp_eval.surrogate.model import Surrogate
 from wrp_eval.wrp.config import WrpSection
 from wrp_eval.wrp.confirm import CONFIRM_ROUNDS, confirm_moves
+from wrp_eval.wrp.direction import direction_placebos
 from wrp_eval.wrp.evaluate import PathTrials, box_plot, forecast_verdict, read_trials, summarise
 from wrp_eval.wrp.evaluation import EvaluationResult, PlaceboControl
 from wrp_eval.wrp.optimize import (
@@ -325,7 +326,8 @@ def evaluate_job(ctx: ExperimentContext, out: Path | None = None, *, n_trials: i
     placebos = PlaceboControl(ev.placebos, tuple(unmoved), infeasible,
                               "as many viewpoints as the WRP moved, chosen at random, moved by the WRP's move "
                               "magnitudes in random directions with its yaw offsets (wrp/placebo.py); robust: its "
-                              "levers at as many viewpoints chosen at random (wrp/robust.py)")
+                              "levers at as many viewpoints chosen at random (wrp/robust.py); reversed: the initial "
+                              "tour taking off U(0, T) s later in the same weather (wrp/direction.py)")
     verdict = None
     if forecast and ev.forecast_trials > 0:
         chosen = result.recommended_path
@@ -349,7 +351,7 @@ def _placebos(ctx: ExperimentContext, out: Path, inputs: WrpInputs, paths: dict[
               optimised: dict[str, dict]) -> tuple[dict[str, dict[str, FlightPath]], int, list[str]]:
     """The placebo paths of every WRP that moved (WRP -> {name -> path}), the placebo moves without a flyable
     direction, and the WRPs that moved nothing; with ``wrp.evaluate.robust`` the robust kind is optimised
-    into ``paths`` first."""
+    into ``paths`` first, with ``wrp.evaluate.direction`` the reversed tour added (wrp/direction.py)."""
     ev = ctx.config.wrp.evaluate
     unmoved = [kind for kind in optimised if not Table3Row.from_json_dict(optimised[kind]["table3"]).moved]
     # a WRP that moved nothing is the initial path: its placebos would all be the initial path too
@@ -361,6 +363,10 @@ def _placebos(ctx: ExperimentContext, out: Path, inputs: WrpInputs, paths: dict[
             unmoved.append("robust")
         else:
             placebo_paths["robust"] = robust_placebos
+    if ev.direction:
+        paths["reversed"] = inputs.path.reversed()
+        rng = np.random.default_rng(np.random.SeedSequence(ctx.campaign_seed, spawn_key=(11, len(WRP_KINDS) + 1)))
+        placebo_paths["reversed"] = direction_placebos(inputs.path, ev.placebos, rng)
     return placebo_paths, infeasible, unmoved
 
 
