@@ -18,6 +18,16 @@ FlightRngs = (int | np.integer[Any] | np.random.SeedSequence | np.random.Generat
               | Sequence[np.random.Generator | int | np.integer[Any] | np.random.SeedSequence])
 
 
+# the spawn-key head of a redrawn seed (:func:`redrawn_seed`): two-element keys, never a spawned child's (i,)
+_REDRAW_KEY = 7
+
+
+def redrawn_seed(seed: int, noise_draw: int) -> int | np.random.SeedSequence:
+    """Draw ``noise_draw`` of a seed's streams: ``seed`` itself for 0, else an independent SeedSequence of it (the
+    same mission's errors drawn again, :attr:`wrp_eval.planning.path.FlightPath.noise_draw`)."""
+    return seed if noise_draw == 0 else np.random.SeedSequence(seed, spawn_key=(_REDRAW_KEY, int(noise_draw)))
+
+
 def children(source: np.random.SeedSequence | np.random.Generator, n: int) -> list[np.random.Generator]:
     """The n Generators ``source`` (a SeedSequence or a Generator) would spawn next (``spawn``'s numbers and bit
     generator), without spawning them: the caller's object is left as it was, so passing the same object twice

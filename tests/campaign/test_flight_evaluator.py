@@ -41,3 +41,22 @@ def test_flights_are_batch_independent_and_recorded(tmp_path, tiny_path, make_co
     wind = column_array(a, "wind_at_views")
     speed = np.linalg.norm(wind[..., :2], axis=-1).mean(axis=1)
     assert np.all((speed > 2) & (speed < 15))
+
+
+def test_a_redrawn_path_meets_the_same_weather_with_other_errors(tmp_path, tiny_path, make_config):
+    # noise_draw 1: the same trials' wind speeds and oracle seeds, other navigation errors and turbulence; the
+    # same draw flown twice gives the same flights
+    common = dict(n_trials=2, wind={"speed_10m_m_s": {"dist": "uniform", "low": 4, "high": 8},
+                                    "turbulence": {"severity": "light"}}, perturbation={"design": "physical"})
+    tables = {}
+    for name, draw in (("own", 0), ("again", 1), ("again-2", 1)):
+        path_file = tmp_path / f"{name}.json"
+        tiny_path(3).redrawn(draw).save(path_file)
+        done = campaign_job(ExperimentContext(make_config(path_file, batch_size=2, **common)), out_dir=tmp_path / name)
+        tables[name] = TrialStore(done.out_dir).read_table().sort_by("trial_id")
+    own, again = tables["own"], tables["again"]
+    for column in ("wind_speed_10m_m_s", "oracle_seed", "flight_seed", "wind_seed"):
+        assert own.column(column).equals(again.column(column))
+    flown_own, flown_again = column_array(own, "flown_offsets"), column_array(again, "flown_offsets")
+    assert np.abs(flown_own - flown_again).min() > 1e-6
+    np.testing.assert_array_equal(column_array(tables["again-2"], "flown_offsets"), flown_again)

@@ -36,11 +36,13 @@ def test_a_reversed_tour_keeps_its_viewpoints_ids_and_legs(plans, tmp_path):
     again = FlightPath.load(tmp_path / "back.json")
     np.testing.assert_array_equal(again.view_id, back.view_id)
     assert back.digest() != path.digest()       # a reloaded path may differ in a last digit (degrees): not compared
-    # a path in plan order taking off at 0 writes neither field: its document and digest are what they were
+    assert back.reversed().view_id is None and back.reversed().digest() == path.digest()
+    # a path in plan order meeting its own errors writes neither field: its document and digest are what they were
     doc = path.to_json_dict()
-    assert "start_time_s" not in doc and not any("view_id" in v for v in doc["viewpoints"])
-    later = path.started_at(120.0)
-    assert FlightPath.from_json_dict(later.to_json_dict()).start_time_s == 120.0 and later.digest() != path.digest()
+    assert "noise_draw" not in doc and not any("view_id" in v for v in doc["viewpoints"])
+    again_drawn = path.redrawn(3)
+    assert FlightPath.from_json_dict(again_drawn.to_json_dict()).noise_draw == 3
+    assert again_drawn.digest() != path.digest()
     doc["viewpoints"][0]["view_id"] = 3      # one viewpoint with an id, the others without
     with pytest.raises(InputError, match="view_id"):
         FlightPath.from_json_dict(doc)

@@ -146,6 +146,9 @@ def test_bad_capture_set_is_an_input_error(box_on_water):
     nan = CaptureSet(np.full((3, 3), np.nan), np.zeros(3), np.zeros(3), np.arange(3))
     with pytest.raises(InputError, match="not all finite"):
         SyntheticOracle().evaluate(nan, box_on_water)
+    twice = CaptureSet(np.zeros((3, 3)), np.zeros(3), np.zeros(3), np.arange(3), view_id=np.array([2, 0, 2]))
+    with pytest.raises(InputError, match="view_id must be distinct"):
+        SyntheticOracle().evaluate(twice, box_on_water)
 
 
 def test_partner_cap_keeps_the_views_connected_and_bounds_the_work(box_on_water):

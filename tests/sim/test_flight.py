@@ -285,19 +285,16 @@ def test_a_vehicle_blown_out_of_the_wind_field_is_lost_without_an_exception(sect
     assert res.taken[1].all() and not res.taken[0].all()
 
 
-def test_a_reversed_tour_and_a_later_take_off_are_flown_as_the_path_says(section, short_path):
-    # the default section (consumer GNSS, turbulence-free wind here): the reversed tour's photos carry their
-    # viewpoints' ids (what the oracle keys its draws by); the same tour taking off 200 s later meets other
-    # navigation errors under the same flight generators, its mission as long
+def test_a_reversed_tour_is_flown_in_its_order_and_its_photos_keep_their_viewpoints(section, short_path):
+    # the default section (consumer GNSS): the reversed tour's photos carry their viewpoints' ids (what the
+    # oracle keys its draws by), taken where the initial tour's are, in the other order
     wind = ConstantWind([3.0, 0.0, 0.0])
     with FlightSimulator(section) as sim:
         ahead = sim.fly(short_path, wind, batch=2, flight_rngs=5)
         back = sim.fly(short_path.reversed(), wind, batch=2, flight_rngs=5)
-        later = sim.fly(short_path.started_at(200.0), wind, batch=2, flight_rngs=5)
     n = len(short_path)
-    assert ahead.taken.all() and back.taken.all() and later.taken.all()
+    assert ahead.taken.all() and back.taken.all()
     assert ahead.captures[0].view_id is None
     np.testing.assert_array_equal(back.captures[0].view_ids(), np.arange(n)[::-1])
     np.testing.assert_allclose(back.captures[0].positions[::-1], ahead.captures[0].positions, atol=3.0)
-    assert np.abs(later.offsets - ahead.offsets).max() > 1e-3
-    assert later.flight_time_s == pytest.approx(ahead.flight_time_s, abs=5.0)
+    assert np.all(np.diff(back.capture_time_s[0]) > 0)

@@ -278,19 +278,3 @@ def test_validation_names_the_key():
         parse_model(NavigationSection, {"correlation_time_s": 0.0}, "nav.yaml")
     assert navigation_params(NavigationSection(white_noise_m=0.2)).white_noise_m == 0.2   # override wins
     assert navigation_params(NavigationSection()).preset == "consumer"
-
-
-def test_a_later_take_off_meets_the_errors_of_that_time_and_its_own_baro_drift():
-    # the error processes run from t = 0: a first estimate at 30 s equals one stepped there chunk by chunk, and
-    # differs from a take-off at 0; the baro drifts from the take-off, not from t = 0
-    params = navigation_params(NavigationSection(preset="consumer"))
-    steps = int(round(30.0 / DT))
-    stepped = NavigationEstimator(params, 4, 3, DT)
-    for k in range(steps + 1):
-        at_30s = stepped.estimate(k * DT, np.zeros((3, 3)), np.zeros((3, 3)), np.zeros(3))
-    late = NavigationEstimator(params, 4, 3, DT).estimate(30.0, np.zeros((3, 3)), np.zeros((3, 3)), np.zeros(3))
-    first = NavigationEstimator(params, 4, 3, DT).estimate(0.0, np.zeros((3, 3)), np.zeros((3, 3)), np.zeros(3))
-    baro = NavigationEstimator(params, 4, 3, DT)._baro_rate * 30.0       # the drift at_30s has and late has not
-    np.testing.assert_allclose(late.position_error[:, :2], at_30s.position_error[:, :2], rtol=1e-9, atol=1e-12)
-    np.testing.assert_allclose(late.position_error[:, 2], at_30s.position_error[:, 2] - baro, rtol=1e-9, atol=1e-9)
-    assert np.abs(late.position_error - first.position_error).min() > 1e-6

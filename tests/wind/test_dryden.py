@@ -122,16 +122,3 @@ def test_intensity_override():
     turb = DrydenTurbulence(1, 0.05, 0, w20_mps=10.0, sigma_w_override_mps=0.7)
     sigma, *_ = turb.parameters(30.0, 5.0)
     assert sigma[0, 2] == pytest.approx(0.7)
-
-
-def test_a_later_first_query_meets_the_turbulence_of_that_time():
-    # the state is drawn at t = 0 and stepped to the first query: a flight taking off at 6 s meets what one
-    # stepped from 0 meets at 6 s (the same stream), not the initial draw again
-    points, mean = np.tile([0.0, 0.0, 25.0], (4, 1)), np.tile([8.0, 0.0, 0.0], (4, 1))
-    stepped = DrydenTurbulence(4, 0.02, 3, 8.0)
-    for k in range(301):
-        at_6s = stepped.velocity(points, k * 0.02, mean)
-    late = DrydenTurbulence(4, 0.02, 3, 8.0).velocity(points, 6.0, mean)
-    np.testing.assert_allclose(late, at_6s, rtol=1e-10, atol=1e-12)
-    first = DrydenTurbulence(4, 0.02, 3, 8.0).velocity(points, 0.0, mean)
-    assert np.abs(late - first).min() > 1e-6

@@ -95,14 +95,16 @@ def test_evaluate_flies_all_paths_with_the_same_winds(tmp_path, acceptance):
         assert doc["placebos"]["not_flown_for"] == ["iswrp", "swrp"]
         assert not (tmp_path / "ev" / "campaign-placebo-iswrp-00").exists()
         assert all("moved no viewpoint" in doc["robustness"][k]["reason"] for k in ("iswrp", "swrp"))
-        # the reversed tour: its viewpoints in the other order with their ids, its placebos the tour taking off later
+        # the reversed tour: its viewpoints in the other order with their ids (also where a chosen WRP is read),
+        # its placebos the initial tour with its flights' errors drawn again
         reversed_path = FlightPath.load(tmp_path / "ev" / "campaign-reversed" / "path.json")
         initial_path = FlightPath.load(tmp_path / "ev" / "campaign-initial" / "path.json")
         np.testing.assert_allclose(reversed_path.positions, initial_path.positions[::-1])
         np.testing.assert_array_equal(reversed_path.view_ids(), np.arange(len(initial_path))[::-1])
-        starts = [FlightPath.load(tmp_path / "ev" / f"campaign-placebo-reversed-{k:02d}" / "path.json").start_time_s
-                  for k in range(2)]
-        assert all(0.0 <= s <= initial_path.flight_time_s for s in starts) and starts[0] != starts[1]
+        assert (tmp_path / "ev" / "wrp-reversed" / "path.json").is_file()
+        draws = [FlightPath.load(tmp_path / "ev" / f"campaign-placebo-reversed-{k:02d}" / "path.json").noise_draw
+                 for k in range(2)]
+        assert draws == [1, 2]
         assert doc["robustness"]["reversed"]["placebos_flown"] == 2
         return
     # the placebos of each WRP fly the same winds and enter its verdict

@@ -3,7 +3,8 @@ the reconstruction oracle on each trial's capture poses.
 
 Per batch of trials: one wind field for the batch (the wind stage's ``build_wind_field``), one
 ``FlightSimulator.fly`` call with the commanded offsets, around the ship (its box for the compass and the
-views' depth, its motion), each trial's navigation errors and ship motion drawn from its own ``flight_seed``;
+views' depth, its motion), each trial's navigation errors and ship motion drawn from its own ``flight_seed``
+(its wind's turbulence and gusts from its wind seed; a path's ``noise_draw`` > 0 draws both again);
 then per trial the paper's extra disturbance of the wind-induced deviation, the capture set (with the
 gimbal's roll and the navigation's positions as priors) and one oracle call. Offsets are measured from the planned
 viewpoints:
@@ -28,6 +29,7 @@ from wrp_eval.sim.captures import CaptureSet
 from wrp_eval.sim.flight import FlightSimulator
 from wrp_eval.sim.flight_state import COMPLETED, OUTCOME_NAMES
 from wrp_eval.sim.onboard import ShipInScene
+from wrp_eval.streams import redrawn_seed
 from wrp_eval.wind.field import build_wind_field
 
 
@@ -69,11 +71,13 @@ class FlightEvaluator:
     def evaluate(self, batch: list[TrialInputs]) -> list[TrialOutcome]:
         start = time.perf_counter()
         wind = build_wind_field([trial_wind_section(self.config.wind, t.wind) for t in batch], self.ship.particulars,
-                                [trial_wind_rng(t.wind) for t in batch], self.dt_s, self.config_dir)
+                                [trial_wind_rng(t.wind, self.path.noise_draw) for t in batch], self.dt_s,
+                                self.config_dir)
         commanded = np.stack([t.commanded_offsets for t in batch])           # (b, n, 4)
         ship = replace(self.in_scene, wind_speed_10m_m_s=wind.speed_10m_at_ship(len(batch)))
         result = self.sim.fly(self.path, wind, len(batch), view_offsets=commanded, ship=ship,
-                              flight_rngs=[np.random.default_rng(t.flight_seed) for t in batch])
+                              flight_rngs=[np.random.default_rng(redrawn_seed(t.flight_seed, self.path.noise_draw))
+                                           for t in batch])
         flight_s = (time.perf_counter() - start) / len(batch)
         disturbance = np.stack([t.disturbance for t in batch])
         flown = commanded + disturbance * (result.offsets - commanded)         # NaN stays NaN (views not taken)

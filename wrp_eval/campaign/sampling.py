@@ -24,7 +24,7 @@ import numpy as np
 from scipy.stats import qmc
 
 from wrp_eval.campaign.config import CampaignSection, Choice, Normal, Uniform
-from wrp_eval.streams import flight_generators
+from wrp_eval.streams import flight_generators, redrawn_seed
 from wrp_eval.wind.config import WindSection
 
 WIND_STREAM, PERTURB_STREAM, DISTURB_STREAM, FLIGHT_STREAM, TARGET_STREAM = 0, 1, 2, 3, 4
@@ -84,11 +84,12 @@ def trial_wind_section(base: WindSection, draw: WindDraw) -> WindSection:
     return base.model_copy(update=update)
 
 
-def trial_wind_rng(draw: WindDraw) -> np.random.Generator:
+def trial_wind_rng(draw: WindDraw, noise_draw: int = 0) -> np.random.Generator:
     """The generator of the trial's wind realisation (its turbulence and gusts): flight 0 of a batch of one
     seeded by ``draw.seed`` (:func:`wrp_eval.streams.flight_generators`), whatever batch the trial flies
-    in, so a trial's wind never depends on the others."""
-    return flight_generators(draw.seed, 1)[0]
+    in, so a trial's wind never depends on the others; ``noise_draw`` > 0: another realisation of the same
+    weather (:func:`wrp_eval.streams.redrawn_seed`)."""
+    return flight_generators(redrawn_seed(draw.seed, noise_draw), 1)[0]
 
 
 def draw_wind(section: CampaignSection, root_seed: int, trial_id: int) -> WindDraw:

@@ -33,8 +33,12 @@ class FlightPath:
     view_id (n,) int or None: which viewpoint of the plan each view is when the tour is flown in another order
     (:meth:`reversed`); None: view i is viewpoint i. The oracle keys each view's random draws by it, so the same
     viewpoint keeps its draws whatever its place in the tour (common random numbers).
-    start_time_s: the take-off on the weather's clock, s (:meth:`started_at`; 0: the campaign's time origin):
-    the same mission flown later in the same weather. Not part of a mission file (the operator's take-off time).
+    noise_draw: which draw of a flight's own random errors the mission meets: its navigation errors, the ship's
+    motion and its wind's turbulence and gusts (the mean wind, the weather, is the trial's whatever the draw).
+    0: the campaign trial's own; k > 0: the same mission flown again in the same weather with other errors
+    (:meth:`redrawn`; the placebo of a tour flown in another order, :mod:`wrp_eval.wrp.direction`). The
+    campaign's flight evaluator applies it to the trial's seeds (:func:`wrp_eval.streams.redrawn_seed`); it is
+    not part of a mission file.
     """
 
     positions: np.ndarray
@@ -49,7 +53,7 @@ class FlightPath:
     method: str = "ours"
     metadata: dict = field(default_factory=dict)
     view_id: np.ndarray | None = None
-    start_time_s: float = 0.0
+    noise_draw: int = 0
 
     def __len__(self) -> int:
         return int(self.positions.shape[0])
@@ -77,16 +81,19 @@ class FlightPath:
         keeping its :attr:`view_id`; the sorties renumbered in flying order."""
         order = np.arange(len(self))[::-1]
         sortie = np.asarray(self.sortie)[order]
+        view_id = self.view_ids()[order]
+        in_plan_order = bool(np.all(view_id == np.arange(len(self))))
         return replace(self, positions=np.asarray(self.positions)[order], yaw=np.asarray(self.yaw)[order],
                        pitch=np.asarray(self.pitch)[order], face_id=np.asarray(self.face_id)[order],
                        kind=np.asarray(self.kind)[order], sortie=sortie.max(initial=0) - sortie + sortie.min(initial=0),
-                       view_id=self.view_ids()[order], metadata={**self.metadata, "reversed": True})
+                       view_id=None if in_plan_order else view_id,
+                       metadata={**self.metadata, "reversed": not self.metadata.get("reversed", False)})
 
-    def started_at(self, start_time_s: float) -> FlightPath:
-        """The same mission taking off ``start_time_s`` s after the campaign's time origin (>= 0)."""
-        if not start_time_s >= 0:
-            raise ValueError(f"start_time_s must be >= 0, got {start_time_s}")
-        return replace(self, start_time_s=float(start_time_s))
+    def redrawn(self, noise_draw: int) -> FlightPath:
+        """The same mission meeting draw ``noise_draw`` (>= 0) of its flights' own errors (:attr:`noise_draw`)."""
+        if noise_draw < 0:
+            raise ValueError(f"noise_draw must be >= 0, got {noise_draw}")
+        return replace(self, noise_draw=int(noise_draw))
 
     def to_json_dict(self) -> dict:
         doc = self._json_dict()
@@ -94,8 +101,8 @@ class FlightPath:
         if self.view_id is not None:
             for viewpoint, view in zip(doc["viewpoints"], self.view_ids().tolist(), strict=True):
                 viewpoint["view_id"] = view
-        if self.start_time_s:
-            doc["start_time_s"] = self.start_time_s
+        if self.noise_draw:
+            doc["noise_draw"] = self.noise_draw
         return doc
 
     def _json_dict(self) -> dict:
@@ -125,8 +132,8 @@ class FlightPath:
         write_text_atomic(file, json.dumps(self.to_json_dict(), indent=1))
 
     def digest(self) -> str:
-        """16-hex content hash of what a flight depends on (viewpoints, camera, speed, dwell): the key that
-        ties a campaign, a surrogate checkpoint and a WRP to the path they were made for."""
+        """16-hex content hash of what a flight depends on (viewpoints and their ids, camera, speed, dwell, the noise
+        draw): the key that ties a campaign, a surrogate checkpoint and a WRP to the path they were made for."""
         return digest_of_document(self.to_json_dict())
 
     @classmethod
@@ -164,16 +171,16 @@ class FlightPath:
                             int(cam["image_width_px"]), int(cam["image_height_px"]))
             speed, dwell = float(doc["speed_m_s"]), float(doc["dwell_s"])
             view_id = _view_ids(vps)
-            start_time = float(doc.get("start_time_s", 0.0))
+            noise_draw = int(doc.get("noise_draw", 0))
         except (KeyError, TypeError, ValueError, AttributeError) as err:
             what = f"missing field {err}" if isinstance(err, KeyError) else str(err)
             raise InputError(source, f"bad path file: {what}") from None
         if not (np.all(np.isfinite(positions)) and np.all(np.isfinite(yaw)) and np.all(np.isfinite(pitch))):
             raise InputError(source, "bad path file: non-finite viewpoint coordinates")
-        if speed <= 0 or dwell < 0 or not start_time >= 0:
-            raise InputError(source, "bad path file: speed_m_s must be > 0, dwell_s and start_time_s >= 0")
+        if speed <= 0 or dwell < 0 or noise_draw < 0:
+            raise InputError(source, "bad path file: speed_m_s must be > 0, dwell_s and noise_draw >= 0")
         return cls(positions, yaw, pitch, face_id, kind, sortie, camera, speed, dwell,
-                   str(doc.get("method", "ours")), dict(doc.get("metadata", {})), view_id, start_time)
+                   str(doc.get("method", "ours")), dict(doc.get("metadata", {})), view_id, noise_draw)
 
 
 def _view_ids(viewpoints: list) -> np.ndarray | None:
@@ -189,8 +196,8 @@ def _view_ids(viewpoints: list) -> np.ndarray | None:
 
 def digest_of_document(doc: dict) -> str:
     """16-hex content hash of a path.json document's flight-relevant fields (viewpoints with their view ids,
-    camera, speed, dwell, the start time where set). A stored file's own document may differ in the last float
+    camera, speed, dwell, the noise draw where set). A stored file's own document may differ in the last float
     digit from a reloaded path's :meth:`FlightPath.to_json_dict` after a round trip through degrees, so callers
     matching a file hash both."""
-    key = {k: doc[k] for k in ("viewpoints", "camera", "speed_m_s", "dwell_s", "start_time_s") if k in doc}
+    key = {k: doc[k] for k in ("viewpoints", "camera", "speed_m_s", "dwell_s", "noise_draw") if k in doc}
     return hashlib.sha256(json.dumps(key, sort_keys=True).encode()).hexdigest()[:16]

@@ -171,9 +171,13 @@ def check_inputs(capture_set: CaptureSet, mesh: trimesh.Trimesh) -> None:
             raise InputError("capture set", f"{name} is not all finite")
     if capture_set.blur_px is not None and np.any(np.asarray(capture_set.blur_px) < 0):
         raise InputError("capture set", "blur_px is negative")
-    planned = np.asarray(capture_set.planned_index)
-    if planned.dtype.kind not in "iu" or np.any(planned < 0) or len(np.unique(planned)) != n:
-        raise InputError("capture set", "planned_index must be distinct non-negative integers (one per view)")
+    for name in ("planned_index", "view_id"):
+        index = getattr(capture_set, name)
+        if index is None:
+            continue
+        index = np.asarray(index)
+        if index.shape != (n,) or index.dtype.kind not in "iu" or np.any(index < 0) or len(np.unique(index)) != n:
+            raise InputError("capture set", f"{name} must be distinct non-negative integers (one per view)")
 
 
 def _fibonacci_sphere(count: int) -> np.ndarray:
@@ -281,12 +285,20 @@ class MeshOracle:
         raise NotImplementedError
 
     def evaluate(self, capture_set: CaptureSet, ship_mesh: trimesh.Trimesh, seed: int = 0) -> ReconResult:
-        """Reconstruct, align to the ground truth (ICP with scale) and score: the :class:`Oracle` interface."""
+        """Reconstruct, align to the ground truth (ICP with scale) and score: the :class:`Oracle` interface. The
+        views are reconstructed in the order of the plan's viewpoints (``view_ids()``; the registered mask comes
+        back in the set's own order): the result of a tour does not depend on the order it was flown in (the
+        incremental registration breaks its ties by position)."""
         start = time.perf_counter()
         check_inputs(capture_set, ship_mesh)
         gt = self.ground_truth(ship_mesh)
-        recon, registered, reason, extra = self.reconstruct(capture_set, gt, seed)
+        order = np.argsort(capture_set.view_ids(), kind="stable")
+        in_plan_order = bool(np.all(order == np.arange(len(order))))
+        recon, registered, reason, extra = self.reconstruct(
+            capture_set if in_plan_order else capture_set.subset(order), gt, seed)
         mask = np.asarray(registered, dtype=bool) if np.ndim(registered) == 1 else None
+        if mask is not None and not in_plan_order:
+            mask = mask[np.argsort(order)]
         s = self.section
         scores = recon.score(gt, s, seed)
         return ReconResult(scores.error_m, scores.accuracy_m, scores.completeness, scores.precision,

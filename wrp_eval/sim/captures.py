@@ -30,8 +30,7 @@ class CaptureSet:
     smear, :mod:`wrp_eval.sim.blur`), None = sharp (0); view_id (n,) int, the plan's viewpoint of each view
     when the path flies its viewpoints in another order (:attr:`wrp_eval.planning.path.FlightPath.view_id`),
     None = its planned_index.
-    Views never taken (a failed flight) are simply absent. The two last fields have defaults, so the
-    positional form ``CaptureSet(positions, yaw, pitch, planned_index, camera)`` is unchanged.
+    Views never taken (a failed flight) are simply absent. Every field after ``planned_index`` has a default.
     """
 
     positions: np.ndarray

@@ -382,19 +382,16 @@ class FlightSimulator:
 
     # -- flights --------------------------------------------------------------------------------------
     def fly(self, path: FlightPath, wind: WindModel, batch: int, view_offsets: np.ndarray | None = None,
-            start_time_s: float | None = None, *, ship: ShipInScene | None = None,
+            start_time_s: float = 0.0, *, ship: ShipInScene | None = None,
             flight_rngs: FlightRngs = None) -> FlightResult:
         """Fly ``path`` ``batch`` times through ``wind`` (anything with ``velocity(points (n,3), t)``,
         row i = flight i). ``view_offsets`` (batch, n_views, 4): commanded (dx, dy, dz m, dyaw rad) added to
         the plan per flight; the recorded offsets are always measured against the unperturbed plan.
-        ``start_time_s``: the take-off on the wind's, the sea's and the navigation errors' clock (None: the
-        path's ``start_time_s``).
         ``ship``: the ship flown around (its box for the compass and the views' depth, its motion); None:
         open sea. ``flight_rngs``: one Generator per flight (or a seed they are spawned from) for the
         navigation errors and the ship's motion; None: seed 0.
         """
-        start = path.start_time_s if start_time_s is None else start_time_s
-        return self._fly(path, wind, batch, view_offsets, start, self.section, ship, flight_rngs)
+        return self._fly(path, wind, batch, view_offsets, start_time_s, self.section, ship, flight_rngs)
 
     def _targets(self, path: FlightPath, batch: int, view_offsets: np.ndarray | None, ship: ShipInScene | None,
                  profile: Profile, sec: SimSection) -> FlightTargets:

@@ -521,7 +521,7 @@ class NavigationEstimator:
         self.params, self.n_flights, self.dt_s = params, int(n_flights), float(dt_s)
         self.ideal = params.is_ideal
         self._k: int | None = None
-        self._takeoff_s = 0.0       # the first estimate's time: the baro drifts from there
+        self._t0 = 0.0
         if self.ideal:
             return
         p = params
@@ -562,30 +562,28 @@ class NavigationEstimator:
         return fixes
 
     def _advance(self, t_s: float) -> int:
-        """Move the error state to the step of ``t_s`` s (each step in turn, from the first fix at t = 0: a flight
-        taking off later meets the errors of that later time); returns the step index."""
+        """Move the error state to the step of ``t_s`` (each step in turn); returns the step index."""
         if self._k is None:
-            self._step(self._noise.draw(1), 0)                        # step 0: the first fix only
-            self._k, self._takeoff_s = 0, float(t_s)
-        k = round(t_s / self.dt_s)
-        if k < self._k:
-            raise ValueError(f"time went backwards: t={t_s} before step {self._k}")
-        self._step(self._noise.draw(k - self._k), self._k + 1)
-        self._k = k
-        return k
-
-    def _step(self, rows: np.ndarray, k0: int) -> None:
-        """Advance the error state over the noise ``rows`` (n_flights, m, width) of steps k0 .. k0 + m - 1."""
+            self._t0, k, k0 = float(t_s), 0, 0
+            rows = self._noise.draw(1)                                 # step 0: the first fix only
+        else:
+            k = round((t_s - self._t0) / self.dt_s)
+            if k < self._k:
+                raise ValueError(f"time went backwards: t={t_s} before step {self._k}")
+            k0 = self._k + 1
+            rows = self._noise.draw(k - self._k)
         if rows.shape[1]:
             p = self.params
             _navigation_steps(rows, self._fix_steps(k0, rows.shape[1]), self._k is None, p.fused, self.dt_s,
                               self._gm, self._pos_err, self._vel_err, self._yaw_noise, self._phi, self._gm_drive,
                               self._white, self._vel_sigma, p.compass_noise_rad, self._accel_chol,
                               self._gyro_step, self.gains, self.yaw_gain)
+        self._k = k
+        return k
 
     def estimate(self, t_s: float, position: ArrayLike, velocity: ArrayLike, yaw: ArrayLike,
                  hull_distance_m: ArrayLike | None = None) -> NavigationEstimate:
-        """The estimated state at time ``t_s`` s (>= 0, non-decreasing; the errors run from t = 0 in steps of dt).
+        """The estimated state at time ``t_s`` (the first call sets t0; later ones advance by multiples of dt).
 
         position, velocity (n, 3) true, m and m/s; yaw (n,) true, rad; hull_distance_m (n,) distance of each
         drone to the hull, m, or None (far from any hull).
@@ -604,4 +602,4 @@ class NavigationEstimator:
         return NavigationEstimate(*_estimate_rows(position, velocity, yaw, self._pos_err, self._vel_err,
                                                   self._yaw_noise, self._compass_bias, self._hull_bias, hull,
                                                   float(p.near_hull_distance_m), self._baro_rate,
-                                                  float(t_s - self._takeoff_s), float(p.uncompensated_latency_s)))
+                                                  float(t_s - self._t0), float(p.uncompensated_latency_s)))

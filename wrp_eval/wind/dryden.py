@@ -298,9 +298,8 @@ class DrydenTurbulence:
         (non-decreasing across calls).
 
         mean_wind (n, 3): the mean wind at the points (sets the u axis and the airspeed V); None = calm
-        (u along +x, V = the floor). The first call draws the stationary state at t = 0 (t >= 0: a flight
-        starting later meets the turbulence of that later time, stepped there at its first point and wind);
-        every call advances round((t - t_prev) / dt) steps with the current altitude and airspeed (one
+        (u along +x, V = the floor). The first call sets the time origin and draws the stationary initial
+        state; later calls advance round((t - t_prev) / dt) steps with the current altitude and airspeed (one
         compiled loop over the flights, :mod:`wrp_eval.compiled`).
         """
         points = np.asarray(points, dtype=float)
@@ -308,14 +307,13 @@ class DrydenTurbulence:
             raise ValueError(f"points must have shape ({self.n_flights}, 3), got {points.shape}")
         mean_wind = np.zeros_like(points) if mean_wind is None else as_rows("mean_wind", mean_wind, points.shape)
         if self.t_s is None:
-            if t < 0:
-                raise ValueError(f"turbulence queried at t = {t} s: the time origin is 0")
             _, _, _, tau, _ = self.parameters(points[:, 2], np.linalg.norm(mean_wind, axis=1))
             self._initialise(tau)
-            self.t_s = 0.0
-        n_steps = int(round((t - self.t_s) / self.dt_s))
-        if n_steps < 0:
-            raise ValueError(f"turbulence queried at t = {t} s after t = {self.t_s} s: time must not decrease")
+            self.t_s, n_steps = float(t), 0
+        else:
+            n_steps = int(round((t - self.t_s) / self.dt_s))
+            if n_steps < 0:
+                raise ValueError(f"turbulence queried at t = {t} s after t = {self.t_s} s: time must not decrease")
         world = _step_rows(points, mean_wind, self.w20_mps, self.airspeed_floor_m_s, self.dt_s, self._draw(n_steps),
                            *self._states())
         self.t_s += n_steps * self.dt_s

@@ -3,7 +3,9 @@
 Each path is flown as a campaign (the campaign stage's ``run_campaign``) with the same config and root seed, so
 trial k of every path draws the same wind (the campaign's common random numbers) and the paths can be compared
 pair by pair. The viewpoints are flown as planned (``perturbation.design: none``; the campaign's extra flown
-disturbance is kept as configured): what differs between the paths is only where they put the viewpoints.
+disturbance is kept as configured): what differs between the paths is where they put the viewpoints (and, for the
+reversed tour of ``direction: true``, the order it flies them in; its placebos fly the initial path with their
+flights' own errors drawn again, wrp/direction.py).
 
 Per path (the paper's Tables 4/5 analogues): mean, standard deviation and 95th percentile of the oracle's error
 over the trials that did not fail, and the failure rate, each with a bootstrap confidence interval

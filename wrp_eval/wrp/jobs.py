@@ -327,7 +327,8 @@ def evaluate_job(ctx: ExperimentContext, out: Path | None = None, *, n_trials: i
                               "as many viewpoints as the WRP moved, chosen at random, moved by the WRP's move "
                               "magnitudes in random directions with its yaw offsets (wrp/placebo.py); robust: its "
                               "levers at as many viewpoints chosen at random (wrp/robust.py); reversed: the initial "
-                              "tour taking off U(0, T) s later in the same weather (wrp/direction.py)")
+                              "tour flown again in the same weather with its flights' own errors drawn again "
+                              "(wrp/direction.py)")
     verdict = None
     if forecast and ev.forecast_trials > 0:
         chosen = result.recommended_path
@@ -339,7 +340,8 @@ def evaluate_job(ctx: ExperimentContext, out: Path | None = None, *, n_trials: i
     result = replace(result, placebos=placebos, forecast=verdict,
                      wrp={kind: Table3Row.from_json_dict(d["table3"]) for kind, d in optimised.items()},
                      common_random_numbers=f"every path flown with campaign seed {ctx.campaign_seed}: trial k of "
-                                           "every path draws the same wind")
+                                           "every path draws the same wind (a placebo of the reversed tour: "
+                                           "the same mean wind, its own errors drawn again)")
     out.mkdir(parents=True, exist_ok=True)
     write_json_atomic(out / "evaluate.json", result.to_json_dict())
     box_plot(flown_trials, out / "boxplot.png")
@@ -365,8 +367,9 @@ def _placebos(ctx: ExperimentContext, out: Path, inputs: WrpInputs, paths: dict[
             placebo_paths["robust"] = robust_placebos
     if ev.direction:
         paths["reversed"] = inputs.path.reversed()
-        rng = np.random.default_rng(np.random.SeedSequence(ctx.campaign_seed, spawn_key=(11, len(WRP_KINDS) + 1)))
-        placebo_paths["reversed"] = direction_placebos(inputs.path, ev.placebos, rng)
+        evaluated_wrp_dir(out, "reversed").mkdir(parents=True, exist_ok=True)
+        paths["reversed"].save(evaluated_wrp_dir(out, "reversed") / "path.json")      # where a chosen WRP is read
+        placebo_paths["reversed"] = direction_placebos(inputs.path, ev.placebos)
     return placebo_paths, infeasible, unmoved
 
 

@@ -124,14 +124,18 @@ def path_with_lever(path: FlightPath, lever: str, views: np.ndarray, standoff_fr
         return replace(path, positions=np.asarray(path.positions) - back[:, None] * axes,
                        metadata={**path.metadata, "lever": lever_note})
     ends, partner = redundant_legs(path.positions, views)
+    ids = path.view_ids()
     new = {"positions": (path.positions[ends] + path.positions[partner]) / 2,
            "yaw": _mean_angle(path.yaw[ends], path.yaw[partner]),
            "pitch": (path.pitch[ends] + path.pitch[partner]) / 2,
-           "face_id": path.face_id[ends], "kind": path.kind[ends], "sortie": path.sortie[ends]}
+           "face_id": path.face_id[ends], "kind": path.kind[ends], "sortie": path.sortie[ends],
+           # the new views numbered after the path's (as captures_with_lever numbers them): every other view keeps
+           # its id, so the oracle's draws of the flown path stay those of the screening
+           "view_id": ids.max(initial=-1) + 1 + np.arange(ends.size)}
     # the new view goes between its two ends in the tour
     slot = np.maximum(ends, partner)
-    fields: dict[str, Any] = {name: np.insert(np.asarray(getattr(path, name)), slot, value, axis=0)
-                              for name, value in new.items()}
+    old = {**{name: np.asarray(getattr(path, name)) for name in new}, "view_id": ids}
+    fields: dict[str, Any] = {name: np.insert(old[name], slot, value, axis=0) for name, value in new.items()}
     return replace(path, **fields, metadata={**path.metadata, "lever": lever_note})
 
 
@@ -139,7 +143,8 @@ def captures_with_lever(cs: CaptureSet, lever: str, views: np.ndarray, standoff_
                         depths_m: np.ndarray, planned: FlightPath) -> CaptureSet:
     """A flight's capture set ``cs`` as it would have been with ``lever`` at ``views`` of the ``planned`` path
     (module docstring): standoff moves each chosen capture back along its view's planned axis; a redundant view
-    is numbered after the path's views (n, n + 1, ...)."""
+    is numbered after the path's views (n, n + 1, ... in the order of the legs, :func:`path_with_lever`'s ids; the
+    view ids likewise after the path's)."""
     n = len(planned)
     index = np.full(n, -1)
     index[cs.planned_index] = np.arange(len(cs))
@@ -160,9 +165,11 @@ def captures_with_lever(cs: CaptureSet, lever: str, views: np.ndarray, standoff_
     def optional_mid(values: np.ndarray | None) -> np.ndarray | None:
         return None if values is None else mid(values)
 
+    leg = np.flatnonzero(both)
     return CaptureSet(mid(cs.positions), np.concatenate([cs.yaw, _mean_angle(cs.yaw[a], cs.yaw[b])]),
-                      mid(cs.pitch), np.concatenate([cs.planned_index, n + np.arange(a.size)]),
-                      cs.camera, optional_mid(cs.roll), optional_mid(cs.prior_positions), optional_mid(cs.blur_px))
+                      mid(cs.pitch), np.concatenate([cs.planned_index, n + leg]),
+                      cs.camera, optional_mid(cs.roll), optional_mid(cs.prior_positions), optional_mid(cs.blur_px),
+                      np.concatenate([cs.view_ids(), planned.view_ids().max(initial=-1) + 1 + leg]))
 
 
 @dataclass(frozen=True)
