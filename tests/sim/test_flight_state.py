@@ -144,3 +144,12 @@ def test_targets_carry_the_views_depth_and_the_fly_through_speeds():
     fast = deep.flown_through(np.ones((2, 3)), np.full((2, 2), 5.0), *trigger_planes(deep.body))
     assert fast.vertex_speed.shape == (2, 3) and fast.leg_speed.tolist() == [[5.0, 5.0]] * 2
     assert deep.vertex_speed is None and np.array_equal(fast.body, deep.body)    # a new value, the old one kept
+
+
+def test_a_reversed_tour_starts_at_its_own_first_view_and_keeps_its_planned_home():
+    path = make_path(5)
+    ahead = FlightTargets.from_path(path, 2, None, np.zeros(3))
+    back = FlightTargets.from_path(path.reversed(), 2, None, np.zeros(3))
+    np.testing.assert_array_equal(ahead.home, ahead.body[:, 0])
+    np.testing.assert_array_equal(back.home, back.body[:, -1])          # the plan's viewpoint 0, flown last
+    np.testing.assert_array_equal(back.home, ahead.home)

@@ -419,7 +419,7 @@ class FlightSimulator:
         log = TrajectoryLog()
         record_every = max(1, int(round(sec.record_interval_s / dt)))
         away_cap_s, max_chunks = _mission_horizon(sec, dt)
-        home = targets.body[:, 0]
+        home = targets.home
         wind_next = None
         for chunk in range(max_chunks + 1):
             t = chunk * dt

@@ -49,7 +49,9 @@ class FlightTargets:
     planned distance along each view's optical axis to the ship (NaN: unknown), for the blur in pixels.
     vertex_speed (batch, n_views) and leg_speed (batch, n_views - 1) m/s: the fly-through reference's speed
     at each viewpoint and cruise limit of each leg; arriving and trigger_normal (batch, n_views, 3): the
-    arriving leg's direction and the trigger plane's normal at each viewpoint (None in stop mode).
+    arriving leg's direction and the trigger plane's normal at each viewpoint (None in stop mode). home_view: the
+    view (in flying order) of the plan's first viewpoint: the flights' home (a tour flown the other way round
+    keeps the home it was planned from).
     """
 
     plan_position: np.ndarray
@@ -62,6 +64,13 @@ class FlightTargets:
     leg_speed: np.ndarray | None = None
     arriving: np.ndarray | None = None
     trigger_normal: np.ndarray | None = None
+    home_view: int = 0
+
+    @property
+    def home(self) -> np.ndarray:
+        """(batch, 3) m: the flights' home, the centre of mass at the plan's first viewpoint."""
+        home: np.ndarray = self.body[:, self.home_view]
+        return home
 
     @property
     def batch(self) -> int:
@@ -95,7 +104,7 @@ class FlightTargets:
         body = cmd_pos - np.stack([cy * cam[0] - sy * cam[1], sy * cam[0] + cy * cam[1],
                                    np.full_like(cy, cam[2])], axis=-1)
         depth = np.full(n_views, np.nan) if depth_m is None else np.asarray(depth_m, dtype=float)
-        return cls(plan_pos, plan_yaw, plan_pitch, cmd_yaw, body, depth)
+        return cls(plan_pos, plan_yaw, plan_pitch, cmd_yaw, body, depth, home_view=int(np.argmin(path.view_ids())))
 
     def flown_through(self, vertex_speed: np.ndarray, leg_speed: np.ndarray, arriving: np.ndarray,
                       trigger_normal: np.ndarray) -> FlightTargets:

@@ -82,7 +82,7 @@ class Onboard:
         self.motion: ShipMotion | None = None if ship is None else ship_motion(
             ship.motion, ship.particulars, [s[1] for s in streams], batch, ship.wind_speed_10m_m_s)
         self.battery = Battery(sec.battery, batch)
-        self.home = targets.body[:, 0].copy()
+        self.home = targets.home.copy()
         self.gimbal_params = GimbalParams.of(sec.gimbal)
         self.gimbal: Gimbal | None = None
         self.attitude: CameraAttitude | None = None        # the cameras now ...
