@@ -8,7 +8,9 @@ same seed (common random numbers, viewpoints as planned) and writes <out>/evalua
 95th percentile of the error, failure rate, P(meets spec), views not taken and expected sorties with bootstrap
 CIs; paired differences against the initial path; each WRP's robustness gain against its placebos and the
 recommended path; the recommended path in the forecast wind: P(meets spec) with its CI and GO / NO-GO) and
-<out>/boxplot.png. Re-running resumes the campaigns.
+<out>/boxplot.png. Re-running resumes the campaigns. ``wrp.evaluate.robust: true`` adds the robust kind and its
+placebos (wrp/robust.py); ``wrp.evaluate.direction: true`` the initial tour flown the other way round, its placebos
+the initial tour with its flights' own errors drawn again (wrp/direction.py).
 
     wrp-eval evaluate CONFIG --colmap-check [--winds N] [--out DIR]
 
@@ -51,8 +53,9 @@ def _evaluate(args: argparse.Namespace) -> int:
 
 
 def register(sub: argparse._SubParsersAction) -> None:
-    e = sub.add_parser("evaluate", help="fly the initial path, ISWRP, SWRP and their placebo paths "
-                                        "under the same winds; which path to fly", description=__doc__,
+    e = sub.add_parser("evaluate", help="fly the initial path, ISWRP, SWRP (and, as configured, the robust "
+                                        "kind and the reversed tour) with their placebo paths under the same "
+                                        "winds; which path to fly", description=__doc__,
                        formatter_class=argparse.RawDescriptionHelpFormatter)
     e.add_argument("config", metavar="CONFIG")
     e.add_argument("--trials", type=int, default=None, help="trials per path (overrides wrp.evaluate.n_trials)")
