@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import dataclasses
 import json
+import re
 import xml.etree.ElementTree as ET
 import zipfile
 
@@ -264,3 +265,16 @@ def test_dji_fly_through_passes_and_shoots_without_hovering(ship, path, section,
     assert turns == {"toPointAndPassWithContinuityCurvature"}
     triggers = {e.text for e in root.iter(f"{{{WPML_NS}}}actionTriggerType")}
     assert triggers == {"reachPoint"}                   # the photo at the waypoint
+
+
+def test_a_reversed_tour_names_its_photos_by_the_plans_viewpoints(ship, path, section, tmp_path):
+    # DJI's fileSuffix s<sortie>_v<viewpoint>: the plan's viewpoint, whatever order the tour flies it in
+    particulars, proxy = ship
+    back = path.reversed()
+    written = export_path(back, particulars, proxy, "dji-wpml", tmp_path / "mission.kmz", section)
+    for file, mission in written:
+        np.testing.assert_array_equal(mission.photo_ids, back.view_ids()[mission.index])
+        with zipfile.ZipFile(file) as kmz:
+            text = kmz.read("wpmz/waylines.wpml").decode()
+        named = [int(v) for v in re.findall(r"fileSuffix>s\d+_v(\d+)<", text)]
+        assert named == mission.photo_ids.tolist() and named != mission.index.tolist()

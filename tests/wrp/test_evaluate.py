@@ -105,6 +105,7 @@ def test_evaluate_flies_all_paths_with_the_same_winds(tmp_path, acceptance):
         draws = [FlightPath.load(tmp_path / "ev" / f"campaign-placebo-reversed-{k:02d}" / "path.json").noise_draw
                  for k in range(2)]
         assert draws == [1, 2]
+        assert doc["windfree_error_m"]["placebo-reversed-01"] == doc["windfree_error_m"]["initial"]
         assert doc["robustness"]["reversed"]["placebos_flown"] == 2
         return
     # the placebos of each WRP fly the same winds and enter its verdict

@@ -62,7 +62,8 @@ class GeoMission:
     looks down); style: how it is flown and shot (:class:`FlightStyle`: mode, heading mode, hold, speed);
     home_*: take-off point (deg, m above the sea); takeoff_alt_rel_m: climb height before the first waypoint
     (clears the no-fly box); fence_lat_lon (4, 2): corners of the no-fly box outline (lat, lon),
-    counter-clockwise seen from above.
+    counter-clockwise seen from above; view_id (k,): the plan's viewpoint of each waypoint (the path's
+    ``view_ids()``: ``index`` unless the tour flies its viewpoints in another order), what photos are named by.
     """
 
     sortie: int
@@ -78,6 +79,12 @@ class GeoMission:
     home_alt_m: float
     takeoff_alt_rel_m: float
     fence_lat_lon: np.ndarray
+    view_id: np.ndarray | None = None
+
+    @property
+    def photo_ids(self) -> np.ndarray:
+        """(k,) int: the plan's viewpoint of each waypoint (:attr:`view_id`, else :attr:`index`)."""
+        return np.asarray(self.index if self.view_id is None else self.view_id, dtype=int)
 
     def __len__(self) -> int:
         return int(self.index.shape[0])
@@ -179,5 +186,5 @@ def build_missions(path: FlightPath, particulars: ShipParticulars, proxy: Proxy,
         missions.append(GeoMission(
             int(sortie), idx, lat[idx], lon[idx], alt_rel[idx], heading[idx], pitch[idx],
             style, float(home_lat), float(home_lon), float(home[2]),
-            takeoff, np.stack([fence_lat, fence_lon], axis=1)))
+            takeoff, np.stack([fence_lat, fence_lon], axis=1), path.view_ids()[idx]))
     return missions

@@ -317,7 +317,10 @@ def evaluate_job(ctx: ExperimentContext, out: Path | None = None, *, n_trials: i
     placebo_trials = {kind: [fly(name, path) for name, path in named.items()]
                       for kind, named in placebo_paths.items()}
     windfree = {name: windfree_error(ctx, path) for name, path in paths.items()}
-    windfree.update({name: windfree_error(ctx, path)
+    # a placebo that only draws its flights' errors again flies the initial path's plan: its wind-free error
+    initial_digest = inputs.path.digest()
+    windfree.update({name: windfree["initial"] if path.noise_draw and path.redrawn(0).digest() == initial_digest
+                     else windfree_error(ctx, path)
                      for named in placebo_paths.values() for name, path in named.items()})
     spec = (ev.spec_error_m if ev.spec_error_m is not None else SPEC_ERROR_FACTOR * windfree["initial"],
             ev.spec_completeness)
