@@ -18,7 +18,8 @@ FlightRngs = (int | np.integer[Any] | np.random.SeedSequence | np.random.Generat
               | Sequence[np.random.Generator | int | np.integer[Any] | np.random.SeedSequence])
 
 
-# the spawn-key head of a redrawn seed (:func:`redrawn_seed`): two-element keys, never a spawned child's (i,)
+# the spawn-key head of a redrawn seed (:func:`redrawn_seed`): its keys (7, k) are not those of the flight and
+# wind streams, which spawn children 0 and 1 of the seed (keys starting 0 or 1)
 _REDRAW_KEY = 7
 
 

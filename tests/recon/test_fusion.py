@@ -209,3 +209,6 @@ def test_a_tour_flown_the_other_way_keeps_each_viewpoints_draws(box_on_water, fa
     back_result = oracle.evaluate(flown_back, box_on_water, seed=4)      # scored in plan order: the same result
     assert back_result.error_m == ahead.error_m
     np.testing.assert_array_equal(back_result.registered_mask, ahead.registered_mask[order])
+    # the registration order, given as positions in each set, names the same viewpoints
+    back_ids = flown_back.view_ids()[back_result.extra["registration_order"]]
+    np.testing.assert_array_equal(back_ids, np.asarray(ahead.extra["registration_order"]))

@@ -298,3 +298,14 @@ def test_a_reversed_tour_is_flown_in_its_order_and_its_photos_keep_their_viewpoi
     np.testing.assert_array_equal(back.captures[0].view_ids(), np.arange(n)[::-1])
     np.testing.assert_allclose(back.captures[0].positions[::-1], ahead.captures[0].positions, atol=3.0)
     assert np.all(np.diff(back.capture_time_s[0]) > 0)
+
+
+def test_a_reversed_tour_pays_for_its_flight_out_from_home(section):
+    # home stays the plan's first viewpoint: the reversed tour starts at the far end with its battery less the
+    # flight out (a 120 m line), the plan-order tour with a full one
+    path = make_path(4, spacing_m=40.0)
+    with FlightSimulator(section) as sim:
+        ahead = sim.fly(path, ConstantWind([0.0, 0.0, 0.0]), batch=1, flight_rngs=2)
+        back = sim.fly(path.reversed(), ConstantWind([0.0, 0.0, 0.0]), batch=1, flight_rngs=2)
+    first_ahead, first_back = ahead.battery_charge[0, 0], back.battery_charge[0, 0]
+    assert first_back < first_ahead - 0.004

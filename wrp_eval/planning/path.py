@@ -31,14 +31,15 @@ class FlightPath:
     kind (n,) int, KIND_SURFACE or KIND_TRANSITION; sortie (n,) int, the battery sortie of each view.
     speed_m_s: cruise speed between views; dwell_s: hover time per photo.
     view_id (n,) int or None: which viewpoint of the plan each view is when the tour is flown in another order
-    (:meth:`reversed`); None: view i is viewpoint i. The oracle keys each view's random draws by it, so the same
+    (:meth:`reversed`) or has views inserted (numbered after the plan's, the redundant lever); None: view i is
+    viewpoint i. The oracle keys each view's random draws by it, so the same
     viewpoint keeps its draws whatever its place in the tour (common random numbers).
     noise_draw: which draw of a flight's own random errors the mission meets: its navigation errors, the ship's
     motion and its wind's turbulence and gusts (the mean wind, the weather, is the trial's whatever the draw).
     0: the campaign trial's own; k > 0: the same mission flown again in the same weather with other errors
     (:meth:`redrawn`; the placebo of a tour flown in another order, :mod:`wrp_eval.wrp.direction`). The
-    campaign's flight evaluator applies it to the trial's seeds (:func:`wrp_eval.streams.redrawn_seed`); it is
-    not part of a mission file.
+    campaign's flight evaluator applies it to the trial's seeds (:func:`wrp_eval.streams.redrawn_seed`; ``wrp-eval
+    fly`` and the envelope, which seed their flights themselves, do not); it is not part of a mission file.
     """
 
     positions: np.ndarray
@@ -97,7 +98,8 @@ class FlightPath:
 
     def to_json_dict(self) -> dict:
         doc = self._json_dict()
-        # written only when set: a path in plan order taking off at 0 keeps the document (and digest) it had
+        # written only when set: a path in plan order meeting its own errors (noise_draw 0) keeps its document
+        # and its digest
         if self.view_id is not None:
             for viewpoint, view in zip(doc["viewpoints"], self.view_ids().tolist(), strict=True):
                 viewpoint["view_id"] = view

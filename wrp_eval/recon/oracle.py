@@ -297,8 +297,10 @@ class MeshOracle:
         recon, registered, reason, extra = self.reconstruct(
             capture_set if in_plan_order else capture_set.subset(order), gt, seed)
         mask = np.asarray(registered, dtype=bool) if np.ndim(registered) == 1 else None
-        if mask is not None and not in_plan_order:
-            mask = mask[np.argsort(order)]
+        if not in_plan_order:       # per-view results back in the set's own order
+            mask = None if mask is None else mask[np.argsort(order)]
+            if "registration_order" in extra:
+                extra = {**extra, "registration_order": [int(order[v]) for v in extra["registration_order"]]}
         s = self.section
         scores = recon.score(gt, s, seed)
         return ReconResult(scores.error_m, scores.accuracy_m, scores.completeness, scores.precision,

@@ -28,8 +28,8 @@ class CaptureSet:
     photogrammetry tool gets as the image's position prior; None = the true positions (a perfect fix);
     blur_px (n,) motion blur during the exposure in pixels of ``camera`` (the length of the image-centre
     smear, :mod:`wrp_eval.sim.blur`), None = sharp (0); view_id (n,) int, the plan's viewpoint of each view
-    when the path flies its viewpoints in another order (:attr:`wrp_eval.planning.path.FlightPath.view_id`),
-    None = its planned_index.
+    when the path flies its viewpoints in another order or has views inserted
+    (:attr:`wrp_eval.planning.path.FlightPath.view_id`), None = its planned_index.
     Views never taken (a failed flight) are simply absent. Every field after ``planned_index`` has a default.
     """
 

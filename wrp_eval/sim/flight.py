@@ -511,9 +511,12 @@ class FlightSimulator:
                 dt: float, start_time_s: float, sec: SimSection) -> tuple[Onboard, _Batch]:
         """The instruments and the rollout state of ``targets.batch`` flights at ``start_time_s``: each vehicle
         hovers where its navigation believes it is on the first target with its first heading (it has been
-        holding there before the mission starts), not at the true target with its error as a step at t = 0."""
+        holding there before the mission starts), not at the true target with its error as a step at t = 0. The
+        flight out from home to that target (none for a tour in plan order: home is its first view) comes off
+        the battery, as a resumed sortie's does."""
         onboard = Onboard(sec, self.params, targets, ship, 0 if flight_rngs is None else flight_rngs, dt,
                           path.speed_m_s, path.camera)
+        onboard.fresh_battery(np.arange(targets.batch), targets.body[:, 0])
         first = onboard.sense(start_time_s, targets.body[:, 0], np.zeros((targets.batch, 3)), targets.yaw[:, 0])
         run = self._start_batch(targets, sec, targets.body[:, 0] - first.position_error,
                                 targets.yaw[:, 0] - first.yaw_error)

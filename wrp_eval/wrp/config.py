@@ -34,8 +34,8 @@ class EvaluateSection(StrictModel):
     robust: bool = Field(False, description="also optimise and fly the robust kind (wrp.robust) and, when it "
                          "applied a lever, its placebos: the same levers at as many viewpoints chosen at random")
     direction: bool = Field(False, description="also fly the initial tour reversed (the same viewpoints the other "
-                            "way round) and its placebos: the initial tour taking off later in the same weather "
-                            "(wrp/direction.py)")
+                            "way round) and its placebos: the initial tour flown again in the same weather with its "
+                            "flights' own errors drawn again (wrp/direction.py)")
     out_dir: str | None = Field(None, description="none: logs/<run.name>/evaluate")
 
 

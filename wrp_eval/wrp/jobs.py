@@ -316,12 +316,7 @@ def evaluate_job(ctx: ExperimentContext, out: Path | None = None, *, n_trials: i
     flown_trials = [fly(name, path) for name, path in paths.items()]
     placebo_trials = {kind: [fly(name, path) for name, path in named.items()]
                       for kind, named in placebo_paths.items()}
-    windfree = {name: windfree_error(ctx, path) for name, path in paths.items()}
-    # a placebo that only draws its flights' errors again flies the initial path's plan: its wind-free error
-    initial_digest = inputs.path.digest()
-    windfree.update({name: windfree["initial"] if path.noise_draw and path.redrawn(0).digest() == initial_digest
-                     else windfree_error(ctx, path)
-                     for named in placebo_paths.values() for name, path in named.items()})
+    windfree = windfree_errors(ctx, paths, placebo_paths)
     spec = (ev.spec_error_m if ev.spec_error_m is not None else SPEC_ERROR_FACTOR * windfree["initial"],
             ev.spec_completeness)
     result = summarise(flown_trials, ctx.campaign_seed, ev.bootstrap, ev.confidence, spec, windfree, placebo_trials,
@@ -343,8 +338,9 @@ def evaluate_job(ctx: ExperimentContext, out: Path | None = None, *, n_trials: i
     result = replace(result, placebos=placebos, forecast=verdict,
                      wrp={kind: Table3Row.from_json_dict(d["table3"]) for kind, d in optimised.items()},
                      common_random_numbers=f"every path flown with campaign seed {ctx.campaign_seed}: trial k of "
-                                           "every path draws the same wind (a placebo of the reversed tour: "
-                                           "the same mean wind, its own errors drawn again)")
+                                           "every path draws the same wind" + (
+                                               " (a placebo of the reversed tour: the same mean wind, its own "
+                                               "errors drawn again)" if ev.direction else ""))
     out.mkdir(parents=True, exist_ok=True)
     write_json_atomic(out / "evaluate.json", result.to_json_dict())
     box_plot(flown_trials, out / "boxplot.png")
@@ -443,6 +439,18 @@ def forecast_config(flown, wind, n_trials: int):
 
 
 SPEC_ERROR_FACTOR = 1.1   # wrp.evaluate.spec_error_m unset: 1.1 x the initial path's wind-free error
+
+
+def windfree_errors(ctx: ExperimentContext, paths: dict[str, FlightPath],
+                    placebo_paths: dict[str, dict[str, FlightPath]]) -> dict[str, float]:
+    """E_windfree (m) of every path and placebo path by name (``paths`` has "initial"): a placebo that only draws
+    its flights' errors again flies the initial path's plan, and takes its wind-free error."""
+    windfree = {name: windfree_error(ctx, path) for name, path in paths.items()}
+    initial_digest = paths["initial"].digest()
+    windfree.update({name: windfree["initial"] if path.noise_draw and path.redrawn(0).digest() == initial_digest
+                     else windfree_error(ctx, path)
+                     for named in placebo_paths.values() for name, path in named.items()})
+    return windfree
 
 
 def windfree_error(ctx: ExperimentContext, path: FlightPath) -> float:

@@ -143,8 +143,9 @@ def captures_with_lever(cs: CaptureSet, lever: str, views: np.ndarray, standoff_
                         depths_m: np.ndarray, planned: FlightPath) -> CaptureSet:
     """A flight's capture set ``cs`` as it would have been with ``lever`` at ``views`` of the ``planned`` path
     (module docstring): standoff moves each chosen capture back along its view's planned axis; a redundant view
-    is numbered after the path's views (n, n + 1, ... in the order of the legs, :func:`path_with_lever`'s ids; the
-    view ids likewise after the path's)."""
+    gets planned_index n + leg and view id (the path's largest) + 1 + leg, leg its place among the redundant legs
+    (so its view id is the one :func:`path_with_lever` gives it, and a leg whose ends were not both taken leaves
+    its number unused)."""
     n = len(planned)
     index = np.full(n, -1)
     index[cs.planned_index] = np.arange(len(cs))

@@ -150,8 +150,8 @@ def _screen_levers(camp: _Campaign, section: WrpSection, targets: dict[str, np.n
             return captures_with_lever(cs, kind, at, rob.standoff_fraction, depths, path)
 
         def windfree(at: np.ndarray | None, change: Callable[[CaptureSet, np.ndarray], CaptureSet] = change) -> float:
-            # the planned captures changed as the flights' are (a redundant view numbered after the path's): the
-            # oracle draws each view's noise by its number, so renumbering the views after an insertion would
+            # the planned captures changed as the flights' are (a redundant view given a view id after the path's):
+            # the oracle draws each view's noise by its view id, so renumbering the views after an insertion would
             # reshuffle it
             if at is None:
                 return windfree_base
