@@ -1,13 +1,13 @@
 """The tour's direction as a lever (issue 30): the initial tour flown the other way round, and its placebos.
 
-Reversing a tour keeps every viewpoint, leg and transition view; what changes is where the mission starts (the
-other end of the tour; the simulator's home stays the plan's first viewpoint, and the flight out to the start is
-charged to the battery), from which side each viewpoint is approached, and *when* each viewpoint is
-photographed: viewpoint i, shot t_i s after take-off, is shot about T - t_i s after it (T: the mission time).
-Under common random numbers every error that runs with time (the GNSS error, a Gauss-Markov process with a 1,100 s correlation time, Beard & McLain, *Small Unmanned
-Aircraft*, 2012, Sec. 7.5, :mod:`wrp_eval.sim.navigation`; the Dryden turbulence; the ship's motion) is then met
-at another moment at each viewpoint, so a reversed tour's flights differ from the initial one's by a re-draw of
-those errors even when its direction does not matter. The oracle keys its own draws by viewpoint
+Reversing a tour keeps every viewpoint, leg and transition view; what changes is where the mission starts (the other
+end of the tour; the simulator's home stays the plan's first viewpoint, and the flight out to the start is charged
+to the battery), from which side each viewpoint is approached, and *when* each viewpoint is photographed: viewpoint
+i, shot t_i s after take-off, is shot about T - t_i s after it (T: the mission time). Under common random numbers
+every error that runs with time (the GNSS error, a Gauss-Markov process with a 1,100 s correlation time, Beard &
+McLain, *Small Unmanned Aircraft*, 2012, Sec. 7.5, :mod:`wrp_eval.sim.navigation`; the Dryden turbulence; the ship's
+motion) is then met at another moment at each viewpoint, so a reversed tour's flights differ from the initial one's
+by a re-draw of those errors even when its direction does not matter. The oracle keys its own draws by viewpoint
 (:attr:`wrp_eval.planning.path.FlightPath.view_id`), so they stay paired.
 
 Placebo (the same machinery as the other WRPs, :mod:`wrp_eval.wrp.evaluate`): the initial tour in its own
