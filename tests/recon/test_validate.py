@@ -101,3 +101,16 @@ def test_calibration_columns_put_colmap_beside_the_synthetic_oracle_under_its_co
     bare = {"synthetic_error_m": syn.error_m, "colmap_error_m": None, "colmap_n_points": None}
     add_calibration(bare, oracle, cs, box_on_water, 0, 800)     # no COLMAP figures: no ratio, no thinning
     assert bare["error_ratio_colmap_to_synthetic"] is None and "synthetic_sparse_error_m" not in bare
+
+
+def test_a_capture_sets_hash_counts_its_view_ids_only_where_set():
+    import dataclasses
+
+    from wrp_eval.recon.validate import capture_sha
+
+    from .conftest import ring_views
+    ring = ring_views((0, 0, 0), 22.0, (3.0,), 8)
+    same_ids = dataclasses.replace(ring, view_id=np.arange(8))
+    other_ids = dataclasses.replace(ring, view_id=np.arange(8)[::-1])
+    assert capture_sha(dataclasses.replace(ring)) == capture_sha(ring)        # no ids: the hash it always had
+    assert len({capture_sha(ring), capture_sha(same_ids), capture_sha(other_ids)}) == 3

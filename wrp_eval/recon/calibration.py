@@ -25,6 +25,7 @@ import trimesh
 
 from wrp_eval.camera import Camera
 from wrp_eval.recon.colmap import sparse_surfels
+from wrp_eval.recon.oracle import in_plan_order
 from wrp_eval.sim.captures import CaptureSet
 
 
@@ -58,7 +59,7 @@ def colmap_equivalent(oracle, capture_set: CaptureSet, mesh: trimesh.Trimesh, n_
     ``sparse_hole_part_m`` (thinned to ``n_points``)."""
     gt = oracle.ground_truth(mesh)
     small = _at_render_width(oracle, capture_set.camera.image_width_px / width_px)
-    fused, _, _, _ = small.reconstruct(at_width(capture_set, width_px), gt, seed)
+    fused, _, _, _ = small.reconstruct(in_plan_order(at_width(capture_set, width_px))[0], gt, seed)
     dense = fused.score(gt, small.section, seed)
     out = {"width_error_m": dense.error_m, "width_completeness": dense.completeness}
     present = np.flatnonzero(fused.existence > 0)

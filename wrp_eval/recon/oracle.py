@@ -145,6 +145,16 @@ def mesh_key(mesh: trimesh.Trimesh) -> str:
     return h.hexdigest()
 
 
+def in_plan_order(capture_set: CaptureSet) -> tuple[CaptureSet, np.ndarray | None]:
+    """(the set's views in the order of the plan's viewpoints, ``view_ids()``, and that order (n,) as indices into
+    the set; None when it already is): what an oracle reconstructs, so that a tour's result does not depend on the
+    order it was flown in."""
+    order = np.argsort(capture_set.view_ids(), kind="stable")
+    if np.all(order == np.arange(len(order))):
+        return capture_set, None
+    return capture_set.subset(order), order
+
+
 def check_inputs(capture_set: CaptureSet, mesh: trimesh.Trimesh) -> None:
     """Refuse malformed capture sets and meshes with one :class:`InputError` line."""
     if not isinstance(mesh, trimesh.Trimesh) or len(mesh.faces) == 0:
@@ -292,12 +302,10 @@ class MeshOracle:
         start = time.perf_counter()
         check_inputs(capture_set, ship_mesh)
         gt = self.ground_truth(ship_mesh)
-        order = np.argsort(capture_set.view_ids(), kind="stable")
-        in_plan_order = bool(np.all(order == np.arange(len(order))))
-        recon, registered, reason, extra = self.reconstruct(
-            capture_set if in_plan_order else capture_set.subset(order), gt, seed)
+        planned, order = in_plan_order(capture_set)
+        recon, registered, reason, extra = self.reconstruct(planned, gt, seed)
         mask = np.asarray(registered, dtype=bool) if np.ndim(registered) == 1 else None
-        if not in_plan_order:       # per-view results back in the set's own order
+        if order is not None:       # per-view results back in the set's own order
             mask = None if mask is None else mask[np.argsort(order)]
             if "registration_order" in extra:
                 extra = {**extra, "registration_order": [int(order[v]) for v in extra["registration_order"]]}

@@ -253,12 +253,14 @@ KIND_COLOURS = {"single_view": "tab:blue", "nav_drift": "tab:orange", "heading_b
 
 
 def capture_sha(cs: CaptureSet) -> str:
-    """Short hash of a capture set's poses, roll, priors, blur and views (a reused COLMAP row must be of the
-    same set)."""
+    """Short hash of a capture set's poses, roll, priors, blur and views, and their view ids where set (a reused
+    COLMAP row must be of the same set)."""
     import hashlib
 
     h = hashlib.sha256()
-    for arr in (cs.positions, cs.yaw, cs.pitch, cs.planned_index, cs.rotations(), cs.position_priors(), cs.blur()):
+    views = () if cs.view_id is None else (cs.view_ids(),)      # only where set: older hashes stay valid
+    for arr in (cs.positions, cs.yaw, cs.pitch, cs.planned_index, cs.rotations(), cs.position_priors(), cs.blur(),
+                *views):
         h.update(np.ascontiguousarray(arr, dtype=np.float64).tobytes())
     return h.hexdigest()[:16]
 
