@@ -273,8 +273,8 @@ def test_a_reversed_tour_names_its_photos_by_the_plans_viewpoints(ship, path, se
     back = path.reversed()
     written = export_path(back, particulars, proxy, "dji-wpml", tmp_path / "mission.kmz", section)
     for file, mission in written:
-        np.testing.assert_array_equal(mission.photo_ids, back.view_ids()[mission.index])
+        np.testing.assert_array_equal(mission.view_id, back.view_ids()[mission.index])
         with zipfile.ZipFile(file) as kmz:
             text = kmz.read("wpmz/waylines.wpml").decode()
         named = [int(v) for v in re.findall(r"fileSuffix>s\d+_v(\d+)<", text)]
-        assert named == mission.photo_ids.tolist() and named != mission.index.tolist()
+        assert named == mission.view_id.tolist() and named != mission.index.tolist()

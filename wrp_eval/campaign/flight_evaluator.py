@@ -95,7 +95,7 @@ class FlightEvaluator:
             captures = CaptureSet(pose[:, :3], pose[:, 3], result.camera_pitch[i, taken], np.flatnonzero(taken),
                                   self.path.camera, roll=result.camera_roll[i, taken], prior_positions=prior,
                                   blur_px=result.blur_px[i, taken],
-                                  view_id=None if self.path.view_id is None else self.path.view_ids()[taken])
+                                  view_id=self.path.view_ids_of(taken))
             recon = self.ship.score(captures, inputs.oracle_seed)
             reasons = []
             if result.failed[i]:

@@ -114,7 +114,7 @@ def _action_group(parent: ET.Element, m: GeoMission, k: int) -> None:
                           ("gimbalYawRotateAngle", _num(float(wrap_180(m.heading_deg[k])))),
                           ("gimbalRotateTimeEnable", 0), ("gimbalRotateTime", 0), ("payloadPositionIndex", 0)]),
         *([] if m.style.through else [("hover", [("hoverTime", _num(m.hold_s, 2))])]),
-        ("takePhoto", [("payloadPositionIndex", 0), ("fileSuffix", f"s{m.sortie}_v{int(m.photo_ids[k])}"),
+        ("takePhoto", [("payloadPositionIndex", 0), ("fileSuffix", f"s{m.sortie}_v{int(m.view_id[k])}"),
                        ("useGlobalPayloadLensIndex", 1)]),
     ]
     for action_id, (func, params) in enumerate(actions):

@@ -62,7 +62,7 @@ class GeoMission:
     looks down); style: how it is flown and shot (:class:`FlightStyle`: mode, heading mode, hold, speed);
     home_*: take-off point (deg, m above the sea); takeoff_alt_rel_m: climb height before the first waypoint
     (clears the no-fly box); fence_lat_lon (4, 2): corners of the no-fly box outline (lat, lon),
-    counter-clockwise seen from above; view_id (k,): the plan's viewpoint of each waypoint (the path's
+    counter-clockwise seen from above; view_id (k,) int: the plan's viewpoint of each waypoint (the path's
     ``view_ids()``: ``index`` unless the tour flies its viewpoints in another order), what photos are named by.
     """
 
@@ -79,12 +79,7 @@ class GeoMission:
     home_alt_m: float
     takeoff_alt_rel_m: float
     fence_lat_lon: np.ndarray
-    view_id: np.ndarray | None = None
-
-    @property
-    def photo_ids(self) -> np.ndarray:
-        """(k,) int: the plan's viewpoint of each waypoint (:attr:`view_id`, else :attr:`index`)."""
-        return np.asarray(self.index if self.view_id is None else self.view_id, dtype=int)
+    view_id: np.ndarray
 
     def __len__(self) -> int:
         return int(self.index.shape[0])

@@ -77,6 +77,11 @@ class FlightPath:
         """(n,) int: the plan's viewpoint of each view (:attr:`view_id`, or 0 .. n - 1)."""
         return np.arange(len(self)) if self.view_id is None else np.asarray(self.view_id, dtype=int)
 
+    def view_ids_of(self, views: np.ndarray) -> np.ndarray | None:
+        """The plan's viewpoints (m,) of ``views`` (m,) int or bool mask, None for a path in plan order (what a
+        capture set of those views carries as its ``view_id``)."""
+        return None if self.view_id is None else self.view_ids()[views]
+
     def reversed(self) -> FlightPath:
         """The same tour flown the other way round: the same viewpoints, legs and transition views, each view
         keeping its :attr:`view_id`; the sorties renumbered in flying order."""

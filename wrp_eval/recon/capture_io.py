@@ -83,5 +83,4 @@ def captures_from_parquet(file: str | Path, trial: int, path: FlightPath) -> Cap
     values = [pos, yaw, pitch] + [a for a in (roll, prior, blur) if a is not None]
     if not all(np.all(np.isfinite(a)) for a in values):
         raise InputError(file, f"trial {trial}: a taken view has non-finite pose values")
-    return CaptureSet(pos, yaw, pitch, view, path.camera, roll, prior, blur,
-                      None if path.view_id is None else path.view_ids()[view])
+    return CaptureSet(pos, yaw, pitch, view, path.camera, roll, prior, blur, path.view_ids_of(view))
