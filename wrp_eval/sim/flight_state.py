@@ -51,7 +51,9 @@ class FlightTargets:
     at each viewpoint and cruise limit of each leg; arriving and trigger_normal (batch, n_views, 3): the
     arriving leg's direction and the trigger plane's normal at each viewpoint (None in stop mode). home_view: the
     view (in flying order) of the plan's first viewpoint: the flights' home (a tour flown the other way round
-    keeps the home it was planned from).
+    keeps the home it was planned from; the autopilot's home is where it took off, MAVLink HOME_POSITION "set
+    automatically by the system during the takeoff", ArduPilot RTL "the point where the plane armed", and the
+    take-off deck is not modelled: the plan starts next to it).
     """
 
     plan_position: np.ndarray
