@@ -25,6 +25,15 @@ def test_load_campaign_trials_reads_the_store(tmp_path):
     assert data.views is not None and np.all(data.views.condition_reference[:, -1] == 1.0)
 
 
+def test_load_campaign_trials_reads_which_views_registered(tmp_path):
+    labels = {2: [1.0, 0.0, 1.0, np.nan, 1.0], 5: [0.0] * 5}
+    make_campaign(tmp_path, 8, 5, registered=labels)
+    data = load_campaign_trials(tmp_path)
+    np.testing.assert_array_equal(data.registered[2], labels[2])
+    np.testing.assert_array_equal(data.registered[5], labels[5])
+    assert np.isnan(data.registered[[0, 1, 3, 4, 6, 7]]).all()        # trials stored without the column
+
+
 def test_load_campaign_refuses_non_campaign(tmp_path):
     with pytest.raises(InputError, match="not a campaign folder"):
         load_campaign_trials(tmp_path)

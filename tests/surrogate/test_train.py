@@ -172,3 +172,61 @@ def test_missing_views_are_dropped_or_taken_as_an_input(known_data):
     dropped = train_surrogate(partial, section, seed=0)
     kept = train_surrogate(partial, section.model_copy(update={"missing_views": "input"}), seed=0)
     assert dropped.metrics["n_used"] == partial.complete().sum() and kept.metrics["n_used"] == data.n_trials
+
+
+def _with_registration(data: TrialData) -> TrialData:
+    """The known-function trials with a registration label that is a known function of each view's own offset:
+    a view registers unless it moved more than 1.2 m sideways (|dx|)."""
+    registered = (np.abs(data.offsets[..., 0]) < 1.2).astype(float)
+    registered[::5, 3] = np.nan                 # views without a label (not taken) take no part in the loss
+    return dataclasses.replace(data, registered=registered)
+
+
+def test_registration_head_learns_which_views_register_and_leaves_the_error_output(known_data, tmp_path):
+    data, _ = known_data
+    labelled = _with_registration(data)
+    section = SurrogateSection(epochs=60, patience=60, batch_size=32, lr=3e-3, channels=16, kernel=3, hidden=32,
+                               registration_weight=1.0)
+    r = train_surrogate(labelled, section, seed=0)
+    reg = r.metrics["test"]["registration"]
+    assert reg["n_views_labelled"] == len(r.split["test"]) * data.n_views - np.isin(
+        r.split["test"], np.arange(0, data.n_trials, 5)).sum()
+    base = max(reg["base_rate"], 1 - reg["base_rate"])
+    assert reg["accuracy"] > base + 0.5 * (1 - base), reg    # most of the way from the base rate to perfect
+    assert r.metrics["test"]["r2"] > 0.7
+    # the head is part of the checkpoint; the loaded network predicts the same
+    r.surrogate.save(tmp_path / "s.pt")
+    loaded = Surrogate.load(tmp_path / "s.pt")
+    assert loaded.meta.architecture["view_outputs"] == 1
+    np.testing.assert_array_equal(loaded.predict(data.offsets[:5]), r.surrogate.predict(data.offsets[:5]))
+    # without the weight there is no head, and the default architecture is the one older checkpoints carry
+    plain = train_surrogate(labelled, section.model_copy(update={"registration_weight": 0.0, "epochs": 2}), seed=0)
+    assert "view_outputs" not in plain.surrogate.meta.architecture and plain.surrogate.net.view_head is None
+    assert "registration" not in plain.metrics["test"]
+
+
+def test_registration_weight_without_labels_is_input_error(known_data):
+    data, _ = known_data
+    section = SurrogateSection(epochs=2, channels=4, registration_weight=0.5)
+    with pytest.raises(InputError, match="registration_weight"):
+        train_surrogate(data, section, seed=0)
+    unlabelled = dataclasses.replace(data, registered=np.full(data.offsets.shape[:2], np.nan))
+    with pytest.raises(InputError, match="records no registered views"):
+        train_surrogate(unlabelled, section, seed=0)
+
+
+def test_targeted_trials_are_the_ones_commanded_off_the_plan(known_data):
+    data, _ = known_data
+    deviation = data.offsets.copy()                 # flown = commanded + deviation: commanded 0 ...
+    deviation[7, 2] -= [1.0, 0.0, 0.0, 0.0]         # ... except trial 7's view 2, commanded 1 m along x
+    deviation[9, 0, 3] = np.nan                     # a view not taken counts as not commanded
+    flagged = dataclasses.replace(data, deviation=deviation).targeted()
+    assert np.flatnonzero(flagged).tolist() == [7]
+    assert not data.targeted().any()                # no commanded offsets recorded
+    deviation[::3, 5, 1] -= 0.5                     # every third trial commanded too
+    targeted = dataclasses.replace(data, deviation=deviation)
+    r = train_surrogate(targeted, SurrogateSection(epochs=2, channels=4), seed=0)
+    held_out = np.intersect1d(r.split["test"], np.flatnonzero(targeted.targeted()))
+    assert r.metrics["test_targeted"]["n"] == held_out.size > 1
+    np.testing.assert_allclose(r.metrics["test_targeted"]["rmse"], np.sqrt(np.mean(
+        (r.surrogate.predict(data.offsets[held_out]) - data.error[held_out]) ** 2)), rtol=1e-6)

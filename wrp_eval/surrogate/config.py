@@ -58,6 +58,11 @@ class SurrogateSection(StrictModel):
                                   "single-view error (metrics single_view.rmse_m) the optimiser's acceptance "
                                   "needs (0: none, and acceptance 'validated' then moves nothing)")
     validation_jitters: int = Field(2, ge=1, le=100, description="oracle jitters averaged per validation move")
+    registration_weight: float = Field(0.0, ge=0, le=100, description="weight of an auxiliary loss in training: "
+                                       "a per-view logit read linearly off the last conv features learns "
+                                       "whether the oracle registered that view (the campaign's view_registered, "
+                                       "binary cross-entropy); 0: none. At close range the error's spread is which "
+                                       "views register (README)")
     predict_failure: bool = Field(False, description="second output: logit of the trial failing")
     use_failed_trials: bool = Field(False, description="train the error output on failed trials whose error is "
                                     "finite too (default: only trials that did not fail)")

@@ -35,7 +35,9 @@ class TrialData:
     deviation (n_trials, n_views, 4) or None: the wind-induced part (flown - commanded), for r_s;
     conditions (n_trials, n_views, 5) or None: blur px and wind m/s at each view and whether it was taken
     (:data:`CONDITION_NAMES`; NaN where not recorded; None: none recorded); views: the path's
-    :class:`ViewContext` (None: per-view inputs unavailable, only the ``offsets`` input set can be trained).
+    :class:`ViewContext` (None: per-view inputs unavailable, only the ``offsets`` input set can be trained);
+    registered (n_trials, n_views) or None: 1 where the oracle registered the view, 0 where it did not, NaN where
+    the view was not taken or the store does not record it (the campaign's ``view_registered``).
     """
 
     offsets: np.ndarray
@@ -48,6 +50,7 @@ class TrialData:
     source: str = ""
     conditions: np.ndarray | None = None
     views: ViewContext | None = None
+    registered: np.ndarray | None = None
 
     @property
     def n_trials(self) -> int:
@@ -63,6 +66,14 @@ class TrialData:
             return np.ones(self.n_trials, bool)
         return ~np.any(np.asarray(self.conditions, float)[..., -1] < 0.5, axis=1)
 
+    def targeted(self) -> np.ndarray:
+        """(n_trials,) bool: the campaign commanded some view off the plan (a targeted trial of the physical
+        design; False where the data records no commanded offsets)."""
+        if self.deviation is None:
+            return np.zeros(self.n_trials, bool)
+        commanded = np.asarray(self.offsets, float) - np.asarray(self.deviation, float)
+        return np.any(np.abs(np.nan_to_num(commanded)) > 1e-9, axis=(1, 2))
+
     def __post_init__(self) -> None:
         off = np.asarray(self.offsets)
         if off.ndim != 3 or off.shape[2] != 4:
@@ -77,6 +88,8 @@ class TrialData:
                              f"conditions must be {(*off.shape[:2], len(CONDITION_NAMES))}")
         if self.views is not None and len(self.views) != off.shape[1]:
             raise InputError(self.source or "trial data", "views has a different number of viewpoints")
+        if self.registered is not None and np.asarray(self.registered).shape != off.shape[:2]:
+            raise InputError(self.source or "trial data", f"registered must be {off.shape[:2]}")
 
 
 def physical_variance_share(data: TrialData) -> dict[str, float] | None:
@@ -112,7 +125,7 @@ def load_campaign_trials(campaign_dir: str | Path, *, views: bool = True, config
     """The trials of a campaign folder (the campaign stage's ``TrialStore``): flown offsets, error_m, failed,
     the conditions at each view (blur, wind) and, with ``views``, the path's :class:`ViewContext` (the ship and
     oracle of the campaign's stored config, resolved relative to ``config_dir``: ~1 s; None without a stored
-    config).
+    config) and which views the oracle registered (NaN in stores written before that column).
 
     A view a flight did not take (it turned home, or the trial raised) gets offset 0 and the condition
     ``taken`` 0 (its other conditions NaN): such trials stay, since what a missing view costs is what each
@@ -126,7 +139,7 @@ def load_campaign_trials(campaign_dir: str | Path, *, views: bool = True, config
     if meta is None:
         raise InputError(folder, "not a campaign folder (no campaign.json); run `wrp-eval campaign` first")
     table = store.read_table(["trial_id", "n_views", "path_digest", "commanded_offsets", "flown_offsets",
-                              "error_m", "failed", "blur_px", "wind_at_views"])
+                              "error_m", "failed", "blur_px", "wind_at_views", "view_registered"])
     if len(table) == 0:
         raise InputError(folder, "the campaign has no stored trials yet")
     path = FlightPath.load(folder / "path.json")
@@ -157,6 +170,7 @@ def load_campaign_trials(campaign_dir: str | Path, *, views: bool = True, config
                      planned_pose=path_pose_features(path), trial_id=trial_id[keep],
                      path_digest=str(meta.get("path_digest", digests.pop())),
                      deviation=flown[keep] - commanded[keep], conditions=conditions, views=context,
+                     registered=column_array(table, "view_registered")[keep],
                      source=f"{folder} ({len(keep)} trials, {incomplete} of them with views not taken; "
                             f"{dropped} without any view)")
 

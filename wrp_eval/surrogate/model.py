@@ -52,7 +52,7 @@ class ViewSequenceCNN(nn.Module):
     """
 
     def __init__(self, in_channels: int, channels: int = 32, kernel: int = 5, layers: int = 2, hidden: int = 32,
-                 outputs: int = 1):
+                 outputs: int = 1, view_outputs: int = 0):
         super().__init__()
         if kernel % 2 == 0:
             raise ValueError("kernel must be odd")
@@ -61,6 +61,9 @@ class ViewSequenceCNN(nn.Module):
             nn.Conv1d(in_channels if i == 0 else channels, channels, kernel, padding=kernel // 2)
             for i in range(layers))
         self.head = nn.Sequential(nn.Linear(channels, hidden), nn.GELU(), nn.Linear(hidden, outputs))
+        # per-viewpoint logits read linearly off the last features (the registration head, used in training only):
+        # being linear, their mean over the path is a linear function of the pooled vector the error head reads
+        self.view_head = nn.Linear(channels, view_outputs) if view_outputs else None
 
     def conv_pre(self, layer: int, x: torch.Tensor) -> torch.Tensor:
         """Pre-activation of conv ``layer``: (batch, n, C_in) -> (batch, n, C), 'same' zero padding."""
@@ -80,6 +83,14 @@ class ViewSequenceCNN(nn.Module):
 
     def forward(self, x: torch.Tensor) -> torch.Tensor:
         return self.head(self.trunk(x).mean(dim=1))
+
+    def forward_with_views(self, x: torch.Tensor) -> tuple[torch.Tensor, torch.Tensor]:
+        """(outputs (batch, outputs), per-view logits (batch, n, view_outputs)) from one pass of the trunk (a
+        network built with ``view_outputs``)."""
+        if self.view_head is None:
+            raise ValueError("this network has no per-view head (view_outputs = 0)")
+        features = self.trunk(x)
+        return self.head(features.mean(dim=1)), self.view_head(features)
 
 
 @dataclass(frozen=True)

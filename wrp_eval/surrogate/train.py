@@ -153,6 +153,13 @@ def train_surrogate(data: TrialData, section: SurrogateSection = SurrogateSectio
         p = surrogate.predict_failure(offsets[te], _conditions(data, te))
         f = np.asarray(data.failed, bool)[te]
         metrics["test"]["failure_brier"] = float(((p - f) ** 2).mean())
+    for name, idx in (("val", va), ("test", te)):      # the held-out flights nearest the optimiser's one-view queries
+        targeted = idx[usable[idx] & data.targeted()[idx]]
+        if targeted.size > 1:
+            metrics[f"{name}_targeted"] = regression_metrics(error[targeted], surrogate.predict(
+                offsets[targeted], _conditions(data, targeted)))
+    if section.registration_weight > 0:
+        metrics["test"]["registration"] = registration_metrics(surrogate, data, te[usable[te]])
     seconds = time.perf_counter() - start
     metrics.update({"epochs_run": epoch, "best_epoch": best_epoch, "train_s": seconds, "seed": seed,
                     "final_lr": final_lr, "n_trials": int(data.n_trials), "n_used": int(rows.size),
@@ -205,6 +212,8 @@ def _untrained_meta(data: TrialData, section: SurrogateSection, offsets: np.ndar
             "channels": section.channels,
             "kernel": section.kernel, "layers": section.layers, "hidden": section.hidden,
             "outputs": 2 if section.predict_failure else 1}
+    if section.registration_weight > 0:
+        arch["view_outputs"] = 1
     return SurrogateMeta(n_views=data.n_views, path_digest=data.path_digest, architecture=arch,
                          offset_mean=off_mean.tolist(), offset_std=off_std.tolist(), error_mean=err_mean,
                          error_std=err_std, pose_mean=pose_mean, pose_std=pose_std, planned_pose=planned,
@@ -218,20 +227,7 @@ def _fit(net, surrogate: Surrogate, data: TrialData, section: SurrogateSection, 
          seed: int) -> tuple[dict, int, int, float]:
     """Train ``net`` in place (Adam, seeded batches, early stopping on the validation loss; the best epoch's
     weights are kept): (loss history, epochs run, best epoch, final learning rate)."""
-    meta = surrogate.meta
-    x_all = surrogate.input_tensor(offsets, data.conditions)                # (N, n, Cin)
-    y_all = torch.as_tensor(np.nan_to_num((target - meta.error_mean) / meta.error_std), dtype=torch.float32)
-    w_all = torch.as_tensor(usable, dtype=torch.float32)                     # error-loss mask
-    f_all = torch.as_tensor(np.asarray(data.failed, bool), dtype=torch.float32)
-
-    def loss_of(idx: torch.Tensor) -> torch.Tensor:
-        out = net(x_all[idx])
-        w = w_all[idx]
-        loss = ((out[:, 0] - y_all[idx]) ** 2 * w).sum() / w.sum().clamp(min=1.0)
-        if section.predict_failure:
-            loss = loss + F.binary_cross_entropy_with_logits(out[:, 1], f_all[idx])
-        return loss
-
+    loss_of = _loss_function(net, surrogate, data, section, offsets, target, usable)
     opt = torch.optim.Adam(net.parameters(), lr=section.lr, weight_decay=section.weight_decay)
     scheduler = None
     if section.lr_decay_patience > 0:
@@ -250,8 +246,8 @@ def _fit(net, surrogate: Surrogate, data: TrialData, section: SurrogateSection, 
             history["train_loss"].append(_epoch(net, opt, loss_of, tr_t[torch.randperm(tr_t.numel(), generator=gen)],
                                                 section.batch_size))
             net.eval()
-            with torch.no_grad():
-                val = float(loss_of(va_t))
+            with torch.no_grad():      # early stopping on the error's loss: the output the optimiser queries
+                val = float(loss_of(va_t, error_only=True))
             history["val_loss"].append(val)
             if scheduler is not None:
                 scheduler.step(val)
@@ -268,6 +264,69 @@ def _fit(net, surrogate: Surrogate, data: TrialData, section: SurrogateSection, 
     net.load_state_dict(best_state)
     net.eval()
     return history, epoch, best_epoch, float(opt.param_groups[0]["lr"])
+
+
+def _loss_function(net, surrogate: Surrogate, data: TrialData, section: SurrogateSection, offsets: np.ndarray,
+                   target: np.ndarray, usable: np.ndarray):
+    """loss_of(trial indices, error_only=False) -> the training loss of those trials: the standardised error's
+    squared residual over the usable trials, [+ the failure logit's binary cross-entropy] [+ registration_weight
+    x the per-view registration logits' binary cross-entropy over the views with a label, of usable trials]."""
+    meta = surrogate.meta
+    x_all = surrogate.input_tensor(offsets, data.conditions)                # (N, n, Cin)
+    y_all = torch.as_tensor(np.nan_to_num((target - meta.error_mean) / meta.error_std), dtype=torch.float32)
+    w_all = torch.as_tensor(usable, dtype=torch.float32)                     # error-loss mask
+    f_all = torch.as_tensor(np.asarray(data.failed, bool), dtype=torch.float32)
+    weight = section.registration_weight
+    if weight > 0:
+        labels = registration_labels(data, usable)
+        r_all, r_mask = torch.as_tensor(np.nan_to_num(labels)), torch.as_tensor(np.isfinite(labels))
+        r_all, r_mask = r_all.to(torch.float32), r_mask.to(torch.float32)
+
+    def loss_of(idx: torch.Tensor, error_only: bool = False) -> torch.Tensor:
+        if weight > 0:
+            out, logits = net.forward_with_views(x_all[idx])
+        else:
+            out = net(x_all[idx])
+        w = w_all[idx]
+        loss = ((out[:, 0] - y_all[idx]) ** 2 * w).sum() / w.sum().clamp(min=1.0)
+        if error_only:
+            return loss
+        if section.predict_failure:
+            loss = loss + F.binary_cross_entropy_with_logits(out[:, 1], f_all[idx])
+        if weight > 0:
+            m = r_mask[idx]
+            bce = F.binary_cross_entropy_with_logits(logits[..., 0], r_all[idx], weight=m, reduction="sum")
+            loss = loss + weight * bce / m.sum().clamp(min=1.0)
+        return loss
+
+    return loss_of
+
+
+def registration_labels(data: TrialData, usable: np.ndarray) -> np.ndarray:
+    """(n_trials, n_views) the registration labels the auxiliary loss learns: the campaign's view_registered (1 /
+    0) on the ``usable`` trials, NaN elsewhere. A campaign without any label is an InputError."""
+    labels = None if data.registered is None else np.where(usable[:, None], np.asarray(data.registered, float),
+                                                            np.nan)
+    if labels is None or not np.isfinite(labels).any():
+        raise InputError("surrogate.registration_weight", f"{data.source or 'the training data'} records no "
+                         "registered views (campaigns stored before view_registered); set it to 0 or fly the "
+                         "campaign again")
+    return labels
+
+
+def registration_metrics(surrogate: Surrogate, data: TrialData, rows: np.ndarray) -> dict:
+    """The registration head on trials ``rows`` (usable ones): log_loss (nats per labelled view), accuracy at
+    p = 0.5, base_rate (the share registered) and n_views_labelled."""
+    labels = registration_labels(data, np.isin(np.arange(data.n_trials), rows))[rows]
+    with torch.no_grad():
+        _, logits = surrogate.net.forward_with_views(surrogate.input_tensor(np.asarray(data.offsets, float)[rows],
+                                                                            _conditions(data, rows)))
+    p = torch.sigmoid(logits[..., 0]).double().numpy()
+    ok = np.isfinite(labels)
+    y, q = labels[ok], np.clip(p[ok], 1e-7, 1 - 1e-7)
+    return {"log_loss": float(-np.mean(y * np.log(q) + (1 - y) * np.log(1 - q))),
+            "accuracy": float(np.mean((q > 0.5) == (y > 0.5))), "base_rate": float(y.mean()),
+            "n_views_labelled": int(ok.sum())}
 
 
 def _epoch(net, opt, loss_of, perm: torch.Tensor, batch_size: int) -> float:
