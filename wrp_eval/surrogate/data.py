@@ -67,8 +67,8 @@ class TrialData:
         return ~np.any(np.asarray(self.conditions, float)[..., -1] < 0.5, axis=1)
 
     def targeted(self) -> np.ndarray:
-        """(n_trials,) bool: the campaign commanded some view off the plan (a targeted trial of the physical
-        design; False where the data records no commanded offsets)."""
+        """(n_trials,) bool: the campaign commanded some view off the plan (the targeted trials of the physical
+        design; every trial of the box and common designs; False where the data records no commanded offsets)."""
         if self.deviation is None:
             return np.zeros(self.n_trials, bool)
         commanded = np.asarray(self.offsets, float) - np.asarray(self.deviation, float)

@@ -6,7 +6,9 @@ is a 1-D signal with one sample per viewpoint and standardised input channels, i
 conditions at the shutter (:mod:`wrp_eval.surrogate.features`); the 7 planned-pose channels; with
 ``per_view`` the 2 coverage channels. The offsets and the geometry are what a candidate move changes;
 ``layers`` x (Conv1d 'same' zero padding + GELU) -> global MEAN
-pooling over the viewpoints -> Linear-GELU-Linear head -> standardised error [+ failure logit].
+pooling over the viewpoints -> Linear-GELU-Linear head -> standardised error [+ failure logit]; optionally
+(``view_outputs``) a linear per-viewpoint head on the last conv features, trained as an auxiliary task
+(whether the oracle registered each view) and not used by the queries.
 
 Why mean pooling: a change of ONE viewpoint's offsets then changes the conv features only within the receptive
 field around it, and the pooled vector by a local sum. :class:`ViewQuery` uses that to score thousands of
@@ -48,7 +50,8 @@ class ViewSequenceCNN(nn.Module):
 
     The conv layers are ``nn.Conv1d`` parameters (weight (C, C_in, k)), evaluated as one matmul over the k
     shifted copies of the sequence (identical to Conv1d with 'same' zero padding; measured about 2x faster
-    than ``F.conv1d`` for these small channel counts on this CPU).
+    than ``F.conv1d`` for these small channel counts on this CPU). ``view_outputs`` > 0: a linear head per
+    viewpoint on the last conv features (:meth:`forward_with_views`), besides the pooled one.
     """
 
     def __init__(self, in_channels: int, channels: int = 32, kernel: int = 5, layers: int = 2, hidden: int = 32,
@@ -61,7 +64,7 @@ class ViewSequenceCNN(nn.Module):
             nn.Conv1d(in_channels if i == 0 else channels, channels, kernel, padding=kernel // 2)
             for i in range(layers))
         self.head = nn.Sequential(nn.Linear(channels, hidden), nn.GELU(), nn.Linear(hidden, outputs))
-        # per-viewpoint logits read linearly off the last features (the registration head, used in training only):
+        # per-viewpoint logits read linearly off the last features (the registration head; not used by queries):
         # being linear, their mean over the path is a linear function of the pooled vector the error head reads
         self.view_head = nn.Linear(channels, view_outputs) if view_outputs else None
 

@@ -50,7 +50,9 @@ PARITY_NAME = "parity.png"
 
 @dataclass
 class TrainResult:
-    """surrogate: the trained model (best validation epoch); metrics: per split R^2, RMSE, MAE (m), counts;
+    """surrogate: the trained model (best validation epoch); metrics: per split R^2, RMSE, MAE (m), counts (and
+    ``val_targeted`` / ``test_targeted``: the same on the held-out flights commanded off the plan; ``test``
+    ``registration``: the registration head's figures, when trained);
     history: per-epoch train and validation loss (standardised MSE); split: trial indices of each split;
     test_true / test_pred (m): the held-out test trials, for the parity plot; seconds: training wall time."""
 
@@ -225,8 +227,9 @@ def _untrained_meta(data: TrialData, section: SurrogateSection, offsets: np.ndar
 def _fit(net, surrogate: Surrogate, data: TrialData, section: SurrogateSection, offsets: np.ndarray,
          target: np.ndarray, usable: np.ndarray, tr: np.ndarray, va: np.ndarray,
          seed: int) -> tuple[dict, int, int, float]:
-    """Train ``net`` in place (Adam, seeded batches, early stopping on the validation loss; the best epoch's
-    weights are kept): (loss history, epochs run, best epoch, final learning rate)."""
+    """Train ``net`` in place (Adam, seeded batches, early stopping on the validation loss -- of the error output
+    alone when the registration head trains beside it, the auxiliary loss is a means, not the product; the best
+    epoch's weights are kept): (loss history, epochs run, best epoch, final learning rate)."""
     loss_of = _loss_function(net, surrogate, data, section, offsets, target, usable)
     opt = torch.optim.Adam(net.parameters(), lr=section.lr, weight_decay=section.weight_decay)
     scheduler = None
@@ -246,8 +249,8 @@ def _fit(net, surrogate: Surrogate, data: TrialData, section: SurrogateSection, 
             history["train_loss"].append(_epoch(net, opt, loss_of, tr_t[torch.randperm(tr_t.numel(), generator=gen)],
                                                 section.batch_size))
             net.eval()
-            with torch.no_grad():      # early stopping on the error's loss: the output the optimiser queries
-                val = float(loss_of(va_t, error_only=True))
+            with torch.no_grad():      # with the registration head: early stopping on the error's loss alone
+                val = float(loss_of(va_t, error_only=section.registration_weight > 0))
             history["val_loss"].append(val)
             if scheduler is not None:
                 scheduler.step(val)
@@ -270,7 +273,8 @@ def _loss_function(net, surrogate: Surrogate, data: TrialData, section: Surrogat
                    target: np.ndarray, usable: np.ndarray):
     """loss_of(trial indices, error_only=False) -> the training loss of those trials: the standardised error's
     squared residual over the usable trials, [+ the failure logit's binary cross-entropy] [+ registration_weight
-    x the per-view registration logits' binary cross-entropy over the views with a label, of usable trials]."""
+    x the per-view registration logits' binary cross-entropy over the views with a label, of usable trials];
+    ``error_only``: the first term alone."""
     meta = surrogate.meta
     x_all = surrogate.input_tensor(offsets, data.conditions)                # (N, n, Cin)
     y_all = torch.as_tensor(np.nan_to_num((target - meta.error_mean) / meta.error_std), dtype=torch.float32)
@@ -316,8 +320,11 @@ def registration_labels(data: TrialData, usable: np.ndarray) -> np.ndarray:
 
 def registration_metrics(surrogate: Surrogate, data: TrialData, rows: np.ndarray) -> dict:
     """The registration head on trials ``rows`` (usable ones): log_loss (nats per labelled view), accuracy at
-    p = 0.5, base_rate (the share registered) and n_views_labelled."""
-    labels = registration_labels(data, np.isin(np.arange(data.n_trials), rows))[rows]
+    p = 0.5, base_rate (the share registered) and n_views_labelled (only that, 0, when none has a label)."""
+    labels = np.full((len(rows), data.n_views), np.nan) if data.registered is None else \
+        np.asarray(data.registered, float)[rows]
+    if not np.isfinite(labels).any():
+        return {"n_views_labelled": 0}
     with torch.no_grad():
         _, logits = surrogate.net.forward_with_views(surrogate.input_tensor(np.asarray(data.offsets, float)[rows],
                                                                             _conditions(data, rows)))
