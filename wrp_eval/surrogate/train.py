@@ -155,11 +155,11 @@ def train_surrogate(data: TrialData, section: SurrogateSection = SurrogateSectio
         p = surrogate.predict_failure(offsets[te], _conditions(data, te))
         f = np.asarray(data.failed, bool)[te]
         metrics["test"]["failure_brier"] = float(((p - f) ** 2).mean())
+    targeted = data.targeted()
     for name, idx in (("val", va), ("test", te)):      # the held-out flights nearest the optimiser's one-view queries
-        targeted = idx[usable[idx] & data.targeted()[idx]]
-        if targeted.size > 1:
-            metrics[f"{name}_targeted"] = regression_metrics(error[targeted], surrogate.predict(
-                offsets[targeted], _conditions(data, targeted)))
+        among = targeted[idx[usable[idx]]]
+        if among.sum() > 1:
+            metrics[f"{name}_targeted"] = regression_metrics(preds[name][0][among], preds[name][1][among])
     if section.registration_weight > 0:
         metrics["test"]["registration"] = registration_metrics(surrogate, data, te[usable[te]])
     seconds = time.perf_counter() - start
@@ -283,21 +283,19 @@ def _loss_function(net, surrogate: Surrogate, data: TrialData, section: Surrogat
     weight = section.registration_weight
     if weight > 0:
         labels = registration_labels(data, usable)
-        r_all, r_mask = torch.as_tensor(np.nan_to_num(labels)), torch.as_tensor(np.isfinite(labels))
-        r_all, r_mask = r_all.to(torch.float32), r_mask.to(torch.float32)
+        r_all = torch.as_tensor(np.nan_to_num(labels), dtype=torch.float32)
+        r_mask = torch.as_tensor(np.isfinite(labels), dtype=torch.float32)
 
     def loss_of(idx: torch.Tensor, error_only: bool = False) -> torch.Tensor:
-        if weight > 0:
-            out, logits = net.forward_with_views(x_all[idx])
-        else:
-            out = net(x_all[idx])
+        views = weight > 0 and not error_only
+        out, logits = net.forward_with_views(x_all[idx]) if views else (net(x_all[idx]), None)
         w = w_all[idx]
         loss = ((out[:, 0] - y_all[idx]) ** 2 * w).sum() / w.sum().clamp(min=1.0)
         if error_only:
             return loss
         if section.predict_failure:
             loss = loss + F.binary_cross_entropy_with_logits(out[:, 1], f_all[idx])
-        if weight > 0:
+        if logits is not None:
             m = r_mask[idx]
             bce = F.binary_cross_entropy_with_logits(logits[..., 0], r_all[idx], weight=m, reduction="sum")
             loss = loss + weight * bce / m.sum().clamp(min=1.0)
@@ -328,11 +326,10 @@ def registration_metrics(surrogate: Surrogate, data: TrialData, rows: np.ndarray
     with torch.no_grad():
         _, logits = surrogate.net.forward_with_views(surrogate.input_tensor(np.asarray(data.offsets, float)[rows],
                                                                             _conditions(data, rows)))
-    p = torch.sigmoid(logits[..., 0]).double().numpy()
     ok = np.isfinite(labels)
-    y, q = labels[ok], np.clip(p[ok], 1e-7, 1 - 1e-7)
-    return {"log_loss": float(-np.mean(y * np.log(q) + (1 - y) * np.log(1 - q))),
-            "accuracy": float(np.mean((q > 0.5) == (y > 0.5))), "base_rate": float(y.mean()),
+    z, y = logits[..., 0].double()[torch.as_tensor(ok)], torch.as_tensor(labels[ok])
+    return {"log_loss": float(F.binary_cross_entropy_with_logits(z, y)),     # the training loss's own form
+            "accuracy": float(((z > 0) == (y > 0.5)).double().mean()), "base_rate": float(y.mean()),
             "n_views_labelled": int(ok.sum())}
 
 
