@@ -289,15 +289,14 @@ class ViewQuery:
         self.n = surrogate.n_views
         self.forward_calls = 0
         self.queries = 0
-        # first layer's weights on the channels a move changes (offsets [+ flown geometry]) as (m, k C): row r of
-        # the result for view c is the change of the pre-activation at position c + h - k (flipped so that
-        # column block 0 is position c - h)
+        # first layer's weights on the channels a move changes (offsets [+ flown geometry]) as (k, m, C): entry r
+        # maps a change at view c to the pre-activation at position c - h + r (tap 2h - r)
         m = surrogate.variable_channels
         scale = torch.as_tensor(surrogate.variable_scale, dtype=torch.float32).view(1, m, 1)
         w1 = cast(nn.Conv1d, net.convs[0]).weight[:, :m, :].detach() / scale                # (C, m, k)
-        self._w1 = w1.permute(1, 2, 0).flip(1).reshape(m, -1).contiguous()
-        # later layers as (k C_in, C) matrices over the k shifted copies (as ViewSequenceCNN.conv_pre)
-        self._w = [c.weight.detach().permute(2, 1, 0).reshape(-1, c.weight.shape[0]).contiguous()
+        self._w1 = w1.permute(2, 1, 0).flip(0).contiguous()
+        # later layers as (k, C_in, C): tap j maps a change at position i to position i + h - j
+        self._w = [c.weight.detach().permute(2, 1, 0).contiguous()
                    for c in cast("Iterable[nn.Conv1d]", net.convs[1:])]
         self.set_base(base_offsets)
 
@@ -339,25 +338,35 @@ class ViewQuery:
     @torch.no_grad()
     def errors(self, index: int, candidates: np.ndarray) -> np.ndarray:
         """(q, 4) candidate offsets of viewpoint ``index`` -> (q,) predicted path error (m)."""
-        cand = torch.as_tensor(np.asarray(candidates, dtype=np.float32))
-        q = cand.shape[0]
+        candidates = np.asarray(candidates, dtype=float)
+        q = candidates.shape[0]
         self.forward_calls += 1
         self.queries += q
-        h, P, n, k = self.h, self.P, self.n, self.s.net.kernel
-        c = index + P                                                      # padded coordinate of the view
-        delta_in = self._variables(index, np.asarray(candidates, dtype=float))           # (q, m)
-        dpre = (delta_in @ self._w1).view(q, 2 * h + 1, -1)                # positions c-h .. c+h, (q, w, C)
+        h, n, k = self.h, self.n, self.s.net.kernel
+        c = index + self.P                                                 # padded coordinate of the view
+        delta_in = self._variables(index, candidates)                      # (q, m)
+        # position-major (w, q, C): every tap adds into a contiguous block of positions
         lo, hi = c - h, c + h + 1
-        delta_act = None
-        for layer in range(len(self.s.net.convs)):
-            if layer > 0:
-                # 'full' convolution of the activation change: positions lo-h .. hi+h-1
-                w = hi - lo + 2 * h
-                dp = F.pad(cast(torch.Tensor, delta_act), (0, 0, 2 * h, 2 * h))
-                cols = torch.cat([dp[:, j:j + w] for j in range(k)], dim=-1)      # (q, w, k C)
-                dpre = (cols.reshape(-1, cols.shape[-1]) @ self._w[layer - 1]).view(q, w, -1)
-                lo, hi = lo - h, hi + h
-            new = F.gelu(self.pre[layer][lo:hi] + dpre) * self._inside[lo:hi]
-            delta_act = new - self.act[layer][lo:hi]
-        pooled = (self.pooled_sum + cast(torch.Tensor, delta_act).sum(dim=1)) / n  # (q, C)
+        pre = self.pre[0][lo:hi, None, :].repeat(1, q, 1)                  # positions c-h .. c+h
+        for r in range(k):
+            pre[r].addmm_(delta_in, self._w1[r])
+        delta_act = self._activation_change(0, pre, lo, hi)
+        for layer in range(1, len(self.s.net.convs)):
+            # 'full' convolution of the activation change: positions lo-h .. hi+h-1
+            width = hi - lo
+            change = delta_act.reshape(width * q, -1)
+            lo, hi = lo - h, hi + h
+            pre = self.pre[layer][lo:hi, None, :].repeat(1, q, 1)
+            for j in range(k):
+                pre[2 * h - j:2 * h - j + width].view(width * q, -1).addmm_(change, self._w[layer - 1][j])
+            delta_act = self._activation_change(layer, pre, lo, hi)
+        pooled = (self.pooled_sum + delta_act.sum(dim=0)) / n             # (q, C)
         return self.s.to_error(self.s.net.head(pooled)[:, 0].double().numpy())
+
+    def _activation_change(self, layer: int, pre: torch.Tensor, lo: int, hi: int) -> torch.Tensor:
+        """(w, q, C) change of conv ``layer``'s activation at padded positions [lo, hi) from the candidates'
+        pre-activations ``pre`` (w, q, C); zero outside the path, as the full network's 'same' padding sees it."""
+        new = F.gelu(pre)
+        if lo < self.P or hi > self.P + self.n:                            # at the path's ends
+            new = new * self._inside[lo:hi, :, None]
+        return new - self.act[layer][lo:hi, None, :]
