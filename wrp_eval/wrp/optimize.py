@@ -297,21 +297,26 @@ def optimise_view_improve(query: ViewQuery, view: int, params: WrpParams,
     b = params.block_iterations
     n_blocks = -(-params.iterations // b)
     t = params.threshold_m
-    parts = []                                   # per block: survivors' iteration, position, yaw, E, draws
+    parts, draws = [], []                        # per block: survivors' iteration, position, yaw, E; its draws
     scored = 0
     for block in range(n_blocks):
         lo, d, pos, yaw_best, e1, survivors = stage_one(query, view, params, seed, block)
         scored += len(pos)
-        parts.append((lo + survivors, pos[survivors], yaw_best[survivors], e1[survivors],
-                      d.neighbour_offset[survivors], d.neighbour_yaw[survivors]))
-    it, pos, yaw, e1, n_off, n_yaw = (np.concatenate(column) for column in zip(*parts, strict=True))
+        parts.append((lo + survivors, pos[survivors], yaw_best[survivors], e1[survivors]))
+        draws.append(d)
+    it, pos, yaw, e1 = (np.concatenate(column) for column in zip(*parts, strict=True))
     if it.size == 0:
         return -1, np.zeros(4), float("nan"), float("nan"), scored
     pick = np.lexsort((it, e1))[:params.improve_candidates]        # lowest E first, ties: earlier iteration
+    # only the picked candidates' neighbourhoods are read: a block's neighbour yaws (its largest draw, made on
+    # first use) are drawn for the blocks that hold one
+    block_of, row = np.divmod(it[pick], b)
+    n_off = np.stack([draws[k].neighbour_offset[r] for k, r in zip(block_of, row, strict=True)])
+    n_yaw = np.stack([draws[k].neighbour_yaw[r] for k, r in zip(block_of, row, strict=True)])
     # the unmoved viewpoint's neighbourhood (its own stream: block index n_blocks) scored with the candidates
     home = iteration_draws(seed, view, n_blocks, params)
-    centres = np.concatenate([home.neighbour_offset[:1], pos[pick][:, None, :] + n_off[pick]])   # (1 + k, M, 3)
-    yaws = np.concatenate([home.neighbour_yaw[:1], n_yaw[pick]])
+    centres = np.concatenate([home.neighbour_offset[:1], pos[pick][:, None, :] + n_off])   # (1 + k, M, 3)
+    yaws = np.concatenate([home.neighbour_yaw[:1], n_yaw])
     _, ek = best_attitude(query, view, centres, yaws)
     stat = neighbourhood_statistic(ek, params)
     score = neighbourhood_score(ek, params)
