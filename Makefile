@@ -3,9 +3,7 @@
 # make bench: set-up + the benchmarks (JSON under logs/bench/)
 SHELL := /bin/bash
 PY ?= python3
-# pytest-xdist processes for `make test` (a test file stays in one process: its module fixtures are built once;
-# files are handed out in collection order, where tests/conftest.py puts the files with slow tests first,
-# not xdist's default of the most tests first, which left the longest files to start last)
+# pytest-xdist processes for `make test` (a test file stays in one process: its module fixtures are built once)
 TEST_WORKERS ?= 2
 VENV := .venv
 BIN := $(VENV)/bin
@@ -37,7 +35,7 @@ test: setup
 	$(BIN)/lint-imports --no-cache
 	$(BIN)/ruff check wrp_eval tests scripts
 	$(BIN)/mypy
-	$(BIN)/python -m pytest -q -p no:cacheprovider -n $(TEST_WORKERS) --dist loadfile --no-loadscope-reorder
+	$(BIN)/python -m pytest -q -p no:cacheprovider -n $(TEST_WORKERS) --dist loadfile
 
 bench: setup
 	$(BIN)/wrp-eval bench --out logs/bench/

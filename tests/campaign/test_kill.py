@@ -75,7 +75,6 @@ def _run(tmp_path, path_file, workers) -> int:
     return proc.returncode
 
 
-@pytest.mark.slow
 def test_kill_9_mid_campaign_then_rerun_completes_without_duplicates(tmp_path, path_file, comparable,
                                                                      make_config):
     assert _run(tmp_path, path_file, workers=0) == -signal.SIGKILL   # kill -9 while evaluating trial KILL_AT

@@ -10,7 +10,6 @@ from wrp_eval.campaign.store import TrialStore
 from wrp_eval.errors import InputError
 
 
-@pytest.mark.slow
 def test_ray_matches_local_and_shuts_down_its_instance(tmp_path, path_file, make_config, comparable, run_analytic):
     local = run_analytic(make_config(path_file, n_trials=10), tmp_path / "local", fail_trial_ids=[3])
     on_ray = run_analytic(make_config(path_file, n_trials=10, backend={"kind": "ray", "workers": 2}),

@@ -12,8 +12,6 @@ import sys
 import textwrap
 from pathlib import Path
 
-import pytest
-
 from tests.envelope.conftest import cells_without_folders, fly
 from wrp_eval.envelope.result import Envelope
 
@@ -62,7 +60,6 @@ def _run(tmp_path) -> tuple[int, str]:
     return proc.returncode, out.decode()
 
 
-@pytest.mark.slow
 def test_a_killed_envelope_resumes_to_the_uninterrupted_result(tmp_path):
     code, _ = _run(tmp_path)
     assert code == -signal.SIGKILL

@@ -7,7 +7,6 @@ import json
 from pathlib import Path
 
 import numpy as np
-import pytest
 
 from tests.envelope.conftest import FAIL_SPEED, cells_without_folders, fly
 from wrp_eval.campaign.store import TrialStore
@@ -95,7 +94,6 @@ def test_a_stricter_spec_moves_the_boundary_down(tmp_path):
     assert np.all(["completeness below spec" in b.limit for b in job.envelope.boundaries])
 
 
-@pytest.mark.slow
 def test_ray_flies_the_same_envelope_as_local_processes(flown):
     """The cells on Ray (a local instance, 2 CPUs) give the same envelope as the in-process run."""
     import ray

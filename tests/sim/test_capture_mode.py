@@ -234,7 +234,6 @@ def test_the_capture_section_rejects_bad_values():
 RATE_TOLERANCE_DEG_S = 12.0
 
 
-@pytest.mark.slow
 def test_no_fly_through_photo_turns_faster_than_the_mission_commands():
     from pathlib import Path
 

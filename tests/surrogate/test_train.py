@@ -126,7 +126,6 @@ def test_log_target_refuses_non_positive_errors(known_data):
         train_surrogate(bad, SurrogateSection(epochs=2, target="log_error"), seed=0)
 
 
-@pytest.mark.slow
 def test_cross_validation_tests_every_usable_trial_exactly_once(known_data):
     data, _ = known_data
     failed = np.zeros(data.n_trials, bool)

@@ -34,7 +34,6 @@ def test_train_writes_checkpoint_metrics_and_plot(trained_campaign):
     assert (root / "sur" / "parity.png").stat().st_size > 0 and (root / "sur" / "surrogate.pt").is_file()
 
 
-@pytest.mark.slow
 def test_train_cv_writes_fold_figures(trained_campaign, tmp_path, capsys):
     root, cfg, campaign = trained_campaign
     assert main(["train", str(cfg), "--campaign", str(campaign), "--out", str(tmp_path), "--cv", "3",
@@ -105,7 +104,6 @@ def test_optimize_e_original_from_the_surrogate(trained_campaign, tmp_path):
     assert doc["table3"]["threshold_m"] == pytest.approx(0.08 * doc["table3"]["e_original_m"])
 
 
-@pytest.mark.slow
 def test_optimize_robust_screens_each_lever_on_flights_apart_from_the_risk_map(trained_campaign, tmp_path):
     root, cfg, campaign = trained_campaign
     robust_cfg = tmp_path / "robust.yaml"
