@@ -289,15 +289,13 @@ class ViewQuery:
         self.n = surrogate.n_views
         self.forward_calls = 0
         self.queries = 0
-        # first layer's weights on the channels a move changes (offsets [+ flown geometry]) as (k, m, C): entry r
-        # maps a change at view c to the pre-activation at position c - h + r (tap 2h - r)
+        # every layer's taps as (k, C_in, C): tap j maps a change at position i to position i + h - j; the first
+        # layer's only on the channels a move changes (offsets [+ flown geometry]), unstandardised
         m = surrogate.variable_channels
         scale = torch.as_tensor(surrogate.variable_scale, dtype=torch.float32).view(1, m, 1)
         w1 = cast(nn.Conv1d, net.convs[0]).weight[:, :m, :].detach() / scale                # (C, m, k)
-        self._w1 = w1.permute(2, 1, 0).flip(0).contiguous()
-        # later layers as (k, C_in, C): tap j maps a change at position i to position i + h - j
-        self._w = [c.weight.detach().permute(2, 1, 0).contiguous()
-                   for c in cast("Iterable[nn.Conv1d]", net.convs[1:])]
+        self._taps = [w1.permute(2, 1, 0).contiguous()] + [
+            c.weight.detach().permute(2, 1, 0).contiguous() for c in cast("Iterable[nn.Conv1d]", net.convs[1:])]
         self.set_base(base_offsets)
 
     @torch.no_grad()
@@ -316,7 +314,7 @@ class ViewQuery:
         self.pooled_sum = x[0].sum(dim=0)                                  # (C,)
         inside = torch.zeros(self.n + 2 * P)
         inside[P:P + self.n] = 1.0
-        self._inside = inside.view(-1, 1)
+        self._inside = inside.view(-1, 1, 1)
 
     def _variables(self, index: int, candidates: np.ndarray) -> torch.Tensor:
         """(q, m) change of the move-dependent channels (offsets [+ flown geometry], unstandardised) of viewpoint
@@ -345,21 +343,18 @@ class ViewQuery:
         h, n, k = self.h, self.n, self.s.net.kernel
         c = index + self.P                                                 # padded coordinate of the view
         delta_in = self._variables(index, candidates)                      # (q, m)
-        # position-major (w, q, C): every tap adds into a contiguous block of positions
-        lo, hi = c - h, c + h + 1
-        pre = self.pre[0][lo:hi, None, :].repeat(1, q, 1)                  # positions c-h .. c+h
-        for r in range(k):
-            pre[r].addmm_(delta_in, self._w1[r])
-        delta_act = self._activation_change(0, pre, lo, hi)
-        for layer in range(1, len(self.s.net.convs)):
-            # 'full' convolution of the activation change: positions lo-h .. hi+h-1
+        # position-major (w, q, C): every tap adds into a contiguous block of positions. Each layer's change is the
+        # 'full' convolution of the previous one's (at first the input's, at the view alone): lo-h .. hi+h-1
+        lo, hi = c, c + 1
+        change = delta_in                                                  # (width q, m): width 1, the view
+        for layer, taps in enumerate(self._taps):
             width = hi - lo
-            change = delta_act.reshape(width * q, -1)
             lo, hi = lo - h, hi + h
             pre = self.pre[layer][lo:hi, None, :].repeat(1, q, 1)
             for j in range(k):
-                pre[2 * h - j:2 * h - j + width].view(width * q, -1).addmm_(change, self._w[layer - 1][j])
+                pre[2 * h - j:2 * h - j + width].view(width * q, -1).addmm_(change, taps[j])
             delta_act = self._activation_change(layer, pre, lo, hi)
+            change = delta_act.reshape((hi - lo) * q, -1)
         pooled = (self.pooled_sum + delta_act.sum(dim=0)) / n             # (q, C)
         return self.s.to_error(self.s.net.head(pooled)[:, 0].double().numpy())
 
@@ -368,5 +363,5 @@ class ViewQuery:
         pre-activations ``pre`` (w, q, C); zero outside the path, as the full network's 'same' padding sees it."""
         new = F.gelu(pre)
         if lo < self.P or hi > self.P + self.n:                            # at the path's ends
-            new = new * self._inside[lo:hi, :, None]
+            new = new * self._inside[lo:hi]
         return new - self.act[layer][lo:hi, None, :]
