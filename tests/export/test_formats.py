@@ -243,6 +243,29 @@ def test_every_file_is_flown_as_the_simulator_flies(fmt, mode, ship, path, secti
             assert back.pass_radius_m == pytest.approx(3.0 if mode == "fly-through" else 0.0)
 
 
+@pytest.mark.parametrize("mission_mode", ["stop", "fly-through"])
+@pytest.mark.parametrize("fmt", sorted(FORMATS))
+def test_per_view_capture_modes_are_written_per_waypoint(fmt, mission_mode, ship, path, section, tmp_path):
+    from wrp_eval.sim.config import SimSection
+
+    stop = np.zeros(len(path), dtype=bool)
+    stop[1::3] = True
+    mixed = path.with_stops(stop, mission_mode)
+    sim = SimSection(dwell_s=1.5, capture={"mode": mission_mode, "corner_radius_m": 3.0})
+    style = FlightStyle.of(mixed, sim.capture, sim.dwell_s)
+    particulars, proxy = ship
+    written = export_path(mixed, particulars, proxy, fmt, tmp_path / f"m{FORMATS[fmt].suffix}", section, style=style)
+    for file, mission in written:
+        back = FORMATS[fmt].read(file)
+        want = stop[mission.index]
+        np.testing.assert_array_equal(back.stop, want)
+        assert back.turn_mode == ("mixed" if 0 < want.sum() < len(want) else "stop" if want.all() else "fly-through")
+        np.testing.assert_allclose(back.hold_s, np.where(want, 1.5, 0.0))
+        assert back.photos == len(mission)
+        if fmt != "dji-wpml":
+            assert back.pass_radius_m == pytest.approx(3.0 if not want.all() else 0.0)
+
+
 def test_the_style_is_the_simulators(path):
     from wrp_eval.sim.config import SimSection
 

@@ -48,6 +48,30 @@ def test_a_reversed_tour_keeps_its_viewpoints_ids_and_legs(plans, tmp_path):
         FlightPath.from_json_dict(doc)
 
 
+def test_per_view_capture_modes_round_trip_and_enter_the_digest(plans, tmp_path):
+    path = plans[("stylized", "ours")].path
+    stop = np.zeros(len(path), dtype=bool)
+    stop[[1, 4]] = True
+    mixed = path.with_stops(stop, "fly-through")
+    assert mixed.capture[1] == "stop" and mixed.capture[0] == "fly-through"
+    np.testing.assert_array_equal(mixed.stops("fly-through"), stop)
+    np.testing.assert_array_equal(mixed.stops("stop"), stop)        # the path's modes override the mission's
+    np.testing.assert_array_equal(path.stops("stop"), np.ones(len(path), bool))
+    assert path.with_stops(stop * 0, "fly-through").capture is None   # every view as the mission says: none written
+    assert "capture" not in path.to_json_dict()["viewpoints"][0]
+    mixed.save(tmp_path / "mixed.json")
+    again = FlightPath.load(tmp_path / "mixed.json")
+    assert again.capture == mixed.capture and mixed.digest() != path.digest()
+    np.testing.assert_array_equal(mixed.reversed().stops("stop"), stop[::-1])
+    doc = mixed.to_json_dict()
+    doc["viewpoints"][2]["capture"] = "hover"
+    with pytest.raises(InputError, match="capture"):
+        FlightPath.from_json_dict(doc, source="mixed.json")
+    del doc["viewpoints"][2]["capture"]
+    with pytest.raises(InputError, match="capture"):
+        FlightPath.from_json_dict(doc, source="mixed.json")
+
+
 @pytest.mark.parametrize("text", ["{not json", '{"format_version": 1, "viewpoints": []}',
                                   '{"format_version": 1, "viewpoints": [{"x_m": 1}]}'])
 def test_bad_path_file_is_an_input_error(tmp_path, text):

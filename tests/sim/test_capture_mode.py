@@ -276,3 +276,43 @@ def test_no_fly_through_photo_turns_faster_than_the_mission_commands():
     excess = (at_shutter - allowed)[measured]
     assert measured.sum() > 100
     assert excess.max() <= RATE_TOLERANCE_DEG_S, (np.flatnonzero(measured)[excess.argmax()], excess.max())
+
+
+# -- per-view capture modes: a fly-through mission that stops where the path says -------------------------------
+def test_a_fly_through_mission_stops_and_dwells_only_at_the_views_its_path_marks_stop():
+    from tests.sim.conftest import make_path
+    from wrp_eval.sim.config import SimSection
+    from wrp_eval.sim.flight import FlightSimulator
+    from wrp_eval.sim.simple_wind import ConstantWind
+
+    path = make_path(n=6, spacing_m=10.0, dwell_s=1.5)
+    dt = SimSection().timestep_s * SimSection().chunk_steps
+    through_sec = SimSection(drones_per_model=1, threads=1, capture={"mode": "fly-through"},
+                             navigation={"preset": "ideal"}, record_interval_s=dt)
+    stop_sec = through_sec.model_copy(update={"capture": CaptureSection(mode="stop")})
+    stop = np.array([False, False, True, False, True, False])
+    calm = ConstantWind([0.0, 0.0, 0.0])
+    with FlightSimulator(through_sec) as sim:
+        through = sim.fly(path, calm, 1)
+        mixed = sim.fly(path.with_stops(stop, "fly-through"), calm, 1)
+        all_stop = sim.fly(path.with_stops(np.ones(6, bool), "fly-through"), calm, 1)
+    with FlightSimulator(stop_sec) as sim:
+        stopped = sim.fly(path, calm, 1)
+        # the path's modes override the mission's: fly-through views within a stop mission
+        mixed_in_stop = sim.fly(path.with_stops(stop, "stop"), calm, 1)
+    assert through.taken.all() and mixed.taken.all() and all_stop.taken.all()
+    # every view marked stop: the stop mission itself, to the bit
+    np.testing.assert_array_equal(all_stop.capture_time_s, stopped.capture_time_s)
+    np.testing.assert_array_equal(all_stop.offsets, stopped.offsets)
+    np.testing.assert_array_equal(mixed_in_stop.capture_time_s, mixed.capture_time_s)
+    # the vehicle's speed at each shutter: at rest at the stop views, on the move through the others
+    tr = mixed.trajectory
+    speed = np.linalg.norm(np.gradient(tr.position[0], tr.time, axis=0), axis=1)
+    at_shutter = np.interp(mixed.capture_time_s[0], tr.time, speed)
+    assert at_shutter[stop].max() < 0.05
+    assert at_shutter[[1, 3]].min() > 0.5
+    # a stop costs its settle and dwell: the mixed mission lies between the pure ones
+    end = [float(r.capture_time_s[0, -1]) for r in (through, mixed, stopped)]
+    assert end[0] + 2 * 1.5 < end[1] < end[2]
+    # the views before a stop are shot passing, as in the pure fly-through mission
+    np.testing.assert_allclose(mixed.capture_time_s[0, :2], through.capture_time_s[0, :2], atol=1e-9)

@@ -33,6 +33,9 @@ def _export(args: argparse.Namespace) -> int:
               f"{ctx.source}): the default 0 was used, so these waypoints are not where the ship is")
     print(f"capture mode {style.mode} (sim.capture.mode), heading {style.heading_mode}, hold {style.hold_s:g} s, "
           f"speed {style.speed_m_s:g} m/s")
+    if path.capture is not None:
+        stops = int(path.stops(style.mode).sum())
+        print(f"per-view capture modes from the path: {stops} stop, {len(path) - stops} fly-through")
     for file, mission in written:
         print(f"sortie {mission.sortie}: {len(mission)} waypoints -> {file}")
     return 0

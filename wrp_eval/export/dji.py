@@ -12,7 +12,9 @@ Choices:
 - the turn mode follows the capture mode (:class:`~wrp_eval.export.mission.FlightStyle`): ``stop`` ->
   ``toPointAndStopWithDiscontinuityCurvature`` (stop at the point) and the actions gimbalRotate, ``hover``
   (the simulator's dwell), ``takePhoto``; ``fly-through`` -> ``toPointAndPassWithContinuityCurvature``
-  (pass through the point without stopping) and gimbalRotate, ``takePhoto`` on reaching it, no hover;
+  (pass through the point without stopping) and gimbalRotate, ``takePhoto`` on reaching it, no hover; per
+  placemark (``waypointTurnParam``, ``useGlobalTurnParam`` 0 in the template) where the path gives per-view
+  modes (:attr:`wrp_eval.planning.path.FlightPath.capture`);
 - drone/payload enums: Mavic 3 Enterprise (droneEnumValue 77, sub 0; payload 66), the closest WPML-capable
   airframe to the paper's Phantom 4-class quadrotor - change them in DJI Pilot 2 for another aircraft.
 """
@@ -28,7 +30,7 @@ from pathlib import Path
 import numpy as np
 
 from wrp_eval.errors import InputError
-from wrp_eval.export.mission import GeoMission, ReadMission
+from wrp_eval.export.mission import GeoMission, ReadMission, turn_mode_of
 from wrp_eval.frames import wrap_180
 
 KML_NS = "http://www.opengis.net/kml/2.2"
@@ -99,6 +101,12 @@ def _heading_param(parent: ET.Element, heading_deg: float, heading_mode: str) ->
     _sub(hp, _w("waypointHeadingPathMode"), "followBadArc")
 
 
+def _turn_param(parent: ET.Element, m: GeoMission, k: int) -> None:
+    turn = _sub(parent, _w("waypointTurnParam"))
+    _sub(turn, _w("waypointTurnMode"), TURN_MODES["stop" if m.stop[k] else "fly-through"])
+    _sub(turn, _w("waypointTurnDampingDist"), 0)
+
+
 def _action_group(parent: ET.Element, m: GeoMission, k: int) -> None:
     group = _sub(parent, _w("actionGroup"))
     _sub(group, _w("actionGroupId"), k)
@@ -113,7 +121,7 @@ def _action_group(parent: ET.Element, m: GeoMission, k: int) -> None:
                           ("gimbalYawRotateEnable", 1),
                           ("gimbalYawRotateAngle", _num(float(wrap_180(m.heading_deg[k])))),
                           ("gimbalRotateTimeEnable", 0), ("gimbalRotateTime", 0), ("payloadPositionIndex", 0)]),
-        *([] if m.style.through else [("hover", [("hoverTime", _num(m.hold_s, 2))])]),
+        *([("hover", [("hoverTime", _num(m.hold_s[k], 2))])] if m.stop[k] else []),
         ("takePhoto", [("payloadPositionIndex", 0), ("fileSuffix", f"s{m.sortie}_v{int(m.view_id[k])}"),
                        ("useGlobalPayloadLensIndex", 1)]),
     ]
@@ -134,16 +142,17 @@ def _placemark(folder: ET.Element, m: GeoMission, k: int, executable: bool) -> N
         _sub(pm, _w("executeHeight"), _num(m.alt_rel_m[k]))
         _sub(pm, _w("waypointSpeed"), _num(m.speed_m_s, 2))
         _heading_param(pm, m.heading_deg[k], m.style.heading_mode)
-        turn = _sub(pm, _w("waypointTurnParam"))
-        _sub(turn, _w("waypointTurnMode"), TURN_MODES[m.style.mode])
-        _sub(turn, _w("waypointTurnDampingDist"), 0)
+        _turn_param(pm, m, k)
     else:
         _sub(pm, _w("height"), _num(m.alt_rel_m[k]))
         _sub(pm, _w("useGlobalHeight"), 0)
         _sub(pm, _w("useGlobalSpeed"), 1)
         _sub(pm, _w("useGlobalHeadingParam"), 0)
         _heading_param(pm, m.heading_deg[k], m.style.heading_mode)
-        _sub(pm, _w("useGlobalTurnParam"), 1)
+        own_turn = bool(m.stop[k]) != (m.style.mode == "stop")     # a per-view mode other than the mission's
+        _sub(pm, _w("useGlobalTurnParam"), 0 if own_turn else 1)
+        if own_turn:
+            _turn_param(pm, m, k)
         _sub(pm, _w("gimbalPitchAngle"), _num(m.gimbal_pitch_deg[k]))
     _action_group(pm, m, k)
 
@@ -198,7 +207,7 @@ def read_dji_kmz(file: str | Path) -> ReadMission:
             if TEMPLATE_PATH not in names:
                 raise ValueError(f"missing {TEMPLATE_PATH}")
             root = ET.fromstring(kmz.read(WAYLINES_PATH))
-        lat, lon, alt, heading, pitch, hold, turns, headings = [], [], [], [], [], [], set(), set()
+        lat, lon, alt, heading, pitch, hold, turns, headings = [], [], [], [], [], [], [], set()
         photos = 0
         speed = float(_text(root, f"{_k('Document')}/{_k('Folder')}/{_w('autoFlightSpeed')}"))
         modes = {v: k for k, v in TURN_MODES.items()}
@@ -210,7 +219,7 @@ def read_dji_kmz(file: str | Path) -> ReadMission:
             turn = _find(pm, f"{_w('waypointTurnParam')}/{_w('waypointTurnMode')}").text
             if turn not in modes:
                 raise ValueError(f"waypoint turn mode {turn!r} is neither of {sorted(modes)}")
-            turns.add(modes[turn])
+            turns.append(modes[turn] == "stop")
             headings.add(_text(pm, f"{_w('waypointHeadingParam')}/{_w('waypointHeadingMode')}"))
             hold.append(0.0)
             for action in pm.iter(_w("action")):
@@ -223,10 +232,11 @@ def read_dji_kmz(file: str | Path) -> ReadMission:
                     hold[-1] += float(_text(params, _w("hoverTime")))
                 elif func == "takePhoto":
                     photos += 1
-        if len(turns) > 1 or len(headings) > 1:
-            raise ValueError(f"mixed turn modes {sorted(turns)} or heading modes {sorted(headings)}")
+        if len(headings) > 1:
+            raise ValueError(f"mixed heading modes {sorted(headings)}")
     except (OSError, KeyError, ValueError, AttributeError, zipfile.BadZipFile, ET.ParseError) as err:
         raise InputError(file, f"not a readable DJI WPML KMZ: {err}") from None
     arr = lambda v: np.asarray(v, dtype=float)  # noqa: E731
-    return ReadMission(arr(lat), arr(lon), arr(alt), arr(heading), arr(pitch), photos, None,
-                       next(iter(turns), None), next(iter(headings), None), arr(hold), speed)
+    stop = np.asarray(turns, dtype=bool)
+    return ReadMission(arr(lat), arr(lon), arr(alt), arr(heading), arr(pitch), photos, None, turn_mode_of(stop),
+                       next(iter(headings), None), arr(hold), speed, stop=stop)

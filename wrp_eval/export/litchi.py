@@ -9,8 +9,11 @@ linearly from one waypoint to the next, litchiutilities.com/docs/why.php - the s
 rotationdir 0, gimbalmode 2 (interpolate, so the pitch column is used); the capture mode sets the rest:
 ``stop``: curvesize 0 (stop at each waypoint), actions 0 = "stay for" (ms, the simulator's dwell) then 1 =
 "take photo"; ``fly-through``: curvesize = the simulator's corner_radius_m (the curve's size at the waypoint,
-litchiutilities.com/docs/litchiCsv.php) and the photo action alone. Unused actions are -1; no POI; no
-interval photos (-1). Litchi's Path Mode ("Curved Turns" for fly-through) is global too.
+litchiutilities.com/docs/litchiCsv.php) and the photo action alone; per waypoint where the path gives
+per-view modes (:attr:`wrp_eval.planning.path.FlightPath.capture`). Unused actions are -1; no POI; no
+interval photos (-1). Litchi's Path Mode ("Curved Turns" for fly-through or a mixed mission) is global too;
+that a curve size of 0 makes a Curved Turns mission stop at that waypoint and run its actions is our reading
+of Litchi's per-waypoint curve size, not confirmed by its documentation.
 """
 
 from __future__ import annotations
@@ -22,7 +25,7 @@ from pathlib import Path
 import numpy as np
 
 from wrp_eval.errors import InputError
-from wrp_eval.export.mission import GeoMission, ReadMission
+from wrp_eval.export.mission import GeoMission, ReadMission, turn_mode_of
 
 N_ACTIONS = 15
 ACTION_NONE, ACTION_STAY_MS, ACTION_PHOTO = -1, 0, 1
@@ -40,10 +43,10 @@ def litchi_csv_bytes(m: GeoMission, firmware: str = "px4") -> bytes:
     out = io.StringIO()
     writer = csv.writer(out, lineterminator="\n")
     writer.writerow(HEADER)
-    through = m.style.through
-    curve = f"{m.style.pass_radius_m:.2f}" if through else 0
+    hold, radius = m.hold_s, m.pass_radius_m
     for k in range(len(m)):
-        actions = [] if through else [ACTION_STAY_MS, int(round(m.hold_s * 1000))]
+        curve = 0 if m.stop[k] else f"{radius[k]:.2f}"
+        actions = [ACTION_STAY_MS, int(round(hold[k] * 1000))] if m.stop[k] else []
         actions += [ACTION_PHOTO, 0]
         actions += [ACTION_NONE, 0] * (N_ACTIONS - len(actions) // 2)
         writer.writerow([f"{m.lat_deg[k]:.10f}", f"{m.lon_deg[k]:.10f}", f"{m.alt_rel_m[k]:.4f}",
@@ -78,7 +81,7 @@ def read_litchi_csv(file: str | Path) -> ReadMission:
     except (OSError, ValueError, UnicodeDecodeError) as err:
         raise InputError(file, f"not a readable Litchi CSV: {err}") from None
     arr = lambda v: np.asarray(v, dtype=float)  # noqa: E731
-    through = bool(curve) and bool(np.all(arr(curve) > 0.0)) and not np.any(arr(hold))
-    return ReadMission(arr(lat), arr(lon), arr(alt), arr(heading), arr(pitch), photos, None,
-                       "fly-through" if through else "stop", None, arr(hold),
-                       float(speed[0]) if speed else None, float(np.max(curve)) if through else 0.0)
+    stop = ~(arr(curve) > 0.0) | (arr(hold) > 0.0)
+    return ReadMission(arr(lat), arr(lon), arr(alt), arr(heading), arr(pitch), photos, None, turn_mode_of(stop),
+                       None, arr(hold), float(speed[0]) if speed else None,
+                       float(np.max(arr(curve)[~stop], initial=0.0)), stop)

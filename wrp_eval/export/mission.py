@@ -26,10 +26,12 @@ from wrp_eval.sim.capture_mode import FLY_THROUGH, STOP, CaptureSection
 class FlightStyle:
     """How the aircraft flies the waypoints and shoots: what the simulator flies, written into every format.
 
-    mode: ``stop`` (fly to the waypoint, hover ``hold_s``, shoot) or ``fly-through`` (shoot passing the
-    waypoint, no hold; the turn starts ``pass_radius_m`` before it, the simulator's ``corner_radius_m``);
-    heading_mode: ``smoothTransition`` (the heading interpolated over each leg); hold_s: hover per photo
-    (0 in fly-through); speed_m_s: cruise speed.
+    mode: the mission's ``stop`` (fly to the waypoint, hover ``hold_s``, shoot) or ``fly-through`` (shoot
+    passing the waypoint, no hold; the turn starts ``pass_radius_m`` before it, the simulator's
+    ``corner_radius_m``), for every waypoint whose path gives no mode of its own
+    (:attr:`wrp_eval.planning.path.FlightPath.capture`); heading_mode: ``smoothTransition`` (the heading
+    interpolated over each leg); hold_s: hover per photo at a stop waypoint (0 when none stops); speed_m_s:
+    cruise speed.
     """
 
     mode: str = STOP
@@ -43,10 +45,10 @@ class FlightStyle:
            dwell_s: float | None = None) -> FlightStyle:
         """The style the simulator flies ``path`` with under ``sim.capture`` and ``sim.dwell_s`` (None: the
         path's dwell), at the path's cruise speed (wrp_eval/sim/flight.py: the same choices)."""
-        through = capture.mode == FLY_THROUGH
-        hold = 0.0 if through else float(path.dwell_s if dwell_s is None else dwell_s)
+        stops = path.stops(capture.mode)
+        hold = float(path.dwell_s if dwell_s is None else dwell_s) if stops.any() else 0.0
         return cls(capture.mode, capture.heading_mode, hold, float(path.speed_m_s),
-                   float(capture.corner_radius_m) if through else 0.0)
+                   0.0 if stops.all() else float(capture.corner_radius_m))
 
     @property
     def through(self) -> bool:
@@ -63,7 +65,9 @@ class GeoMission:
     home_*: take-off point (deg, m above the sea); takeoff_alt_rel_m: climb height before the first waypoint
     (clears the no-fly box); fence_lat_lon (4, 2): corners of the no-fly box outline (lat, lon),
     counter-clockwise seen from above; view_id (k,) int: the plan's viewpoint of each waypoint (the path's
-    ``view_ids()``: ``index`` unless the tour flies its viewpoints in another order), what photos are named by.
+    ``view_ids()``: ``index`` unless the tour flies its viewpoints in another order), what photos are named by;
+    stop (k,) bool: the waypoints flown stop-and-shoot (the others are shot passing), the path's per-view modes
+    over the style's mode (:meth:`wrp_eval.planning.path.FlightPath.stops`).
     """
 
     sortie: int
@@ -80,13 +84,23 @@ class GeoMission:
     takeoff_alt_rel_m: float
     fence_lat_lon: np.ndarray
     view_id: np.ndarray
+    stop: np.ndarray
 
     def __len__(self) -> int:
         return int(self.index.shape[0])
 
     @property
-    def hold_s(self) -> float:
-        return self.style.hold_s
+    def hold_s(self) -> np.ndarray:
+        """(k,) s: the hover before each photo (the style's hold at a stop waypoint, 0 where it is passed)."""
+        hold: np.ndarray = np.where(self.stop, self.style.hold_s, 0.0)
+        return hold
+
+    @property
+    def pass_radius_m(self) -> np.ndarray:
+        """(k,) m: where the turn starts before each waypoint (the style's pass radius where it is passed, 0 at a
+        stop waypoint)."""
+        radius: np.ndarray = np.where(self.stop, 0.0, self.style.pass_radius_m)
+        return radius
 
     @property
     def speed_m_s(self) -> float:
@@ -97,9 +111,10 @@ class GeoMission:
 class ReadMission:
     """What a reader recovers from an exported file (k waypoints, as in :class:`GeoMission`).
 
-    turn_mode: ``stop`` | ``fly-through`` as the file commands it; heading_mode: the heading mode the file
-    names (None where the format cannot carry one); hold_s (k,) hover per waypoint; speed_m_s: cruise speed;
-    pass_radius_m: where the turn starts before a waypoint (0 for stop)."""
+    turn_mode: ``stop`` | ``fly-through`` as the file commands it for every waypoint, ``mixed`` where some stop
+    and some are passed (``stop`` (k,) bool says which stop); heading_mode: the heading mode the file names
+    (None where the format cannot carry one); hold_s (k,) hover per waypoint; speed_m_s: cruise speed;
+    pass_radius_m: where the turn starts before a passed waypoint (0 when every waypoint stops)."""
 
     lat_deg: np.ndarray
     lon_deg: np.ndarray
@@ -113,6 +128,14 @@ class ReadMission:
     hold_s: np.ndarray | None = None
     speed_m_s: float | None = None
     pass_radius_m: float | None = None
+    stop: np.ndarray | None = None
+
+
+def turn_mode_of(stop: np.ndarray) -> str | None:
+    """The :attr:`ReadMission.turn_mode` of waypoints whose ``stop`` (k,) bool a reader recovered (None: none)."""
+    if not stop.size:
+        return None
+    return STOP if stop.all() else FLY_THROUGH if not stop.any() else "mixed"
 
 
 def home_point(particulars: ShipParticulars, section: ExportSection) -> np.ndarray:
@@ -181,5 +204,5 @@ def build_missions(path: FlightPath, particulars: ShipParticulars, proxy: Proxy,
         missions.append(GeoMission(
             int(sortie), idx, lat[idx], lon[idx], alt_rel[idx], heading[idx], pitch[idx],
             style, float(home_lat), float(home_lon), float(home[2]),
-            takeoff, np.stack([fence_lat, fence_lon], axis=1), path.view_ids()[idx]))
+            takeoff, np.stack([fence_lat, fence_lon], axis=1), path.view_ids()[idx], path.stops(style.mode)[idx]))
     return missions

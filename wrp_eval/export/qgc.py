@@ -31,7 +31,7 @@ import numpy as np
 from pymavlink import mavwp
 
 from wrp_eval.errors import InputError
-from wrp_eval.export.mission import GeoMission, ReadMission
+from wrp_eval.export.mission import GeoMission, ReadMission, turn_mode_of
 
 MAV_CMD_NAV_WAYPOINT = 16
 MAV_CMD_NAV_RETURN_TO_LAUNCH = 20
@@ -54,11 +54,11 @@ def mission_items(m: GeoMission) -> list[tuple[int, int, list[float]]]:
               [0.0, 0.0, 0.0, float(m.heading_deg[0]), m.home_lat_deg, m.home_lon_deg, m.takeoff_alt_rel_m]),
              (MAV_CMD_DO_CHANGE_SPEED, MAV_FRAME_MISSION, [float(SPEED_TYPE_GROUND), m.speed_m_s, -1.0, 0.0, 0.0, 0.0,
                                                            0.0])]
-    accept = m.style.pass_radius_m if m.style.through else 0.0
+    hold, accept = m.hold_s, m.pass_radius_m
     for k in range(len(m)):
         items.append((MAV_CMD_NAV_WAYPOINT, MAV_FRAME_GLOBAL_RELATIVE_ALT,
-                      [m.hold_s, accept, 0.0, float(m.heading_deg[k]), float(m.lat_deg[k]), float(m.lon_deg[k]),
-                       float(m.alt_rel_m[k])]))
+                      [float(hold[k]), float(accept[k]), 0.0, float(m.heading_deg[k]), float(m.lat_deg[k]),
+                       float(m.lon_deg[k]), float(m.alt_rel_m[k])]))
         items.append((MAV_CMD_DO_GIMBAL_MANAGER_PITCHYAW, MAV_FRAME_MISSION,
                       [float(m.gimbal_pitch_deg[k]), 0.0, NAN, NAN, 0.0, 0.0, 0.0]))
         items.append((MAV_CMD_IMAGE_START_CAPTURE, MAV_FRAME_MISSION, [0.0, 0.0, 1.0, float(k + 1), 0.0, 0.0, 0.0]))
@@ -122,8 +122,8 @@ def _fmt(v: float, decimals: int) -> str:
 
 def _read_items(items: list[tuple[int, int, list[float]]], home: tuple[float, float] | None) -> ReadMission:
     """Waypoints (16 in the relative frame), the gimbal pitch set after each, the photo count, the speed set
-    and the turn mode: ``fly-through`` where every waypoint holds 0 s and has an acceptance radius, else
-    ``stop``. MAVLink names no heading mode (None)."""
+    and the turn modes: a waypoint that holds 0 s and has an acceptance radius is passed, any other stops.
+    MAVLink names no heading mode (None)."""
     lat: list[float] = []
     lon: list[float] = []
     alt: list[float] = []
@@ -144,10 +144,9 @@ def _read_items(items: list[tuple[int, int, list[float]]], home: tuple[float, fl
         elif command == MAV_CMD_IMAGE_START_CAPTURE:
             photos += int(p[2])
     arr = lambda v: np.asarray(v, dtype=float)  # noqa: E731
-    through = bool(hold) and not np.any(arr(hold)) and bool(np.all(arr(accept) > 0.0))
-    return ReadMission(arr(lat), arr(lon), arr(alt), arr(heading), arr(pitch), photos, home,
-                       "fly-through" if through else "stop", None, arr(hold), speed,
-                       float(np.max(accept)) if through else 0.0)
+    stop = (arr(hold) > 0.0) | ~(arr(accept) > 0.0)
+    return ReadMission(arr(lat), arr(lon), arr(alt), arr(heading), arr(pitch), photos, home, turn_mode_of(stop),
+                       None, arr(hold), speed, float(np.max(arr(accept)[~stop], initial=0.0)), stop)
 
 
 def read_qgc_plan(file: str | Path) -> ReadMission:

@@ -20,6 +20,9 @@ KIND_SURFACE = 0
 KIND_TRANSITION = 1
 KIND_NAMES = ("surface", "transition")
 PATH_FORMAT_VERSION = 1
+# a view's capture mode: the names of wrp_eval.sim.capture_mode (STOP, FLY_THROUGH); planning does not import the
+# simulator
+CAPTURE_MODES = ("stop", "fly-through")
 
 
 @dataclass(frozen=True)
@@ -40,6 +43,10 @@ class FlightPath:
     (:meth:`redrawn`; the placebo of a tour flown in another order, :mod:`wrp_eval.wrp.direction`). The
     campaign's flight evaluator applies it to the trial's seeds (:func:`wrp_eval.streams.redrawn_seed`; ``wrp-eval
     fly`` and the envelope, which seed their flights themselves, do not); it is not part of a mission file.
+    capture (n,) str or None: each view's capture mode, ``stop`` or ``fly-through``
+    (:mod:`wrp_eval.sim.capture_mode`), overriding the mission's ``sim.capture.mode`` (a fly-through mission
+    that stops where a view needs a sharp, level photo; the robust kind's capture lever); None: every view as
+    the mission's mode says. Written per viewpoint in path.json and in every exported mission.
     """
 
     positions: np.ndarray
@@ -55,6 +62,13 @@ class FlightPath:
     metadata: dict = field(default_factory=dict)
     view_id: np.ndarray | None = None
     noise_draw: int = 0
+    capture: tuple[str, ...] | None = None
+
+    def __post_init__(self) -> None:
+        if self.capture is not None and (len(self.capture) != len(self.positions)
+                                         or not set(self.capture) <= set(CAPTURE_MODES)):
+            raise ValueError(f"capture must give one of {CAPTURE_MODES} for each of the {len(self.positions)} "
+                             f"views, got {self.capture!r}")
 
     def __len__(self) -> int:
         return int(self.positions.shape[0])
@@ -73,6 +87,23 @@ class FlightPath:
         """Cruise time at ``speed_m_s`` plus one dwell per photo."""
         return self.length_m / self.speed_m_s + self.dwell_s * len(self)
 
+    def stops(self, mission_mode: str) -> np.ndarray:
+        """(n,) bool: the views shot stop-and-shoot when the mission's capture mode is ``mission_mode`` (``stop``
+        or ``fly-through``; :attr:`capture` overrides it per view)."""
+        if mission_mode not in CAPTURE_MODES:
+            raise ValueError(f"capture mode {mission_mode!r} is not one of {CAPTURE_MODES}")
+        modes = self.capture if self.capture is not None else (mission_mode,) * len(self)
+        return np.array([mode == CAPTURE_MODES[0] for mode in modes], dtype=bool)
+
+    def with_stops(self, stop: np.ndarray, mission_mode: str) -> FlightPath:
+        """This path with the views of the (n,) bool mask ``stop`` shot stop-and-shoot and the others flown
+        through, as per-view modes (:attr:`capture`); None when they all follow ``mission_mode``."""
+        stop = np.asarray(stop, dtype=bool)
+        if stop.shape != (len(self),):
+            raise ValueError(f"stop must be ({len(self)},) bool, got shape {stop.shape}")
+        capture = tuple(CAPTURE_MODES[0] if s else CAPTURE_MODES[1] for s in stop.tolist())
+        return replace(self, capture=None if set(capture) == {mission_mode} else capture)
+
     def view_ids(self) -> np.ndarray:
         """(n,) int: the plan's viewpoint of each view (:attr:`view_id`, or 0 .. n - 1)."""
         return np.arange(len(self)) if self.view_id is None else np.asarray(self.view_id, dtype=int)
@@ -90,6 +121,7 @@ class FlightPath:
         view_id = self.view_ids()[order]
         in_plan_order = bool(np.all(view_id == np.arange(len(self))))
         return replace(self, positions=np.asarray(self.positions)[order], yaw=np.asarray(self.yaw)[order],
+                       capture=None if self.capture is None else self.capture[::-1],
                        pitch=np.asarray(self.pitch)[order], face_id=np.asarray(self.face_id)[order],
                        kind=np.asarray(self.kind)[order], sortie=sortie.max(initial=0) - sortie + sortie.min(initial=0),
                        view_id=None if in_plan_order else view_id,
@@ -110,6 +142,9 @@ class FlightPath:
                 viewpoint["view_id"] = view
         if self.noise_draw:
             doc["noise_draw"] = self.noise_draw
+        if self.capture is not None:
+            for viewpoint, mode in zip(doc["viewpoints"], self.capture, strict=True):
+                viewpoint["capture"] = mode
         return doc
 
     def _json_dict(self) -> dict:
@@ -179,6 +214,7 @@ class FlightPath:
             speed, dwell = float(doc["speed_m_s"]), float(doc["dwell_s"])
             view_id = _view_ids(vps)
             noise_draw = int(doc.get("noise_draw", 0))
+            capture = _capture_modes(vps)
         except (KeyError, TypeError, ValueError, AttributeError) as err:
             what = f"missing field {err}" if isinstance(err, KeyError) else str(err)
             raise InputError(source, f"bad path file: {what}") from None
@@ -187,7 +223,19 @@ class FlightPath:
         if speed <= 0 or dwell < 0 or noise_draw < 0:
             raise InputError(source, "bad path file: speed_m_s must be > 0, dwell_s and noise_draw >= 0")
         return cls(positions, yaw, pitch, face_id, kind, sortie, camera, speed, dwell,
-                   str(doc.get("method", "ours")), dict(doc.get("metadata", {})), view_id, noise_draw)
+                   str(doc.get("method", "ours")), dict(doc.get("metadata", {})), view_id, noise_draw, capture)
+
+
+def _capture_modes(viewpoints: list) -> tuple[str, ...] | None:
+    """The viewpoints' ``capture`` modes (every viewpoint has one of :data:`CAPTURE_MODES`), or None when none has
+    one."""
+    have = [("capture" in v) for v in viewpoints]
+    if not any(have):
+        return None
+    modes = tuple(v.get("capture") for v in viewpoints)
+    if not all(have) or not set(modes) <= set(CAPTURE_MODES):
+        raise ValueError(f"'capture' must be one of {list(CAPTURE_MODES)} for every viewpoint or none")
+    return modes  # type: ignore[return-value]
 
 
 def _view_ids(viewpoints: list) -> np.ndarray | None:

@@ -24,6 +24,14 @@ the corner crosses it; what position-triggered survey cameras do); a view whose 
 the reference is two views further on is missed (not taken). The crossing is detected at the position-loop
 rate; its time is interpolated within the chunk from the estimated speed along the plane's normal, and the
 shutter opens ``trigger_latency_s`` later (:func:`shutter_offset`).
+
+Per-view modes (:attr:`wrp_eval.planning.path.FlightPath.capture`, overriding ``mode``): a mission with any view
+flown through is flown on the fly-through reference, which comes to rest at the views marked ``stop`` (speed 0 there,
+:func:`vertex_speeds`), settles and hovers the dwell before the photo, exactly as a stop-mode view; the views
+marked ``fly-through`` are shot passing. What a DJI waypoint mission does per waypoint with its turn mode
+(WPML ``waypointTurnMode``: ``toPointAndStopWithDiscontinuityCurvature`` stops, ``toPointAndPassWithContinuity
+Curvature`` passes; DJI WPML "common element" reference) and PX4 with a hold time per waypoint
+(MAV_CMD_NAV_WAYPOINT param1). Every view marked ``stop`` is the stop mission itself, to the bit.
 """
 
 from __future__ import annotations
@@ -78,10 +86,11 @@ class CaptureSection(StrictModel):
 
 def vertex_speeds(body: np.ndarray, yaw: np.ndarray, cruise_m_s: float, accel_m_s2: float,
                   yaw_rate_rad_s: float, corner_radius_m: float, corner_step_m_s: float = CORNER_STEP_M_S,
-                  window_s: float = 0.0) -> tuple[np.ndarray, np.ndarray]:
+                  window_s: float = 0.0, stop: np.ndarray | None = None) -> tuple[np.ndarray, np.ndarray]:
     """(speed at each viewpoint (batch, n_views), cruise limit of each leg (batch, n_views - 1)) m/s for the
     fly-through reference through the body targets ``body`` (batch, n_views, 3) m with headings ``yaw``
-    (batch, n_views) rad. The first and last viewpoints are at rest. At a corner of turn angle theta the
+    (batch, n_views) rad. The first and last viewpoints are at rest, and so are the viewpoints of ``stop``
+    (n_views,) bool (shot stop-and-shoot within a fly-through mission; None: none). At a corner of turn angle theta the
     reference's velocity turns in one step of 2 v sin(theta/2), at the viewpoint, where the photo is taken:
     v is kept to ``corner_step_m_s`` / (2 sin(theta/2)) (:data:`CORNER_STEP_M_S`). With the jerk window T =
     ``window_s`` (:func:`through_profile`) a leg of length L from v0 must leave room for it: the trapezoid over
@@ -103,6 +112,8 @@ def vertex_speeds(body: np.ndarray, yaw: np.ndarray, cruise_m_s: float, accel_m_
     speed: NDArray[np.float64] = np.zeros(body.shape[:2])
     speed[:, 1:-1] = np.minimum(np.minimum(np.nan_to_num(corner, nan=0.0, posinf=np.inf), step),
                                 np.minimum(leg_cap[:, :-1], leg_cap[:, 1:]))
+    if stop is not None:
+        speed[:, np.asarray(stop, dtype=bool)] = 0.0
     half = 0.5 * accel_m_s2 * window_s
     for k in range(1, speed.shape[1]):             # over viewpoints (tens), every flight at once
         reach = np.sqrt((speed[:, k - 1] - half) ** 2 + 2.0 * accel_m_s2 * length[:, k - 1]) - half

@@ -399,9 +399,10 @@ class FlightSimulator:
                                           view_depths(path, None if ship is None else ship.box))
         if not profile.through:
             return targets
+        stop = path.stops(sec.capture.mode)
         speeds = vertex_speeds(targets.body, targets.yaw, path.speed_m_s, sec.acceleration_m_s2, YAW_RATE_REF_RAD_S,
-                               sec.capture.corner_radius_m, window_s=profile.jerk_window_s)
-        return targets.flown_through(*speeds, *trigger_planes(targets.body))
+                               sec.capture.corner_radius_m, window_s=profile.jerk_window_s, stop=stop)
+        return targets.flown_through(*speeds, *trigger_planes(targets.body), stop=stop)
 
     def _fly(self, path: FlightPath, wind: WindModel, batch: int, view_offsets: np.ndarray | None,
              start_time_s: float, sec: SimSection, ship: ShipInScene | None = None,
@@ -410,8 +411,11 @@ class FlightSimulator:
         phases.py) on the flight state, then the commands, the record and the rollout."""
         par = self.params
         dt = sec.timestep_s * sec.chunk_steps
-        profile = Profile.of(path.speed_m_s, sec)
-        dwell = 0.0 if profile.through else (path.dwell_s if sec.dwell_s is None else sec.dwell_s)
+        stops = path.stops(sec.capture.mode)
+        profile = Profile.of(path.speed_m_s, sec, through=not stops.all())
+        # the hover before each photo taken at rest: the stop views' (in fly-through the first and last views are
+        # photographed on arrival)
+        dwell = np.where(stops, path.dwell_s if sec.dwell_s is None else sec.dwell_s, 0.0)
         targets = self._targets(path, batch, view_offsets, ship, profile, sec)
         onboard, run = self._launch(path, targets, ship, flight_rngs, dt, start_time_s, sec)
         state = FlightState.start(targets)
@@ -479,14 +483,13 @@ class FlightSimulator:
 
     @staticmethod
     def _photos_and_phases(state: FlightState, targets: FlightTargets, nav: NavigationEstimate, shoot: _Shoot,
-                           dt: float, sec: SimSection, dwell: float, profile: Profile) -> None:
+                           dt: float, sec: SimSection, dwell: np.ndarray, profile: Profile) -> None:
         """This chunk's photos (fly-through triggers, or the photo after the dwell) and phase moves."""
         if profile.through:
             FlightSimulator._passing_photos(state, targets, nav, shoot, dt, sec)
         moves = transitions(state, nav.position, nav.velocity, nav.yaw, targets, sec, dwell, profile.through)
-        if profile.through:     # the last view, taken at rest: the views still pending before it were missed
-            last = moves.trigger & (state.index == targets.n_views - 1)
-            state.photo = np.where(last, np.maximum(state.photo, state.index), state.photo)
+        if profile.through:     # a view taken at rest (a stop, the last): the views still pending before it were missed
+            state.photo = np.where(moves.trigger, np.maximum(state.photo, state.index), state.photo)
         due = np.flatnonzero(moves.trigger & (state.photo == state.index))
         take_photos(state, targets, due, shoot(due, state.photo[due], np.full(due.size, sec.capture.trigger_latency_s)))
         advance(state, targets, np.flatnonzero(moves.trigger | moves.chain), profile)

@@ -49,7 +49,10 @@ class FlightTargets:
     planned distance along each view's optical axis to the ship (NaN: unknown), for the blur in pixels.
     vertex_speed (batch, n_views) and leg_speed (batch, n_views - 1) m/s: the fly-through reference's speed
     at each viewpoint and cruise limit of each leg; arriving and trigger_normal (batch, n_views, 3): the
-    arriving leg's direction and the trigger plane's normal at each viewpoint (None in stop mode). home_view: the
+    arriving leg's direction and the trigger plane's normal at each viewpoint (None in stop mode); stop
+    (n_views,) bool: in fly-through, the views the reference stops at, shot after the settle and the dwell like
+    a stop-mode view (the path's per-view capture modes, :meth:`wrp_eval.planning.path.FlightPath.stops`; None:
+    none). home_view: the
     view (in flying order) of the plan's first viewpoint: the flights' home (a tour flown the other way round
     keeps the home it was planned from; the autopilot's home is where it took off, MAVLink HOME_POSITION "set
     automatically by the system during the takeoff", ArduPilot RTL "the point where the plane armed", and the
@@ -66,6 +69,7 @@ class FlightTargets:
     leg_speed: np.ndarray | None = None
     arriving: np.ndarray | None = None
     trigger_normal: np.ndarray | None = None
+    stop: np.ndarray | None = None
     home_view: int = 0
 
     @property
@@ -109,10 +113,11 @@ class FlightTargets:
         return cls(plan_pos, plan_yaw, plan_pitch, cmd_yaw, body, depth, home_view=int(np.argmin(path.view_ids())))
 
     def flown_through(self, vertex_speed: np.ndarray, leg_speed: np.ndarray, arriving: np.ndarray,
-                      trigger_normal: np.ndarray) -> FlightTargets:
-        """These targets with the fly-through reference's speeds and trigger planes."""
+                      trigger_normal: np.ndarray, stop: np.ndarray | None = None) -> FlightTargets:
+        """These targets with the fly-through reference's speeds, trigger planes and stops (n_views,) bool."""
         return replace(self, vertex_speed=vertex_speed, leg_speed=leg_speed, arriving=arriving,
-                       trigger_normal=trigger_normal)
+                       trigger_normal=trigger_normal,
+                       stop=np.zeros(self.n_views, dtype=bool) if stop is None else np.asarray(stop, dtype=bool))
 
 
 @dataclass(slots=True)

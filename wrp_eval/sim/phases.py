@@ -130,10 +130,12 @@ class Profile:
     through: bool = False
 
     @classmethod
-    def of(cls, cruise_m_s: float, sec: SimSection) -> Profile:
+    def of(cls, cruise_m_s: float, sec: SimSection, through: bool | None = None) -> Profile:
+        """The profile of ``sec`` at ``cruise_m_s``; ``through``: fly-through segments (None: as
+        ``sec.capture.mode`` says; a mission whose path sets per-view modes is flown through when any view is)."""
         a_max = sec.acceleration_m_s2
         return cls(cruise_m_s, a_max, a_max / sec.jerk_m_s3 if sec.jerk_m_s3 else 0.0,
-                   sec.capture.mode == "fly-through")
+                   sec.capture.mode == "fly-through" if through is None else bool(through))
 
     def at(self, length: np.ndarray, tau: np.ndarray) -> tuple[Any, ...]:
         """(s m, v m/s, a m/s^2, duration s), each (n,), rest to rest on segments of ``length`` (n,) m at
@@ -404,8 +406,9 @@ class Transitions(NamedTuple):
 def _transition_rows(phase: NDArray[np.int_], phase_time: NDArray[np.float64], index: NDArray[np.int_],
                      duration: NDArray[np.float64], end: NDArray[np.float64], target_yaw: NDArray[np.float64],
                      position: NDArray[np.float64], velocity: NDArray[np.float64], yaw: NDArray[np.float64],
-                     n_views: int, through: bool, settle_position_m: float, settle_speed_m_s: float,
-                     settle_yaw_rad: float, settle_timeout_s: float, dwell_s: float,
+                     n_views: int, through: bool, stop: NDArray[np.bool_], settle_position_m: float,
+                     settle_speed_m_s: float, settle_yaw_rad: float, settle_timeout_s: float,
+                     dwell_s: NDArray[np.float64],
                      ) -> tuple[NDArray[np.bool_], NDArray[np.bool_], NDArray[np.bool_], NDArray[np.bool_]]:
     """(to_settle, to_dwell, trigger, chain) (n,) bool of :func:`transitions`, row by row."""
     n = phase.size
@@ -413,7 +416,7 @@ def _transition_rows(phase: NDArray[np.int_], phase_time: NDArray[np.float64], i
     trigger, chain = np.zeros(n, np.bool_), np.zeros(n, np.bool_)
     for row in range(n):
         arrived = phase[row] == TRANSIT and phase_time[row] >= duration[row]
-        chain[row] = arrived and through and index[row] < n_views - 1
+        chain[row] = arrived and through and index[row] < n_views - 1 and not stop[index[row]]
         to_settle[row] = arrived and not chain[row]
         if phase[row] == SETTLE:
             yaw_err = wrapped(yaw[row] - target_yaw[row, index[row]])
@@ -423,34 +426,38 @@ def _transition_rows(phase: NDArray[np.int_], phase_time: NDArray[np.float64], i
             settled = off < settle_position_m ** 2 and speed2 < settle_speed_m_s ** 2 and abs(yaw_err) < settle_yaw_rad
             to_dwell[row] = settled or phase_time[row] >= settle_timeout_s
         # 1e-9: the dwell is a whole number of chunks, summed in floating point
-        trigger[row] = phase[row] == DWELL and phase_time[row] >= dwell_s - 1e-9
+        trigger[row] = phase[row] == DWELL and phase_time[row] >= dwell_s[index[row]] - 1e-9
     return to_settle, to_dwell, trigger, chain
 
 
 def transitions(state: FlightState, position: np.ndarray, velocity: np.ndarray, yaw: np.ndarray,
-                targets: FlightTargets, sec: SimSection, dwell_s: float, through: bool) -> Transitions:
+                targets: FlightTargets, sec: SimSection, dwell_s: ArrayLike, through: bool) -> Transitions:
     """The vectorised state machine's moves this chunk, on the navigation's estimate: ``position``,
-    ``velocity`` (batch, 3), ``yaw`` (batch,) rad. In fly-through (``through``) the reference stops only at
-    the last viewpoint."""
+    ``velocity`` (batch, 3), ``yaw`` (batch,) rad; ``dwell_s``: the hover before each photo taken at rest, s
+    (a number, or (n_views,) per view). In fly-through (``through``) the reference stops only at the last
+    viewpoint and at the views of ``targets.stop``."""
     seg = state.segment
+    stop = targets.stop if targets.stop is not None else np.zeros(targets.n_views, dtype=bool)
+    dwell = np.ascontiguousarray(np.broadcast_to(np.asarray(dwell_s, dtype=float), (targets.n_views,)))
     moves = _transition_rows(state.phase, state.phase_time, state.index, seg.duration, seg.end, targets.yaw,
-                             position, velocity, yaw, targets.n_views, bool(through), float(sec.settle_position_m),
-                             float(sec.settle_speed_m_s), float(np.radians(sec.settle_yaw_deg)),
-                             float(sec.settle_timeout_s), float(dwell_s))
+                             position, velocity, yaw, targets.n_views, bool(through), stop,
+                             float(sec.settle_position_m), float(sec.settle_speed_m_s),
+                             float(np.radians(sec.settle_yaw_deg)), float(sec.settle_timeout_s), dwell)
     return Transitions(*moves, state.phase_time - seg.duration)
 
 
 @kernel
 def _passing_rows(phase: NDArray[np.int_], photo: NDArray[np.int_], index: NDArray[np.int_],
                   position: NDArray[np.float64], body: NDArray[np.float64], trigger_normal: NDArray[np.float64],
-                  arriving: NDArray[np.float64], reach_m: float,
+                  arriving: NDArray[np.float64], stop: NDArray[np.bool_], reach_m: float,
                   ) -> tuple[NDArray[np.bool_], NDArray[np.bool_], NDArray[np.float64], NDArray[np.float64]]:
     """(hit, skipped (n,) bool, past (n,) m, the plane's normal (n, 3)) of :func:`passing_views`, row by row."""
     n, n_views = phase.size, body.shape[1]
     hit, skipped, past, normal = np.zeros(n, np.bool_), np.zeros(n, np.bool_), np.zeros(n), np.empty((n, 3))
     for row in range(n):
         view = min(photo[row], n_views - 1)
-        candidate = phase[row] < DONE and photo[row] >= 1 and photo[row] < n_views and photo[row] <= index[row]
+        candidate = (phase[row] < DONE and photo[row] >= 1 and photo[row] < n_views and photo[row] <= index[row]
+                     and not stop[view])
         along = 0.0
         for d in range(3):
             rel = position[row, d] - body[row, view, d]
@@ -473,11 +480,13 @@ def passing_views(state: FlightState, position: np.ndarray, targets: FlightTarge
     U-turn, normal to the arriving leg), and is at most ``reach_m`` short of the view along the arriving leg
     (on a hairpin the mitre plane runs almost along the leg: without this a vehicle off the track would be
     "past" it long before the view). A view whose plane the vehicle has not crossed by the time the
-    reference is two views further on is skipped: a missed trigger, the photo is not taken."""
-    if targets.trigger_normal is None or targets.arriving is None:
+    reference is two views further on is skipped: a missed trigger, the photo is not taken. A view of
+    ``targets.stop`` is not shot passing: the flight stops there and shoots after the dwell."""
+    if targets.trigger_normal is None or targets.arriving is None or targets.stop is None:
         raise ValueError("fly-through targets without their trigger planes (FlightTargets.flown_through)")
     hit, skipped, past, normal = _passing_rows(state.phase, state.photo, state.index, position, targets.body,
-                                               targets.trigger_normal, targets.arriving, float(reach_m))
+                                               targets.trigger_normal, targets.arriving, targets.stop,
+                                               float(reach_m))
     hits = np.flatnonzero(hit)
     return hits, past[hits], normal[hits], np.flatnonzero(skipped)
 
