@@ -15,6 +15,7 @@ from __future__ import annotations
 import logging
 import time
 from dataclasses import replace
+from pathlib import Path
 
 from wrp_eval.atomic import write_json_atomic
 from wrp_eval.campaign.jobs import campaign_job
@@ -32,7 +33,7 @@ from wrp_eval.run_summary import CampaignRun, EnvelopeRun, RunSummary, Surrogate
 from wrp_eval.ship.rerun_log import save_ship_recording
 from wrp_eval.study.runner import run_study
 from wrp_eval.surrogate.train import CHECKPOINT_NAME, train_from_campaign
-from wrp_eval.wrp.jobs import EVALUATED_PATHS, evaluate_job
+from wrp_eval.wrp.jobs import evaluate_job
 from wrp_eval.wrp.risk import campaign_flown_offsets, save_risk_recording, view_risk
 from wrp_eval.wrp.robust import campaign_error_sources
 
@@ -172,8 +173,9 @@ def export_missions(ctx: ExperimentContext) -> dict[str, list[str]]:
     """Every format's missions of the initial path, the ISWRP and the SWRP into the run's missions folder;
     returns path name -> files written."""
     folders, ship = ctx.folders, ctx.ship
-    files = {"initial": folders.plan / "path.json",
-             **{kind: folders.evaluated_wrp(kind) / "path.json" for kind in EVALUATED_PATHS[1:]}}
+    files: dict[str, Path] = {"initial": folders.plan / "path.json",
+                              **{kind: folders.evaluated_wrp(kind) / "path.json" for kind in
+                                 ctx.config.wrp.evaluate.kinds}}
     missions: dict[str, list[str]] = {}
     for name, file in files.items():
         flight_path = FlightPath.load(file)

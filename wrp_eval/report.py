@@ -315,7 +315,7 @@ def wrp_section(wrp: dict[str, Table3Row]) -> list[str]:
              "| path | threshold (m) | offset rate (%) | position offset (m) | rotation offset (deg) | time (s) | "
              "oracle error, wind-free (m) | paper: rate / pos / rot / time / error |",
              "|---|---|---|---|---|---|---|---|"]
-    for kind in ("iswrp", "swrp"):
+    for kind in (k for k in ("iswrp", "swrp") if k in wrp):      # wrp.evaluate.kinds may leave one out
         row, p = wrp[kind], PAPER[f"{kind}_t030"]
         lines.append(f"| {kind.upper()} | {fmt(row.threshold_m)} | {fmt(row.offset_rate_pct)} | "
                      f"{fmt(row.position_offset_m)} | {fmt(row.rotation_offset_deg)} | "

@@ -15,6 +15,9 @@ class EvaluateSection(StrictModel):
     seed (so trial k of every path sees the same wind: common random numbers)."""
 
     n_trials: int = Field(100, ge=2, le=1_000_000)
+    kinds: list[Literal["iswrp", "swrp"]] = Field(["iswrp", "swrp"], description="the paper's WRPs optimised and "
+                                                  "flown ([]: none, and no surrogate is needed: the initial path "
+                                                  "beside the flown levers, robust / direction / capture_stops)")
     thresholds_m: list[float] | None = Field(None, description="one threshold per WRP kind [iswrp, swrp] "
                                              "(none: the optimisation's threshold for both)")
     bootstrap: int = Field(2000, ge=100, le=1_000_000, description="bootstrap resamples of the CIs")
@@ -36,6 +39,14 @@ class EvaluateSection(StrictModel):
     direction: bool = Field(False, description="also fly the initial tour reversed (the same viewpoints the other "
                             "way round) and its placebos: the initial tour flown again in the same weather with its "
                             "flights' own errors drawn again (wrp/direction.py)")
+    capture_stops: bool = Field(False, description="also fly the initial path stopping to shoot at the views whose "
+                                "photos blur in its campaign's flights, fly-through elsewhere (per-view capture "
+                                "modes; needs sim.capture.mode fly-through) and its placebos: as many stops at "
+                                "views chosen at random (wrp/capture_lever.py)")
+    capture_blur_limit_px: float = Field(1.0, gt=0.0, description="capture_stops: stop where the 95th percentile "
+                                         "of a view's blur over the campaign's flights exceeds this, px (1 px: "
+                                         "the image-side motion during the exposure should not exceed one pixel, "
+                                         "Phase One knowledge base KA-01341)")
     out_dir: str | None = Field(None, description="none: logs/<run.name>/evaluate")
 
 

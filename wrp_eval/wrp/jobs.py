@@ -31,9 +31,11 @@ from wrp_eval.planning.path import FlightPath, digest_of_document
 from wrp_eval.recon.capture_io import captures_from_path
 from wrp_eval.recon.scored_ship import ScoredShip
 from wrp_eval.ship.nofly import flyable
+from wrp_eval.sim.capture_mode import FLY_THROUGH
 from wrp_eval.sim.onboard import view_depths
 from wrp_eval.surrogate.data import TrialData, load_campaign_trials
 from wrp_eval.surrogate.model import Surrogate
+from wrp_eval.wrp.capture_lever import blurred_views, capture_lever_paths, held_out_blur
 from wrp_eval.wrp.config import WrpSection
 from wrp_eval.wrp.confirm import CONFIRM_ROUNDS, confirm_moves
 from wrp_eval.wrp.direction import direction_placebos
@@ -61,7 +63,7 @@ class WrpInputs:
     per-viewpoint neighbourhood radii r_s (n,) m with a line saying where they came from."""
 
     path: FlightPath
-    surrogate: Surrogate
+    surrogate: Surrogate | None     # None: an evaluation of the initial path and flown levers only
     campaign_dir: Path
     radius_m: np.ndarray
     radius_source: str
@@ -76,9 +78,10 @@ def oracle_error(ship: ScoredShip, path: FlightPath) -> dict:
 
 def resolve_inputs(ctx: ExperimentContext, section: WrpSection, checkpoint: str | Path | None = None,
                    campaign: str | Path | None = None, *, surrogate: Surrogate | None = None,
-                   trials: TrialData | None = None) -> WrpInputs:
+                   trials: TrialData | None = None, need_surrogate: bool = True) -> WrpInputs:
     """The :class:`WrpInputs` of ``section``: the path of the campaign folder (or ``wrp.path``), the checkpoint
-    (or the ``surrogate`` already loaded), r_s from the campaign's trials (or the ``trials`` already read)."""
+    (or the ``surrogate`` already loaded; none read when not ``need_surrogate``), r_s from the campaign's trials
+    (or the ``trials`` already read)."""
     camp = Path(campaign or section.campaign_dir or ctx.training_campaign_dir)
     path_file = Path(section.path) if section.path else camp / "path.json"
     path = FlightPath.load(path_file)
@@ -87,11 +90,11 @@ def resolve_inputs(ctx: ExperimentContext, section: WrpSection, checkpoint: str 
         digests.add(digest_of_document(json.loads(path_file.read_text())))
     except (KeyError, TypeError, ValueError):
         pass
-    if surrogate is None:
+    if surrogate is None and need_surrogate:
         ckpt = Path(checkpoint or section.checkpoint or ctx.folders.surrogate / "surrogate.pt")
         surrogate = Surrogate.load(ckpt, n_views=len(path), path_digest=digests,
                                    inputs=ctx.config.surrogate.inputs)
-    else:
+    elif surrogate is not None:
         surrogate.check_path(len(path), digests, source="surrogate")
     radius = np.full(len(path), section.sample_radius_m)
     source = f"fixed {section.sample_radius_m} m"
@@ -129,6 +132,13 @@ def safety_constraints(ctx: ExperimentContext, path: FlightPath) -> dict:
             "no_fly_bounds": ctx.flight_proxy.no_fly_bounds()}
 
 
+def model_of(inputs: WrpInputs) -> Surrogate:
+    """The surrogate of ``inputs`` (an optimisation needs one)."""
+    if inputs.surrogate is None:
+        raise ValueError("an ISWRP / SWRP optimisation needs a surrogate (resolve_inputs(need_surrogate=True))")
+    return inputs.surrogate
+
+
 def step_from_surrogate(surrogate: Surrogate, section: WrpSection) -> float:
     """The position move bound: ``step_m``, else the training offsets' smallest position half-range."""
     if section.step_m is not None:
@@ -147,7 +157,7 @@ def wind_free_error(ctx: ExperimentContext, inputs: WrpInputs, section: WrpSecti
     if section.e_original_m is not None:
         return float(section.e_original_m), "given"
     if section.e_original_source == "surrogate":
-        return float(inputs.surrogate.predict(np.zeros((1, len(inputs.path), 4)))[0]), "surrogate at zero offsets"
+        return float(model_of(inputs).predict(np.zeros((1, len(inputs.path), 4)))[0]), "surrogate at zero offsets"
     verdict = oracle_error(ctx.scored_ship, inputs.path)
     if verdict["error_m"] is None:
         raise InputError("wrp", f"the oracle could not score the wind-free path ({verdict['reason']}); "
@@ -159,7 +169,7 @@ def run_optimize(ctx: ExperimentContext, section: WrpSection, out: Path, inputs:
                  e_original: float | None = None, use_oracle: bool = True) -> dict:
     """One ISWRP / SWRP optimisation of ``inputs`` by ``section`` into ``out``; returns wrp_metrics.json."""
     torch.set_num_threads(section.threads)
-    path, surrogate = inputs.path, inputs.surrogate
+    path, surrogate = inputs.path, model_of(inputs)
     e0, e0_source = wind_free_error(ctx, inputs, section, e_original)
     threshold = section.threshold_m if section.threshold_m is not None else section.threshold_fraction * e0
     params = wrp_params(ctx, section, inputs, float(threshold), float(e0))
@@ -193,7 +203,7 @@ def wrp_params(ctx: ExperimentContext, section: WrpSection, inputs: WrpInputs, t
                e_original_m: float) -> WrpParams:
     """The optimiser's parameters: the ``wrp:`` section's, with what the inputs measured (sampling radius,
     step, the surrogate's validated error, the measured neighbourhood) and the planner's flight-safety box."""
-    surrogate = inputs.surrogate
+    surrogate = model_of(inputs)
     return WrpParams.of(section, threshold_m=threshold_m, e_original_m=e_original_m, sample_radius_m=inputs.radius_m,
                         step_m=step_from_surrogate(surrogate, section), validated_error_m=validated_error(surrogate),
                         neighbour_cholesky=inputs.neighbour_cholesky, **safety_constraints(ctx, inputs.path))
@@ -206,9 +216,9 @@ def _confirmed(ctx: ExperimentContext, section: WrpSection, inputs: WrpInputs, p
     rounds = []
     for _ in range(CONFIRM_ROUNDS):
         confirmation = confirm_moves(ctx.scored_ship, inputs.path, result.offsets, result.moved, params, seed,
-                                     section.confirm_samples, forecast_blur(inputs.surrogate))
+                                     section.confirm_samples, forecast_blur(model_of(inputs)))
         rounds.append(confirmation.to_json_dict())
-        result = revert(result, confirmation.rejected, inputs.surrogate)
+        result = revert(result, confirmation.rejected, model_of(inputs))
         if not confirmation.rejected.any() or not result.moved.any():
             break
     return result, rounds
@@ -217,7 +227,7 @@ def _confirmed(ctx: ExperimentContext, section: WrpSection, inputs: WrpInputs, p
 def _metrics_doc(table: Table3Row, e0_source: str, inputs: WrpInputs, params: WrpParams, section: WrpSection, seed: int,
                  rounds: list[dict], result) -> dict:
     """wrp_metrics.json: the Table 3 row, the settings used and every viewpoint's move."""
-    surrogate = inputs.surrogate
+    surrogate = model_of(inputs)
     margin = params.improvement_margin_m()
     return {"table3": table.to_json_dict(), "e_original_source": e0_source,
             "sample_radius_source": inputs.radius_source,
@@ -301,7 +311,8 @@ def evaluate_job(ctx: ExperimentContext, out: Path | None = None, *, n_trials: i
     out = Path(out) if out is not None else ctx.folders.evaluate
     if ev.thresholds_m is not None and len(ev.thresholds_m) != 2:
         raise InputError("wrp.evaluate.thresholds_m", "give two thresholds: [iswrp, swrp]")
-    inputs = resolve_inputs(ctx, section, checkpoint, campaign, surrogate=surrogate, trials=trials)
+    inputs = resolve_inputs(ctx, section, checkpoint, campaign, surrogate=surrogate, trials=trials,
+                            need_surrogate=bool(ev.kinds))
     paths, optimised = _optimise_both(ctx, out, inputs, e_original)
     flown = evaluation_trial(ctx.trial_config, n_trials or ev.n_trials)
     placebo_paths, infeasible, unmoved = _placebos(ctx, out, inputs, paths, optimised)
@@ -326,7 +337,8 @@ def evaluate_job(ctx: ExperimentContext, out: Path | None = None, *, n_trials: i
                               "magnitudes in random directions with its yaw offsets (wrp/placebo.py); robust: its "
                               "levers at as many viewpoints chosen at random (wrp/robust.py); reversed: the initial "
                               "tour flown again in the same weather with its flights' own errors drawn again "
-                              "(wrp/direction.py)")
+                              "(wrp/direction.py); stops: as many stop-and-shoot views chosen at random "
+                              "(wrp/capture_lever.py)")
     verdict = None
     if forecast and ev.forecast_trials > 0:
         chosen = result.recommended_path
@@ -369,7 +381,28 @@ def _placebos(ctx: ExperimentContext, out: Path, inputs: WrpInputs, paths: dict[
         evaluated_wrp_dir(out, "reversed").mkdir(parents=True, exist_ok=True)
         paths["reversed"].save(evaluated_wrp_dir(out, "reversed") / "path.json")      # where a chosen WRP is read
         placebo_paths["reversed"] = direction_placebos(inputs.path, ev.placebos)
+    if ev.capture_stops:
+        paths["stops"], placebo_paths["stops"] = _capture_stops(ctx, out, inputs)
     return placebo_paths, infeasible, unmoved
+
+
+def _capture_stops(ctx: ExperimentContext, out: Path, inputs: WrpInputs) -> tuple[FlightPath, dict[str, FlightPath]]:
+    """The initial path stopping where the campaign's held-out flights blur, and its placebos
+    (wrp/capture_lever.py), seeded from the campaign seed; the path saved where a chosen WRP is read."""
+    ev = ctx.config.wrp.evaluate
+    if ctx.config.sim.capture.mode != FLY_THROUGH:
+        raise InputError("wrp.evaluate.capture_stops", "needs sim.capture.mode fly-through (a stop mission stops "
+                                                       "at every view already)")
+    blur = held_out_blur(inputs.campaign_dir, ev.n_trials)
+    stops = blurred_views(blur, ev.capture_blur_limit_px)
+    rng = np.random.default_rng(np.random.SeedSequence(ctx.campaign_seed, spawn_key=(11, len(WRP_KINDS) + 1)))
+    path, placebos = capture_lever_paths(inputs.path, stops, ev.placebos, rng)
+    folder = evaluated_wrp_dir(out, "stops")
+    folder.mkdir(parents=True, exist_ok=True)
+    path.save(folder / "path.json")
+    progress_log.info(f"capture stops: {int(stops.sum())} of {len(stops)} views stop-and-shoot (95th percentile "
+                      f"blur over {len(blur)} held-out campaign flights above {ev.capture_blur_limit_px:g} px)")
+    return path, placebos
 
 
 def _robust_and_placebos(ctx: ExperimentContext, out: Path, inputs: WrpInputs
@@ -389,10 +422,13 @@ def _robust_and_placebos(ctx: ExperimentContext, out: Path, inputs: WrpInputs
 
 def _optimise_both(ctx: ExperimentContext, out: Path, inputs: WrpInputs,
                    e_original: float | None) -> tuple[dict[str, FlightPath], dict[str, dict]]:
-    """ISWRP and SWRP of ``inputs`` into ``out``: (name -> path with "initial" first, kind -> wrp_metrics)."""
+    """The ISWRP and SWRP of ``inputs`` (those of ``wrp.evaluate.kinds``) into ``out``: (name -> path with
+    "initial" first, kind -> wrp_metrics)."""
     section, thresholds = ctx.config.wrp, ctx.config.wrp.evaluate.thresholds_m
-    paths, optimised = {"initial": inputs.path}, {}
-    for i, kind in enumerate(("iswrp", "swrp")):
+    paths: dict[str, FlightPath] = {"initial": inputs.path}
+    optimised: dict[str, dict] = {}
+    for kind in ctx.config.wrp.evaluate.kinds:
+        i = WRP_KINDS.index(kind)
         kind_section = with_kind(section, kind, thresholds[i] if thresholds is not None else None)
         folder = evaluated_wrp_dir(out, kind)
         optimised[kind] = run_optimize(ctx, kind_section, folder, inputs, e_original=e_original)

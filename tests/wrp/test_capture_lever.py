@@ -1,0 +1,85 @@
+"""The per-view capture-mode lever: stops where the held-out flights' photos blur, its placebos, and its
+evaluation flown beside the initial path without a surrogate."""
+
+import json
+
+import numpy as np
+import pytest
+
+from tests.surrogate import helpers
+from wrp_eval.config import ExperimentConfig
+from wrp_eval.errors import InputError
+from wrp_eval.planning.path import FlightPath
+from wrp_eval.wrp.capture_lever import blurred_views, capture_lever_paths, held_out_blur
+
+
+def test_a_view_stops_when_its_95th_percentile_blur_exceeds_the_limit():
+    blur = np.zeros((20, 4))
+    blur[:, 1] = 2.0             # always blurred
+    blur[18:, 2] = 5.0           # two flights in twenty: its 95th percentile is 5 px
+    blur[:, 3] = np.nan          # never taken
+    blur[0, 0] = np.nan          # taken by the other flights
+    np.testing.assert_array_equal(blurred_views(blur, 1.0), [False, True, True, False])
+    np.testing.assert_array_equal(blurred_views(blur, 2.0), [False, False, True, False])
+    np.testing.assert_array_equal(blurred_views(blur, 5.0), [False, False, False, False])
+
+
+def test_the_stops_are_chosen_on_trials_the_evaluation_does_not_fly(tmp_path):
+    blur = np.zeros((12, 5))
+    blur[:6, 0] = 9.0           # blurred in the trials an evaluation of 6 flights flies: not seen
+    blur[6:, 3] = 9.0
+    helpers.make_campaign(tmp_path / "c", 12, 5, blur_px=blur)
+    held = held_out_blur(tmp_path / "c", 6)
+    assert held.shape == (6, 5)
+    np.testing.assert_array_equal(blurred_views(held, 1.0), [False, False, False, True, False])
+    with pytest.raises(InputError, match="no trials beyond"):
+        held_out_blur(tmp_path / "c", 12)
+    helpers.make_campaign(tmp_path / "none", 12, 5)
+    with pytest.raises(InputError, match="no blur"):
+        held_out_blur(tmp_path / "none", 6)
+
+
+def test_placebos_stop_at_as_many_random_views_and_are_seeded():
+    path = helpers.make_path(30)
+    stops = np.zeros(30, dtype=bool)
+    stops[[3, 4, 5, 20]] = True
+    lever, placebos = capture_lever_paths(path, stops, 5, np.random.default_rng(7))
+    np.testing.assert_array_equal(lever.stops("fly-through"), stops)
+    assert lever.metadata["capture_stops"] == 4
+    masks = [p.stops("fly-through") for p in placebos.values()]
+    assert all(m.sum() == 4 for m in masks) and len({tuple(np.flatnonzero(m)) for m in masks}) == 5
+    assert all(p.metadata["placebo_of"] == "stops" for p in placebos.values())
+    again = capture_lever_paths(path, stops, 5, np.random.default_rng(7))[1]
+    assert [p.digest() for p in again.values()] == [p.digest() for p in placebos.values()]
+
+
+def _config(mode: str) -> ExperimentConfig:
+    return ExperimentConfig.model_validate({
+        "run": {"seed": 2}, "sim": {"capture": {"mode": mode}},
+        "campaign": {"backend": {"workers": 0}, "batch_size": 4},
+        "wrp": {"evaluate": {"n_trials": 6, "bootstrap": 200, "placebos": 2, "forecast_trials": 0, "kinds": [],
+                             "capture_stops": True}}})
+
+
+def test_the_capture_lever_is_evaluated_beside_the_initial_path_without_a_surrogate(tmp_path):
+    from wrp_eval.campaign.evaluators import ANALYTIC_EVALUATOR
+    from wrp_eval.experiment import ExperimentContext
+    from wrp_eval.wrp.jobs import evaluate_job
+
+    blur = np.zeros((14, 5))
+    blur[6:, [1, 3]] = 4.0
+    helpers.make_campaign(tmp_path / "campaign", 14, 5, blur_px=blur)
+    result = evaluate_job(ExperimentContext(_config("fly-through"), tmp_path), tmp_path / "ev",
+                          campaign=str(tmp_path / "campaign"), e_original=1.45, evaluator=ANALYTIC_EVALUATOR)
+    doc = json.loads((tmp_path / "ev" / "evaluate.json").read_text())
+    assert [p.path for p in result.paths] == ["initial", "stops"] and doc["wrp"] == {}
+    stops = FlightPath.load(tmp_path / "ev" / "wrp-stops" / "path.json")
+    np.testing.assert_array_equal(stops.stops("fly-through"), [False, True, False, True, False])
+    flown = FlightPath.load(tmp_path / "ev" / "campaign-stops" / "path.json")
+    assert flown.capture == stops.capture                # the campaign flies the per-view modes
+    assert doc["robustness"]["stops"]["placebos_flown"] == 2
+    placebo = FlightPath.load(tmp_path / "ev" / "campaign-placebo-stops-01" / "path.json")
+    assert placebo.stops("fly-through").sum() == 2
+    with pytest.raises(InputError, match="fly-through"):
+        evaluate_job(ExperimentContext(_config("stop"), tmp_path), tmp_path / "ev2",
+                     campaign=str(tmp_path / "campaign"), e_original=1.45, evaluator=ANALYTIC_EVALUATOR)
