@@ -266,6 +266,23 @@ def test_per_view_capture_modes_are_written_per_waypoint(fmt, mission_mode, ship
             assert back.pass_radius_m == pytest.approx(3.0 if not want.all() else 0.0)
 
 
+@pytest.mark.parametrize("fmt", sorted(FORMATS))
+def test_each_legs_speed_is_written_at_the_waypoint_it_leaves(fmt, ship, path, section, tmp_path):
+    legs = np.full(len(path) - 1, path.speed_m_s)
+    legs[2::4] = 2.5
+    slow = path.with_leg_speeds(legs)
+    particulars, proxy = ship
+    style = FlightStyle.of(slow)
+    written = export_path(slow, particulars, proxy, fmt, tmp_path / f"m{FORMATS[fmt].suffix}", section, style=style)
+    for file, mission in written:
+        back = FORMATS[fmt].read(file)
+        np.testing.assert_allclose(back.leg_speed_m_s[:-1], legs[mission.index[:-1]])   # no leg after the last
+        assert back.speed_m_s == pytest.approx(path.speed_m_s) and back.photos == len(mission)
+    (file, _), *_ = export_path(path, particulars, proxy, fmt, tmp_path / f"p{FORMATS[fmt].suffix}", section,
+                                style=FlightStyle.of(path))
+    np.testing.assert_allclose(FORMATS[fmt].read(file).leg_speed_m_s, path.speed_m_s)   # one speed: as before
+
+
 def test_the_style_is_the_simulators(path):
     from wrp_eval.sim.config import SimSection
 

@@ -72,6 +72,30 @@ def test_per_view_capture_modes_round_trip_and_enter_the_digest(plans, tmp_path)
         FlightPath.from_json_dict(doc, source="mixed.json")
 
 
+def test_leg_speeds_round_trip_reverse_with_the_tour_and_enter_the_digest(plans, tmp_path):
+    path = plans[("stylized", "ours")].path
+    legs = np.full(len(path) - 1, path.speed_m_s)
+    legs[3] = 2.0
+    slow = path.with_leg_speeds(legs)
+    assert path.with_leg_speeds(np.full(len(path) - 1, path.speed_m_s)).leg_speed_m_s is None
+    assert "leg_speed_m_s" not in path.to_json_dict()["viewpoints"][0]
+    slow.save(tmp_path / "slow.json")
+    again = FlightPath.load(tmp_path / "slow.json")
+    np.testing.assert_array_equal(again.leg_speeds(), legs)
+    assert slow.digest() != path.digest()
+    assert slow.flight_time_s == pytest.approx(path.flight_time_s + path.segment_lengths_m[3] * (1 / 2.0 - 1 / 5.0))
+    np.testing.assert_array_equal(slow.reversed().leg_speeds(), legs[::-1])
+    doc = slow.to_json_dict()
+    doc["viewpoints"][3]["leg_speed_m_s"] = 0.0
+    with pytest.raises(InputError, match="leg_speed_m_s"):
+        FlightPath.from_json_dict(doc, source="slow.json")
+    del doc["viewpoints"][3]["leg_speed_m_s"]
+    with pytest.raises(InputError, match="leg_speed_m_s"):
+        FlightPath.from_json_dict(doc, source="slow.json")
+    with pytest.raises(ValueError, match="leg_speed_m_s"):
+        path.with_leg_speeds(legs[:-1])
+
+
 @pytest.mark.parametrize("text", ["{not json", '{"format_version": 1, "viewpoints": []}',
                                   '{"format_version": 1, "viewpoints": [{"x_m": 1}]}'])
 def test_bad_path_file_is_an_input_error(tmp_path, text):

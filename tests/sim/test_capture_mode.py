@@ -316,3 +316,41 @@ def test_a_fly_through_mission_stops_and_dwells_only_at_the_views_its_path_marks
     assert end[0] + 2 * 1.5 < end[1] < end[2]
     # the views before a stop are shot passing, as in the pure fly-through mission
     np.testing.assert_allclose(mixed.capture_time_s[0, :2], through.capture_time_s[0, :2], atol=1e-9)
+
+
+# -- speed per leg ----------------------------------------------------------------------------------------------
+@pytest.mark.parametrize("mode", ["stop", "fly-through"])
+def test_each_leg_is_flown_at_its_own_cruise_speed(mode):
+    from dataclasses import replace
+
+    from tests.sim.conftest import make_path
+    from wrp_eval.sim.config import SimSection
+    from wrp_eval.sim.flight import FlightSimulator
+    from wrp_eval.sim.simple_wind import ConstantWind
+
+    # a straight line of long legs (no corners: the cruise limit is the leg's own speed)
+    base = make_path(n=4, spacing_m=40.0)
+    path = replace(base, positions=base.positions * [1.0, 0.0, 0.0] + [0.0, 0.0, 20.0], yaw=np.zeros(4))
+    dt = SimSection().timestep_s * SimSection().chunk_steps
+    sec = SimSection(drones_per_model=1, threads=1, capture={"mode": mode}, navigation={"preset": "ideal"},
+                     record_interval_s=dt)
+    calm = ConstantWind([0.0, 0.0, 0.0])
+    slow = path.with_leg_speeds(np.array([5.0, 2.0, 5.0]))
+    with FlightSimulator(sec) as sim:
+        plain = sim.fly(path, calm, 1)
+        spelled = sim.fly(replace(path, leg_speed_m_s=np.full(3, path.speed_m_s)), calm, 1)
+        slowed = sim.fly(slow, calm, 1)
+    # every leg at the path's own speed, spelt out: the same flight to the bit
+    np.testing.assert_array_equal(spelled.capture_time_s, plain.capture_time_s)
+    np.testing.assert_array_equal(spelled.trajectory.position, plain.trajectory.position)
+    assert slowed.taken.all()
+    tr = slowed.trajectory
+    speed = np.linalg.norm(np.gradient(tr.position[0], tr.time, axis=0), axis=1)
+    x = tr.position[0, :, 0]
+    for leg, cruise in enumerate((5.0, 2.0, 5.0)):
+        inside = (x > 40.0 * leg + 10.0) & (x < 40.0 * leg + 30.0)      # the leg's middle, at cruise
+        assert speed[inside].max() == pytest.approx(cruise, rel=0.05), leg
+    # the slow leg takes about 40 / 2 - 40 / 5 = 12 s longer; the others as before, but for (fly-through) slowing
+    # to the slow leg's 2 m/s at their shared view (5 -> 2 m/s at 2.5 m/s^2: ~0.4 s, ~0.56 s with the jerk window)
+    legs = np.diff(slowed.capture_time_s[0]) - np.diff(plain.capture_time_s[0])
+    assert legs[1] == pytest.approx(12.0, abs=1.5) and np.abs(legs[[0, 2]]).max() < 0.6

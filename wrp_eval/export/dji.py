@@ -140,13 +140,16 @@ def _placemark(folder: ET.Element, m: GeoMission, k: int, executable: bool) -> N
     _sub(pm, _w("index"), k)
     if executable:
         _sub(pm, _w("executeHeight"), _num(m.alt_rel_m[k]))
-        _sub(pm, _w("waypointSpeed"), _num(m.speed_m_s, 2))
+        _sub(pm, _w("waypointSpeed"), _num(m.leg_speed_m_s[k], 2))
         _heading_param(pm, m.heading_deg[k], m.style.heading_mode)
         _turn_param(pm, m, k)
     else:
         _sub(pm, _w("height"), _num(m.alt_rel_m[k]))
         _sub(pm, _w("useGlobalHeight"), 0)
-        _sub(pm, _w("useGlobalSpeed"), 1)
+        own_speed = bool(m.leg_speed_m_s[k] != m.speed_m_s)     # the leg's own speed (the path's per leg)
+        _sub(pm, _w("useGlobalSpeed"), 0 if own_speed else 1)
+        if own_speed:
+            _sub(pm, _w("waypointSpeed"), _num(m.leg_speed_m_s[k], 2))
         _sub(pm, _w("useGlobalHeadingParam"), 0)
         _heading_param(pm, m.heading_deg[k], m.style.heading_mode)
         own_turn = bool(m.stop[k]) != (m.style.mode == "stop")     # a per-view mode other than the mission's
@@ -208,6 +211,7 @@ def read_dji_kmz(file: str | Path) -> ReadMission:
                 raise ValueError(f"missing {TEMPLATE_PATH}")
             root = ET.fromstring(kmz.read(WAYLINES_PATH))
         lat, lon, alt, heading, pitch, hold, turns, headings = [], [], [], [], [], [], [], set()
+        leaving: list[float] = []
         photos = 0
         speed = float(_text(root, f"{_k('Document')}/{_k('Folder')}/{_w('autoFlightSpeed')}"))
         modes = {v: k for k, v in TURN_MODES.items()}
@@ -216,6 +220,7 @@ def read_dji_kmz(file: str | Path) -> ReadMission:
             lat.append(float(lat_s))
             lon.append(float(lon_s))
             alt.append(float(_text(pm, _w("executeHeight"))))
+            leaving.append(float(_text(pm, _w("waypointSpeed"))))
             turn = _find(pm, f"{_w('waypointTurnParam')}/{_w('waypointTurnMode')}").text
             if turn not in modes:
                 raise ValueError(f"waypoint turn mode {turn!r} is neither of {sorted(modes)}")
@@ -239,4 +244,4 @@ def read_dji_kmz(file: str | Path) -> ReadMission:
     arr = lambda v: np.asarray(v, dtype=float)  # noqa: E731
     stop = np.asarray(turns, dtype=bool)
     return ReadMission(arr(lat), arr(lon), arr(alt), arr(heading), arr(pitch), photos, None, turn_mode_of(stop),
-                       next(iter(headings), None), arr(hold), speed, stop=stop)
+                       next(iter(headings), None), arr(hold), speed, stop=stop, leg_speed_m_s=arr(leaving))

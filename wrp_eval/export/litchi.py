@@ -51,7 +51,7 @@ def litchi_csv_bytes(m: GeoMission, firmware: str = "px4") -> bytes:
         actions += [ACTION_NONE, 0] * (N_ACTIONS - len(actions) // 2)
         writer.writerow([f"{m.lat_deg[k]:.10f}", f"{m.lon_deg[k]:.10f}", f"{m.alt_rel_m[k]:.4f}",
                          f"{m.heading_deg[k]:.4f}", curve, 0, GIMBAL_INTERPOLATE, f"{m.gimbal_pitch_deg[k]:.4f}"]
-                        + actions + [0, f"{m.speed_m_s:.2f}", 0, 0, 0, 0, -1, -1])
+                        + actions + [0, f"{m.leg_speed_m_s[k]:.2f}", 0, 0, 0, 0, -1, -1])
     return out.getvalue().encode("ascii")
 
 
@@ -83,5 +83,5 @@ def read_litchi_csv(file: str | Path) -> ReadMission:
     arr = lambda v: np.asarray(v, dtype=float)  # noqa: E731
     stop = ~(arr(curve) > 0.0) | (arr(hold) > 0.0)
     return ReadMission(arr(lat), arr(lon), arr(alt), arr(heading), arr(pitch), photos, None, turn_mode_of(stop),
-                       None, arr(hold), float(speed[0]) if speed else None,
-                       float(np.max(arr(curve)[~stop], initial=0.0)), stop)
+                       None, arr(hold), float(speed[-1]) if speed else None,     # the last row: the mission's
+                       float(np.max(arr(curve)[~stop], initial=0.0)), stop, arr(speed))

@@ -67,7 +67,9 @@ class GeoMission:
     counter-clockwise seen from above; view_id (k,) int: the plan's viewpoint of each waypoint (the path's
     ``view_ids()``: ``index`` unless the tour flies its viewpoints in another order), what photos are named by;
     stop (k,) bool: the waypoints flown stop-and-shoot (the others are shot passing), the path's per-view modes
-    over the style's mode (:meth:`wrp_eval.planning.path.FlightPath.stops`).
+    over the style's mode (:meth:`wrp_eval.planning.path.FlightPath.stops`); leg_speed_m_s (k,) m/s: the cruise
+    speed of the leg leaving each waypoint (the path's :meth:`~wrp_eval.planning.path.FlightPath.leg_speeds`; the
+    style's speed after the sortie's last waypoint).
     """
 
     sortie: int
@@ -85,6 +87,7 @@ class GeoMission:
     fence_lat_lon: np.ndarray
     view_id: np.ndarray
     stop: np.ndarray
+    leg_speed_m_s: np.ndarray
 
     def __len__(self) -> int:
         return int(self.index.shape[0])
@@ -114,7 +117,8 @@ class ReadMission:
     turn_mode: ``stop`` | ``fly-through`` as the file commands it for every waypoint, ``mixed`` where some stop
     and some are passed (``stop`` (k,) bool says which stop); heading_mode: the heading mode the file names
     (None where the format cannot carry one); hold_s (k,) hover per waypoint; speed_m_s: cruise speed;
-    pass_radius_m: where the turn starts before a passed waypoint (0 when every waypoint stops)."""
+    pass_radius_m: where the turn starts before a passed waypoint (0 when every waypoint stops); leg_speed_m_s
+    (k,) m/s: the speed the file sets for the leg leaving each waypoint (at the last, what it leaves set)."""
 
     lat_deg: np.ndarray
     lon_deg: np.ndarray
@@ -129,6 +133,7 @@ class ReadMission:
     speed_m_s: float | None = None
     pass_radius_m: float | None = None
     stop: np.ndarray | None = None
+    leg_speed_m_s: np.ndarray | None = None
 
 
 def turn_mode_of(stop: np.ndarray) -> str | None:
@@ -199,10 +204,13 @@ def build_missions(path: FlightPath, particulars: ShipParticulars, proxy: Proxy,
     fence_lat, fence_lon = ship_to_geographic(corners, pose)
     takeoff = max(float(hi[2] - home[2]), float(section.min_altitude_m))
     missions = []
+    leaving = np.append(path.leg_speeds(), style.speed_m_s)      # the leg leaving each view; none after the last
     for sortie in np.unique(path.sortie):
         idx = np.flatnonzero(path.sortie == sortie)
+        legs = np.append(leaving[idx[:-1]], style.speed_m_s)
         missions.append(GeoMission(
             int(sortie), idx, lat[idx], lon[idx], alt_rel[idx], heading[idx], pitch[idx],
             style, float(home_lat), float(home_lon), float(home[2]),
-            takeoff, np.stack([fence_lat, fence_lon], axis=1), path.view_ids()[idx], path.stops(style.mode)[idx]))
+            takeoff, np.stack([fence_lat, fence_lon], axis=1), path.view_ids()[idx], path.stops(style.mode)[idx],
+            legs))
     return missions

@@ -55,6 +55,7 @@ def mission_items(m: GeoMission) -> list[tuple[int, int, list[float]]]:
              (MAV_CMD_DO_CHANGE_SPEED, MAV_FRAME_MISSION, [float(SPEED_TYPE_GROUND), m.speed_m_s, -1.0, 0.0, 0.0, 0.0,
                                                            0.0])]
     hold, accept = m.hold_s, m.pass_radius_m
+    speed = m.speed_m_s
     for k in range(len(m)):
         items.append((MAV_CMD_NAV_WAYPOINT, MAV_FRAME_GLOBAL_RELATIVE_ALT,
                       [float(hold[k]), float(accept[k]), 0.0, float(m.heading_deg[k]), float(m.lat_deg[k]),
@@ -62,6 +63,10 @@ def mission_items(m: GeoMission) -> list[tuple[int, int, list[float]]]:
         items.append((MAV_CMD_DO_GIMBAL_MANAGER_PITCHYAW, MAV_FRAME_MISSION,
                       [float(m.gimbal_pitch_deg[k]), 0.0, NAN, NAN, 0.0, 0.0, 0.0]))
         items.append((MAV_CMD_IMAGE_START_CAPTURE, MAV_FRAME_MISSION, [0.0, 0.0, 1.0, float(k + 1), 0.0, 0.0, 0.0]))
+        if k < len(m) - 1 and m.leg_speed_m_s[k] != speed:    # the next leg's own speed (the path's speed per leg)
+            speed = float(m.leg_speed_m_s[k])
+            items.append((MAV_CMD_DO_CHANGE_SPEED, MAV_FRAME_MISSION, [float(SPEED_TYPE_GROUND), speed, -1.0, 0.0,
+                                                                       0.0, 0.0, 0.0]))
     items.append((MAV_CMD_NAV_RETURN_TO_LAUNCH, MAV_FRAME_MISSION, [0.0] * 7))
     return items
 
@@ -131,11 +136,16 @@ def _read_items(items: list[tuple[int, int, list[float]]], home: tuple[float, fl
     pitch: list[float] = []
     hold: list[float] = []
     accept: list[float] = []
-    photos, speed = 0, None
+    leaving: list[float] = []
+    photos, speed, current = 0, None, NAN
     for command, frame, p in items:
         if command == MAV_CMD_DO_CHANGE_SPEED and int(p[0]) == SPEED_TYPE_GROUND:
-            speed = p[1]
+            speed = p[1] if speed is None else speed        # the mission's: the first one set
+            current = p[1]
+            if leaving:
+                leaving[-1] = current
         if command == MAV_CMD_NAV_WAYPOINT and frame == MAV_FRAME_GLOBAL_RELATIVE_ALT:
+            leaving.append(current)
             for column, value in ((lat, p[4]), (lon, p[5]), (alt, p[6]), (heading, p[3]), (pitch, NAN),
                                   (hold, p[0]), (accept, p[1])):
                 column.append(value)
@@ -146,7 +156,8 @@ def _read_items(items: list[tuple[int, int, list[float]]], home: tuple[float, fl
     arr = lambda v: np.asarray(v, dtype=float)  # noqa: E731
     stop = (arr(hold) > 0.0) | ~(arr(accept) > 0.0)
     return ReadMission(arr(lat), arr(lon), arr(alt), arr(heading), arr(pitch), photos, home, turn_mode_of(stop),
-                       None, arr(hold), speed, float(np.max(arr(accept)[~stop], initial=0.0)), stop)
+                       None, arr(hold), speed, float(np.max(arr(accept)[~stop], initial=0.0)), stop,
+                       arr(leaving))
 
 
 def read_qgc_plan(file: str | Path) -> ReadMission:

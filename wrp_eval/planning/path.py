@@ -47,6 +47,9 @@ class FlightPath:
     (:mod:`wrp_eval.sim.capture_mode`), overriding the mission's ``sim.capture.mode`` (a fly-through mission
     that stops where a view needs a sharp, level photo; the robust kind's capture lever); None: every view as
     the mission's mode says. Written per viewpoint in path.json and in every exported mission.
+    leg_speed_m_s (n - 1,) m/s or None: the cruise speed of each leg (leg i from view i to view i + 1; the robust
+    kind's speed lever); None: ``speed_m_s`` on every leg. Written per viewpoint (the leg leaving it) in path.json
+    and in every exported mission.
     """
 
     positions: np.ndarray
@@ -63,12 +66,30 @@ class FlightPath:
     view_id: np.ndarray | None = None
     noise_draw: int = 0
     capture: tuple[str, ...] | None = None
+    leg_speed_m_s: np.ndarray | None = None
 
     def __post_init__(self) -> None:
         if self.capture is not None and (len(self.capture) != len(self.positions)
                                          or not set(self.capture) <= set(CAPTURE_MODES)):
             raise ValueError(f"capture must give one of {CAPTURE_MODES} for each of the {len(self.positions)} "
                              f"views, got {self.capture!r}")
+        legs = self.leg_speed_m_s
+        if legs is not None and (np.shape(legs) != (max(len(self.positions) - 1, 0),)
+                                 or not np.all(np.isfinite(legs) & (np.asarray(legs) > 0))):
+            raise ValueError(f"leg_speed_m_s must give a finite speed > 0 for each of the {len(self.positions) - 1} "
+                             f"legs, got {legs!r}")
+
+    def leg_speeds(self) -> np.ndarray:
+        """(n - 1,) m/s: the cruise speed of each leg (:attr:`leg_speed_m_s`, else ``speed_m_s``)."""
+        if self.leg_speed_m_s is not None:
+            return np.asarray(self.leg_speed_m_s, dtype=float)
+        return np.full(max(len(self) - 1, 0), float(self.speed_m_s))
+
+    def with_leg_speeds(self, speeds: np.ndarray) -> FlightPath:
+        """This path with the legs' cruise speeds ``speeds`` (n - 1,) m/s (None kept where every leg flies at
+        ``speed_m_s``)."""
+        speeds = np.asarray(speeds, dtype=float)
+        return replace(self, leg_speed_m_s=None if np.all(speeds == self.speed_m_s) else speeds)
 
     def __len__(self) -> int:
         return int(self.positions.shape[0])
@@ -84,8 +105,8 @@ class FlightPath:
 
     @property
     def flight_time_s(self) -> float:
-        """Cruise time at ``speed_m_s`` plus one dwell per photo."""
-        return self.length_m / self.speed_m_s + self.dwell_s * len(self)
+        """Cruise time at the legs' speeds plus one dwell per photo."""
+        return float((self.segment_lengths_m / self.leg_speeds()).sum()) + self.dwell_s * len(self)
 
     def stops(self, mission_mode: str) -> np.ndarray:
         """(n,) bool: the views shot stop-and-shoot when the mission's capture mode is ``mission_mode`` (``stop``
@@ -122,6 +143,7 @@ class FlightPath:
         in_plan_order = bool(np.all(view_id == np.arange(len(self))))
         return replace(self, positions=np.asarray(self.positions)[order], yaw=np.asarray(self.yaw)[order],
                        capture=None if self.capture is None else self.capture[::-1],
+                       leg_speed_m_s=None if self.leg_speed_m_s is None else np.asarray(self.leg_speed_m_s)[::-1],
                        pitch=np.asarray(self.pitch)[order], face_id=np.asarray(self.face_id)[order],
                        kind=np.asarray(self.kind)[order], sortie=sortie.max(initial=0) - sortie + sortie.min(initial=0),
                        view_id=None if in_plan_order else view_id,
@@ -145,6 +167,9 @@ class FlightPath:
         if self.capture is not None:
             for viewpoint, mode in zip(doc["viewpoints"], self.capture, strict=True):
                 viewpoint["capture"] = mode
+        if self.leg_speed_m_s is not None:
+            for viewpoint, speed in zip(doc["viewpoints"], self.leg_speeds().tolist(), strict=False):
+                viewpoint["leg_speed_m_s"] = speed
         return doc
 
     def _json_dict(self) -> dict:
@@ -215,6 +240,7 @@ class FlightPath:
             view_id = _view_ids(vps)
             noise_draw = int(doc.get("noise_draw", 0))
             capture = _capture_modes(vps)
+            leg_speed = _leg_speeds(vps)
         except (KeyError, TypeError, ValueError, AttributeError) as err:
             what = f"missing field {err}" if isinstance(err, KeyError) else str(err)
             raise InputError(source, f"bad path file: {what}") from None
@@ -223,7 +249,21 @@ class FlightPath:
         if speed <= 0 or dwell < 0 or noise_draw < 0:
             raise InputError(source, "bad path file: speed_m_s must be > 0, dwell_s and noise_draw >= 0")
         return cls(positions, yaw, pitch, face_id, kind, sortie, camera, speed, dwell,
-                   str(doc.get("method", "ours")), dict(doc.get("metadata", {})), view_id, noise_draw, capture)
+                   str(doc.get("method", "ours")), dict(doc.get("metadata", {})), view_id, noise_draw, capture,
+                   leg_speed)
+
+
+def _leg_speeds(viewpoints: list) -> np.ndarray | None:
+    """The legs' ``leg_speed_m_s`` (n - 1,) m/s, given on every viewpoint but the last (finite, > 0), or None
+    when no viewpoint gives one."""
+    have = [("leg_speed_m_s" in v) for v in viewpoints]
+    if not any(have):
+        return None
+    speeds = np.array([v.get("leg_speed_m_s", np.nan) for v in viewpoints[:-1]], dtype=float)
+    if not all(have[:-1]) or have[-1] or not np.all(np.isfinite(speeds) & (speeds > 0)):
+        raise ValueError("'leg_speed_m_s' must be > 0 on every viewpoint but the last (the leg leaving it) or on "
+                         "none")
+    return speeds
 
 
 def _capture_modes(viewpoints: list) -> tuple[str, ...] | None:

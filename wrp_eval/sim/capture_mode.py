@@ -84,13 +84,14 @@ class CaptureSection(StrictModel):
                                                                      "from the viewpoint, m")
 
 
-def vertex_speeds(body: np.ndarray, yaw: np.ndarray, cruise_m_s: float, accel_m_s2: float,
+def vertex_speeds(body: np.ndarray, yaw: np.ndarray, cruise_m_s: ArrayLike, accel_m_s2: float,
                   yaw_rate_rad_s: float, corner_radius_m: float, corner_step_m_s: float = CORNER_STEP_M_S,
                   window_s: float = 0.0, stop: np.ndarray | None = None) -> tuple[np.ndarray, np.ndarray]:
     """(speed at each viewpoint (batch, n_views), cruise limit of each leg (batch, n_views - 1)) m/s for the
     fly-through reference through the body targets ``body`` (batch, n_views, 3) m with headings ``yaw``
-    (batch, n_views) rad. The first and last viewpoints are at rest, and so are the viewpoints of ``stop``
-    (n_views,) bool (shot stop-and-shoot within a fly-through mission; None: none). At a corner of turn angle theta the
+    (batch, n_views) rad, each leg at most ``cruise_m_s`` (a number, or (n_views - 1,) per leg). The first and
+    last viewpoints are at rest, and so are the viewpoints of ``stop`` (n_views,) bool (shot stop-and-shoot
+    within a fly-through mission; None: none). At a corner of turn angle theta the
     reference's velocity turns in one step of 2 v sin(theta/2), at the viewpoint, where the photo is taken:
     v is kept to ``corner_step_m_s`` / (2 sin(theta/2)) (:data:`CORNER_STEP_M_S`). With the jerk window T =
     ``window_s`` (:func:`through_profile`) a leg of length L from v0 must leave room for it: the trapezoid over

@@ -400,7 +400,7 @@ class FlightSimulator:
         if not profile.through:
             return targets
         stop = path.stops(sec.capture.mode)
-        speeds = vertex_speeds(targets.body, targets.yaw, path.speed_m_s, sec.acceleration_m_s2, YAW_RATE_REF_RAD_S,
+        speeds = vertex_speeds(targets.body, targets.yaw, path.leg_speeds(), sec.acceleration_m_s2, YAW_RATE_REF_RAD_S,
                                sec.capture.corner_radius_m, window_s=profile.jerk_window_s, stop=stop)
         return targets.flown_through(*speeds, *trigger_planes(targets.body), stop=stop)
 

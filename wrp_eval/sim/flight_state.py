@@ -52,7 +52,8 @@ class FlightTargets:
     arriving leg's direction and the trigger plane's normal at each viewpoint (None in stop mode); stop
     (n_views,) bool: in fly-through, the views the reference stops at, shot after the settle and the dwell like
     a stop-mode view (the path's per-view capture modes, :meth:`wrp_eval.planning.path.FlightPath.stops`; None:
-    none). home_view: the
+    none); leg_cruise (n_views - 1,) m/s: the cruise speed of each leg (the path's
+    :meth:`~wrp_eval.planning.path.FlightPath.leg_speeds`; None: the profile's cruise on every leg). home_view: the
     view (in flying order) of the plan's first viewpoint: the flights' home (a tour flown the other way round
     keeps the home it was planned from; the autopilot's home is where it took off, MAVLink HOME_POSITION "set
     automatically by the system during the takeoff", ArduPilot RTL "the point where the plane armed", and the
@@ -70,6 +71,7 @@ class FlightTargets:
     arriving: np.ndarray | None = None
     trigger_normal: np.ndarray | None = None
     stop: np.ndarray | None = None
+    leg_cruise: np.ndarray | None = None
     home_view: int = 0
 
     @property
@@ -110,7 +112,8 @@ class FlightTargets:
         body = cmd_pos - np.stack([cy * cam[0] - sy * cam[1], sy * cam[0] + cy * cam[1],
                                    np.full_like(cy, cam[2])], axis=-1)
         depth = np.full(n_views, np.nan) if depth_m is None else np.asarray(depth_m, dtype=float)
-        return cls(plan_pos, plan_yaw, plan_pitch, cmd_yaw, body, depth, home_view=int(np.argmin(path.view_ids())))
+        return cls(plan_pos, plan_yaw, plan_pitch, cmd_yaw, body, depth, leg_cruise=path.leg_speeds(),
+                   home_view=int(np.argmin(path.view_ids())))
 
     def flown_through(self, vertex_speed: np.ndarray, leg_speed: np.ndarray, arriving: np.ndarray,
                       trigger_normal: np.ndarray, stop: np.ndarray | None = None) -> FlightTargets:
@@ -126,7 +129,8 @@ class Segment:
     replaced): start, end (n, 3) m of the centre of mass; yaw0 (n,) rad heading at the start; dyaw (n,) rad
     turn to the end (wrapped); length (n,) m; direction (n, 3) unit vector (zero on a zero-length segment);
     duration (n,) s of the reference along it; v0, v1, v_max (n,) m/s: the fly-through reference's speed at
-    the start, at the end and its cruise limit (zeros in stop mode, where segments run rest to rest)."""
+    the start, at the end and its cruise limit (in stop mode, where segments run rest to rest, v0 = v1 = 0 and
+    v_max the leg's cruise speed; 0: the profile's cruise)."""
 
     start: np.ndarray
     end: np.ndarray

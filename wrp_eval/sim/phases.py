@@ -91,17 +91,20 @@ def profile_row(length: float, tau: float, v_max: float, a_max: float,
 
 
 @kernel
-def _profile_rows(length: NDArray[np.float64], tau: NDArray[np.float64], v_max: float, a_max: float,
+def _profile_rows(length: NDArray[np.float64], tau: NDArray[np.float64], v_max: NDArray[np.float64], a_max: float,
                   t_jerk: float) -> NDArray[np.float64]:
     out = np.empty((4, length.size))
     for row in range(length.size):
-        out[0, row], out[1, row], out[2, row], out[3, row] = profile_row(length[row], tau[row], v_max, a_max, t_jerk)
+        out[0, row], out[1, row], out[2, row], out[3, row] = profile_row(length[row], tau[row], v_max[row], a_max,
+                                                                         t_jerk)
     return out
 
 
-def reference_profile(length: ArrayLike, tau: ArrayLike, v_max: float, a_max: float, t_jerk: float) -> tuple[Any, ...]:
+def reference_profile(length: ArrayLike, tau: ArrayLike, v_max: ArrayLike, a_max: float,
+                      t_jerk: float) -> tuple[Any, ...]:
     """Jerk-limited rest-to-rest profile: distance, speed, acceleration (each (n,)) at time tau, and the
-    duration (n,); ``length`` and ``tau`` broadcast, ``v_max``, ``a_max`` and ``t_jerk`` are numbers.
+    duration (n,); ``length``, ``tau`` and the cruise speed ``v_max`` broadcast, ``a_max`` and ``t_jerk`` are
+    numbers.
 
     The trapezoidal speed profile averaged over a moving window of ``t_jerk`` s: the acceleration then
     ramps over t_jerk instead of jumping, i.e. the jerk is limited to a_max / t_jerk, at most twice that
@@ -111,9 +114,10 @@ def reference_profile(length: ArrayLike, tau: ArrayLike, v_max: float, a_max: fl
     vehicle overshot each viewpoint by ~10 cm (README.md). Exact box averages from the closed forms:
     s_j = (S(t) - S(t-T)) / T, v_j = (s(t) - s(t-T)) / T, a_j = (v(t) - v(t-T)) / T.
     """
-    length, tau = np.broadcast_arrays(np.asarray(length, dtype=float), np.asarray(tau, dtype=float))
+    length, tau, v_max = np.broadcast_arrays(np.asarray(length, dtype=float), np.asarray(tau, dtype=float),
+                                             np.asarray(v_max, dtype=float))
     out = _profile_rows(np.ascontiguousarray(length).reshape(-1), np.ascontiguousarray(tau).reshape(-1),
-                        float(v_max), float(a_max), float(t_jerk))
+                        np.ascontiguousarray(v_max).reshape(-1), float(a_max), float(t_jerk))
     return tuple(x.reshape(length.shape)[()] for x in out)     # [()]: a number for numbers
 
 
@@ -143,11 +147,13 @@ class Profile:
         return reference_profile(length, tau, self.cruise_m_s, self.acceleration_m_s2, self.jerk_window_s)
 
     def along(self, seg: Segment, tau: np.ndarray) -> tuple[Any, ...]:
-        """(s, v, a, duration) (n,) on the segments ``seg`` at ``tau`` (n,) s, in this profile's mode."""
+        """(s, v, a, duration) (n,) on the segments ``seg`` at ``tau`` (n,) s, in this profile's mode (rest to rest
+        at each segment's own cruise ``v_max``, or this profile's where it is 0)."""
         if self.through:
             return through_profile(seg.length, tau, seg.v0, seg.v1, seg.v_max, self.acceleration_m_s2,
                                    self.jerk_window_s)
-        return self.at(seg.length, tau)
+        return reference_profile(seg.length, tau, np.where(seg.v_max > 0.0, seg.v_max, self.cruise_m_s),
+                                 self.acceleration_m_s2, self.jerk_window_s)
 
 
 def plan_segments(start: np.ndarray, end: np.ndarray, yaw0: np.ndarray, yaw1: np.ndarray,
@@ -196,8 +202,9 @@ def _reference_rows(transit: NDArray[np.bool_], phase_time: NDArray[np.float64],
     for row in range(n):
         if through:
             s, v, a, _ = through_row(length[row], phase_time[row], v0[row], v1[row], v_max[row], a_max, t_jerk)
-        else:
-            s, v, a, _ = profile_row(length[row], phase_time[row], cruise_m_s, a_max, t_jerk)
+        else:       # the leg's own cruise (0: the profile's)
+            s, v, a, _ = profile_row(length[row], phase_time[row], v_max[row] if v_max[row] > 0.0 else cruise_m_s,
+                                     a_max, t_jerk)
         d2 = 0.0
         for d in range(3):
             ref_pos[row, d] = start[row, d] + direction[row, d] * s if transit[row] else end[row, d]
@@ -345,6 +352,8 @@ def resume(state: FlightState, targets: FlightTargets, rows: np.ndarray, positio
             raise ValueError("fly-through targets without their speeds (FlightTargets.flown_through)")
         speeds = dict(v0=np.zeros(rows.size), v1=targets.vertex_speed[rows, k],
                       v_max=targets.leg_speed[rows, np.maximum(k - 1, 0)])
+    elif targets.leg_cruise is not None and targets.leg_cruise.size:
+        speeds = dict(v_max=targets.leg_cruise[np.maximum(k - 1, 0)])
     state.segment.assign(rows, plan_segments(position, targets.body[rows, k], yaw, targets.yaw[rows, k], profile,
                                              **speeds))
     state.phase[rows] = TRANSIT
@@ -522,6 +531,8 @@ def advance(state: FlightState, targets: FlightTargets, rows: np.ndarray, profil
             raise ValueError("fly-through targets without their speeds (FlightTargets.flown_through)")
         speeds = dict(v0=targets.vertex_speed[nxt, k1 - 1], v1=targets.vertex_speed[nxt, k1],
                       v_max=targets.leg_speed[nxt, k1 - 1])
+    elif targets.leg_cruise is not None:
+        speeds = dict(v_max=targets.leg_cruise[k1 - 1])
     state.segment.assign(nxt, plan_segments(state.segment.end[nxt], targets.body[nxt, k1],
                                             targets.yaw[nxt, k1 - 1], targets.yaw[nxt, k1], profile, **speeds))
     state.index[nxt] = k1
