@@ -10,7 +10,7 @@ from tests.surrogate import helpers
 from wrp_eval.config import ExperimentConfig
 from wrp_eval.errors import InputError
 from wrp_eval.planning.path import FlightPath
-from wrp_eval.wrp.capture_lever import blurred_views, capture_lever_paths, held_out_blur
+from wrp_eval.wrp.capture_lever import blurred_views, capture_lever_paths, held_out_blur, legs_at, slow_leg_paths
 
 
 def test_a_view_stops_when_its_95th_percentile_blur_exceeds_the_limit():
@@ -53,12 +53,24 @@ def test_placebos_stop_at_as_many_random_views_and_are_seeded():
     assert [p.digest() for p in again.values()] == [p.digest() for p in placebos.values()]
 
 
+def test_the_slow_legs_lever_slows_the_legs_at_the_views_and_its_placebos_as_many():
+    path = helpers.make_path(10)
+    views = np.zeros(10, dtype=bool)
+    views[[0, 4, 5]] = True
+    legs = legs_at(views)
+    np.testing.assert_array_equal(np.flatnonzero(legs), [0, 3, 4, 5])
+    lever, placebos = slow_leg_paths(path, legs, 2.0, 3, np.random.default_rng(1))
+    np.testing.assert_array_equal(lever.leg_speeds(), np.where(legs, 2.0, path.speed_m_s))
+    assert all((p.leg_speeds() == 2.0).sum() == 4 for p in placebos.values())
+    assert list(placebos) == [f"placebo-slow-legs-{k:02d}" for k in range(3)]
+
+
 def _config(mode: str) -> ExperimentConfig:
     return ExperimentConfig.model_validate({
         "run": {"seed": 2}, "sim": {"capture": {"mode": mode}},
         "campaign": {"backend": {"workers": 0}, "batch_size": 4},
         "wrp": {"evaluate": {"n_trials": 6, "bootstrap": 200, "placebos": 2, "forecast_trials": 0, "kinds": [],
-                             "capture_stops": True}}})
+                             "capture_stops": True, "slow_legs": True}}})
 
 
 def test_the_capture_lever_is_evaluated_beside_the_initial_path_without_a_surrogate(tmp_path):
@@ -72,7 +84,7 @@ def test_the_capture_lever_is_evaluated_beside_the_initial_path_without_a_surrog
     result = evaluate_job(ExperimentContext(_config("fly-through"), tmp_path), tmp_path / "ev",
                           campaign=str(tmp_path / "campaign"), e_original=1.45, evaluator=ANALYTIC_EVALUATOR)
     doc = json.loads((tmp_path / "ev" / "evaluate.json").read_text())
-    assert [p.path for p in result.paths] == ["initial", "stops"] and doc["wrp"] == {}
+    assert [p.path for p in result.paths] == ["initial", "stops", "slow-legs"] and doc["wrp"] == {}
     stops = FlightPath.load(tmp_path / "ev" / "wrp-stops" / "path.json")
     np.testing.assert_array_equal(stops.stops("fly-through"), [False, True, False, True, False])
     flown = FlightPath.load(tmp_path / "ev" / "campaign-stops" / "path.json")
@@ -80,6 +92,9 @@ def test_the_capture_lever_is_evaluated_beside_the_initial_path_without_a_surrog
     assert doc["robustness"]["stops"]["placebos_flown"] == 2
     placebo = FlightPath.load(tmp_path / "ev" / "campaign-placebo-stops-01" / "path.json")
     assert placebo.stops("fly-through").sum() == 2
+    slow = FlightPath.load(tmp_path / "ev" / "campaign-slow-legs" / "path.json")
+    np.testing.assert_array_equal(slow.leg_speeds(), [2.5, 2.5, 2.5, 2.5])     # every leg touches view 1 or 3
+    assert doc["robustness"]["slow-legs"]["placebos_flown"] == 2
     with pytest.raises(InputError, match="fly-through"):
         evaluate_job(ExperimentContext(_config("stop"), tmp_path), tmp_path / "ev2",
                      campaign=str(tmp_path / "campaign"), e_original=1.45, evaluator=ANALYTIC_EVALUATOR)

@@ -1,4 +1,4 @@
-"""Per-view capture mode as a lever (issue 30): a fly-through mission that stops to shoot where its photos blur.
+"""The capture levers (issue 30): per-view capture mode and speed per leg, where a fly-through mission's photos blur.
 
 Fly-through shoots on the move: the photo of a view taken at a corner or during a heading change blurs (the
 blur of the oracle, :mod:`wrp_eval.sim.blur`) and is taken at a heading the mission did not command. Stopping
@@ -17,6 +17,12 @@ flights that judge them. A view never taken in those flights is not a stop.
 
 Placebo: as many stops at views chosen at random (seeded from the campaign seed), flown under the same winds;
 the verdict is the evaluation's (the gain's CI above 0 and above the placebos' 95th percentile).
+
+Speed per leg (``wrp.evaluate.slow_legs``): the same views, fly-through kept, but the legs arriving at and
+leaving each of them flown at ``slow_leg_speed_m_s`` (:attr:`wrp_eval.planning.path.FlightPath.leg_speed_m_s`):
+the translation blur scales with the speed at the shutter (:mod:`wrp_eval.sim.blur`), and a slower corner turns
+the velocity in a smaller step (less tilt and heading swing at the shutter). Its placebos slow as many legs chosen
+at random.
 """
 
 from __future__ import annotations
@@ -57,6 +63,34 @@ def held_out_blur(campaign_dir: str | Path, first_trial: int) -> np.ndarray:
     if not np.isfinite(blur).any():
         raise InputError(campaign_dir, "the campaign records no blur per view (wrp.evaluate.capture_stops needs it)")
     return blur
+
+
+def legs_at(views: np.ndarray) -> np.ndarray:
+    """(n - 1,) bool: the legs arriving at or leaving the ``views`` (n,) bool."""
+    views = np.asarray(views, dtype=bool)
+    legs: np.ndarray = views[1:] | views[:-1]
+    return legs
+
+
+def slow_leg_paths(initial: FlightPath, legs: np.ndarray, speed_m_s: float, placebos: int,
+                   rng: np.random.Generator) -> tuple[FlightPath, dict[str, FlightPath]]:
+    """The initial path flying the ``legs`` (n - 1,) bool at ``speed_m_s`` (the others at their own speed), and
+    ``placebos`` paths slowing as many legs chosen at random by ``rng``, named ``placebo-slow-legs-NN``."""
+    own = initial.leg_speeds()
+
+    def slowed(mask: np.ndarray, placebo_of: str | None = None) -> FlightPath:
+        path = initial.with_leg_speeds(np.where(mask, np.minimum(own, speed_m_s), own))
+        extra = {"slow_legs": int(mask.sum()), "slow_leg_speed_m_s": speed_m_s} if placebo_of is None \
+            else {"placebo_of": placebo_of}
+        return replace(path, metadata={**initial.metadata, **extra})
+
+    n, count = len(own), int(np.count_nonzero(legs))
+    named = {}
+    for k in range(placebos):
+        mask = np.zeros(n, dtype=bool)
+        mask[rng.choice(n, size=count, replace=False)] = True
+        named[f"placebo-slow-legs-{k:02d}"] = slowed(mask, "slow-legs")
+    return slowed(np.asarray(legs, dtype=bool)), named
 
 
 def capture_lever_paths(initial: FlightPath, stops: np.ndarray, placebos: int,

@@ -47,6 +47,11 @@ class EvaluateSection(StrictModel):
                                          "of a view's blur over the campaign's flights exceeds this, px (1 px: "
                                          "the image-side motion during the exposure should not exceed one pixel, "
                                          "Phase One knowledge base KA-01341)")
+    slow_legs: bool = Field(False, description="also fly the initial path with the legs arriving at and leaving "
+                            "the same blurred views (capture_blur_limit_px) flown at slow_leg_speed_m_s, and its "
+                            "placebos: as many legs slowed at random (wrp/capture_lever.py)")
+    slow_leg_speed_m_s: float = Field(2.5, gt=0.0, description="slow_legs: the slowed legs' cruise speed, m/s (half "
+                                      "the planner's 5 m/s: half the translation blur)")
     out_dir: str | None = Field(None, description="none: logs/<run.name>/evaluate")
 
 

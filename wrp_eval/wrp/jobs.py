@@ -35,7 +35,13 @@ from wrp_eval.sim.capture_mode import FLY_THROUGH
 from wrp_eval.sim.onboard import view_depths
 from wrp_eval.surrogate.data import TrialData, load_campaign_trials
 from wrp_eval.surrogate.model import Surrogate
-from wrp_eval.wrp.capture_lever import blurred_views, capture_lever_paths, held_out_blur
+from wrp_eval.wrp.capture_lever import (
+    blurred_views,
+    capture_lever_paths,
+    held_out_blur,
+    legs_at,
+    slow_leg_paths,
+)
 from wrp_eval.wrp.config import WrpSection
 from wrp_eval.wrp.confirm import CONFIRM_ROUNDS, confirm_moves
 from wrp_eval.wrp.direction import direction_placebos
@@ -337,8 +343,8 @@ def evaluate_job(ctx: ExperimentContext, out: Path | None = None, *, n_trials: i
                               "magnitudes in random directions with its yaw offsets (wrp/placebo.py); robust: its "
                               "levers at as many viewpoints chosen at random (wrp/robust.py); reversed: the initial "
                               "tour flown again in the same weather with its flights' own errors drawn again "
-                              "(wrp/direction.py); stops: as many stop-and-shoot views chosen at random "
-                              "(wrp/capture_lever.py)")
+                              "(wrp/direction.py); stops / slow-legs: as many stop-and-shoot views / slowed legs "
+                              "chosen at random (wrp/capture_lever.py)")
     verdict = None
     if forecast and ev.forecast_trials > 0:
         chosen = result.recommended_path
@@ -381,28 +387,37 @@ def _placebos(ctx: ExperimentContext, out: Path, inputs: WrpInputs, paths: dict[
         evaluated_wrp_dir(out, "reversed").mkdir(parents=True, exist_ok=True)
         paths["reversed"].save(evaluated_wrp_dir(out, "reversed") / "path.json")      # where a chosen WRP is read
         placebo_paths["reversed"] = direction_placebos(inputs.path, ev.placebos)
-    if ev.capture_stops:
-        paths["stops"], placebo_paths["stops"] = _capture_stops(ctx, out, inputs)
+    if ev.capture_stops or ev.slow_legs:
+        for name, (path, placebos) in _capture_levers(ctx, out, inputs).items():
+            paths[name], placebo_paths[name] = path, placebos
     return placebo_paths, infeasible, unmoved
 
 
-def _capture_stops(ctx: ExperimentContext, out: Path, inputs: WrpInputs) -> tuple[FlightPath, dict[str, FlightPath]]:
-    """The initial path stopping where the campaign's held-out flights blur, and its placebos
-    (wrp/capture_lever.py), seeded from the campaign seed; the path saved where a chosen WRP is read."""
+def _capture_levers(ctx: ExperimentContext, out: Path, inputs: WrpInputs
+                    ) -> dict[str, tuple[FlightPath, dict[str, FlightPath]]]:
+    """The capture levers of ``wrp.evaluate`` (wrp/capture_lever.py) at the views where the campaign's held-out
+    flights blur: "stops" (stop-and-shoot there) and / or "slow-legs" (their legs slowed), each with its placebos
+    seeded from the campaign seed; each path saved where a chosen WRP is read."""
     ev = ctx.config.wrp.evaluate
     if ctx.config.sim.capture.mode != FLY_THROUGH:
-        raise InputError("wrp.evaluate.capture_stops", "needs sim.capture.mode fly-through (a stop mission stops "
-                                                       "at every view already)")
+        raise InputError("wrp.evaluate.capture_stops / slow_legs", "the capture levers need sim.capture.mode fly-through (a stop "
+                                                       "mission stops at every view already, its photos do not blur)")
     blur = held_out_blur(inputs.campaign_dir, ev.n_trials)
-    stops = blurred_views(blur, ev.capture_blur_limit_px)
-    rng = np.random.default_rng(np.random.SeedSequence(ctx.campaign_seed, spawn_key=(11, len(WRP_KINDS) + 1)))
-    path, placebos = capture_lever_paths(inputs.path, stops, ev.placebos, rng)
-    folder = evaluated_wrp_dir(out, "stops")
-    folder.mkdir(parents=True, exist_ok=True)
-    path.save(folder / "path.json")
-    progress_log.info(f"capture stops: {int(stops.sum())} of {len(stops)} views stop-and-shoot (95th percentile "
-                      f"blur over {len(blur)} held-out campaign flights above {ev.capture_blur_limit_px:g} px)")
-    return path, placebos
+    views = blurred_views(blur, ev.capture_blur_limit_px)
+    progress_log.info(f"capture levers: {int(views.sum())} of {len(views)} views blur (95th percentile over "
+                      f"{len(blur)} held-out campaign flights above {ev.capture_blur_limit_px:g} px)")
+    levers = {}
+    if ev.capture_stops:
+        rng = np.random.default_rng(np.random.SeedSequence(ctx.campaign_seed, spawn_key=(11, len(WRP_KINDS) + 1)))
+        levers["stops"] = capture_lever_paths(inputs.path, views, ev.placebos, rng)
+    if ev.slow_legs:
+        rng = np.random.default_rng(np.random.SeedSequence(ctx.campaign_seed, spawn_key=(11, len(WRP_KINDS) + 2)))
+        levers["slow-legs"] = slow_leg_paths(inputs.path, legs_at(views), ev.slow_leg_speed_m_s, ev.placebos, rng)
+    for name, (path, _) in levers.items():
+        folder = evaluated_wrp_dir(out, name)
+        folder.mkdir(parents=True, exist_ok=True)
+        path.save(folder / "path.json")
+    return levers
 
 
 def _robust_and_placebos(ctx: ExperimentContext, out: Path, inputs: WrpInputs
