@@ -310,7 +310,10 @@ def surrogate_section(sur: SurrogateFit) -> list[str]:
 
 
 def wrp_section(wrp: dict[str, Table3Row]) -> list[str]:
-    """The ISWRP and SWRP rows of the paper's Table 3 (ours, the paper's at threshold 0.30 beside)."""
+    """The ISWRP and SWRP rows of the paper's Table 3 (ours, the paper's at threshold 0.30 beside); none when the
+    evaluation optimised neither (``wrp.evaluate.kinds: []``)."""
+    if not wrp:
+        return []
     lines = ["## ISWRP and SWRP (paper Table 3 columns; paper at threshold 0.30)", "",
              "| path | threshold (m) | offset rate (%) | position offset (m) | rotation offset (deg) | time (s) | "
              "oracle error, wind-free (m) | paper: rate / pos / rot / time / error |",

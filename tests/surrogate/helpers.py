@@ -16,12 +16,13 @@ def make_path(n_views: int):
 
 
 def make_campaign(folder, n_trials: int, n_views: int, seed: int = 0, nan_trials=(), failed_trials=(),
-                  registered=None, blur_px=None):
+                  registered=None, blur_px=None, trial_config=None):
     """A campaign folder written through the campaign stage's own store: commanded offsets in a box, a
     wind-induced deviation of known spread (0.3 m per axis, normal), error from the known function; the
     default trial config (its ship gives the per-view coverage). ``registered`` {trial: (n_views,) 1 / 0 / NaN}:
     the view_registered column of those trials (the others store none); ``blur_px`` (n_trials, n_views) px: the
-    blur column of every trial (None: none stored)."""
+    blur column of every trial (None: none stored); ``trial_config``: the stored trial config's settings (None: the
+    default)."""
     from wrp_eval.campaign.config import TrialConfig
     from wrp_eval.campaign.store import TrialStore
     from wrp_eval.planning.path import digest_of_document as path_digest
@@ -48,7 +49,8 @@ def make_campaign(folder, n_trials: int, n_views: int, seed: int = 0, nan_trials
                         **({"blur_px": [float(b) for b in blur_px[k]]} if blur_px is not None else {})})
     with TrialStore(folder) as store:
         store.write_meta({"path_digest": digest, "n_views": n_views, "n_trials": n_trials,
-                          "config": TrialConfig().model_dump(mode="json")}, doc)   # the default (stylized) ship
+                          "config": TrialConfig.model_validate(trial_config or {}).model_dump(mode="json")},
+                         doc)   # the default (stylized) ship
         store.append(records[: n_trials // 2])
         store.append(records[n_trials // 2:])
     return path, digest, commanded, flown, error

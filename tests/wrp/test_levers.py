@@ -64,6 +64,25 @@ def test_the_redundant_view_sits_halfway_along_the_shorter_leg():
         assert out.face_id[at] == path.face_id[v]
 
 
+def test_a_redundant_view_keeps_the_paths_per_view_modes_and_leg_speeds():
+    path = ring_path()
+    stop = np.zeros(len(path), dtype=bool)
+    stop[4] = True
+    legs = np.linspace(2.0, 5.0, len(path) - 1)
+    path = path.with_stops(stop, "fly-through").with_leg_speeds(legs)
+    views = np.array([4, 8])
+    partner = leg_partners(path.positions, views)
+    out = path_with_lever(path, "redundant", views, 0.1, np.full(len(path), 30.0))
+    assert len(out.capture) == len(out) and out.leg_speeds().shape == (len(out) - 1,)
+    for v, w in zip(views, partner, strict=True):
+        at = int(np.flatnonzero(np.all(np.isclose(out.positions, (path.positions[v] + path.positions[w]) / 2),
+                                       axis=1))[0])
+        # between a stop and another view it stops too; both halves of the split leg at that leg's speed
+        assert out.capture[at] == ("stop" if stop[v] or stop[w] else "fly-through")
+        assert out.leg_speeds()[at - 1] == out.leg_speeds()[at] == legs[min(v, w)]
+    assert out.stops("fly-through").sum() == 2
+
+
 def test_standoff_moves_only_the_chosen_views_back_along_their_axes():
     path = ring_path()
     depth = np.linspace(20.0, 40.0, len(path))

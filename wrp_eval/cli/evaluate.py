@@ -10,7 +10,10 @@ CIs; paired differences against the initial path; each WRP's robustness gain aga
 recommended path; the recommended path in the forecast wind: P(meets spec) with its CI and GO / NO-GO) and
 <out>/boxplot.png. Re-running resumes the campaigns. ``wrp.evaluate.robust: true`` adds the robust kind and its
 placebos (wrp/robust.py); ``wrp.evaluate.direction: true`` the initial tour flown the other way round, its placebos
-the initial tour with its flights' own errors drawn again (wrp/direction.py).
+the initial tour with its flights' own errors drawn again (wrp/direction.py); ``wrp.evaluate.capture_stops`` /
+``slow_legs: true`` (fly-through missions) the initial path stopping to shoot / slowing its legs where its held-out
+campaign flights' photos blur, each with as many stops / slowed legs at random as placebos (wrp/capture_lever.py);
+``wrp.evaluate.kinds: []`` leaves ISWRP and SWRP out (no surrogate needed).
 
     wrp-eval evaluate CONFIG --colmap-check [--winds N] [--out DIR]
 

@@ -36,6 +36,10 @@ def _export(args: argparse.Namespace) -> int:
     if path.capture is not None:
         stops = int(path.stops(style.mode).sum())
         print(f"per-view capture modes from the path: {stops} stop, {len(path) - stops} fly-through")
+    if path.leg_speed_m_s is not None:
+        legs = path.leg_speeds()
+        print(f"speeds per leg from the path: {int((legs != style.speed_m_s).sum())} of {legs.size} legs at their "
+              f"own speed ({legs.min():g} - {legs.max():g} m/s)")
     for file, mission in written:
         print(f"sortie {mission.sortie}: {len(mission)} waypoints -> {file}")
     return 0

@@ -13,7 +13,9 @@ file version 1, mission version 2, geoFence version 2, polygon version 1):
   to reach at the waypoint (PX4/ArduPilot turn towards it at their own yaw rate, not over the leg);
   MAV_CMD_DO_GIMBAL_MANAGER_PITCHYAW (1000): pitch (deg, + up), yaw 0 (relative to the vehicle, flags 0),
   rates NaN (ignored);  MAV_CMD_IMAGE_START_CAPTURE (2000): all cameras, interval 0, 1 image, sequence k;
-  and MAV_CMD_NAV_RETURN_TO_LAUNCH (20) at the end.
+  a MAV_CMD_DO_CHANGE_SPEED where the leg leaving the waypoint has another speed (the path's speed per leg;
+  PX4 runs it once that waypoint is reached); and MAV_CMD_NAV_RETURN_TO_LAUNCH (20) at the end. A path with
+  per-view capture modes sets param1/param2 waypoint by waypoint.
 Navigation items use MAV_FRAME_GLOBAL_RELATIVE_ALT (3, metres above home); the others MAV_FRAME_MISSION (2).
 In the WPL file line 0 is the home position (MAV_FRAME_GLOBAL, metres above mean sea level), as
 Mission Planner and pymavlink expect. NaN parameters are ``null`` in the .plan (QGC's own convention) and

@@ -45,11 +45,12 @@ class FlightPath:
     fly`` and the envelope, which seed their flights themselves, do not); it is not part of a mission file.
     capture (n,) str or None: each view's capture mode, ``stop`` or ``fly-through``
     (:mod:`wrp_eval.sim.capture_mode`), overriding the mission's ``sim.capture.mode`` (a fly-through mission
-    that stops where a view needs a sharp, level photo; the robust kind's capture lever); None: every view as
-    the mission's mode says. Written per viewpoint in path.json and in every exported mission.
-    leg_speed_m_s (n - 1,) m/s or None: the cruise speed of each leg (leg i from view i to view i + 1; the robust
-    kind's speed lever); None: ``speed_m_s`` on every leg. Written per viewpoint (the leg leaving it) in path.json
-    and in every exported mission.
+    that stops where a view needs a sharp, level photo; the evaluation's capture lever,
+    ``wrp.evaluate.capture_stops``); None: every view as the mission's mode says. Written per viewpoint in
+    path.json and in every exported mission.
+    leg_speed_m_s (n - 1,) m/s or None: the cruise speed of each leg (leg i from view i to view i + 1; the
+    evaluation's speed lever, ``wrp.evaluate.slow_legs``); None: ``speed_m_s`` on every leg. Written per
+    viewpoint (the leg leaving it) in path.json and in every exported mission.
     """
 
     positions: np.ndarray
@@ -106,6 +107,8 @@ class FlightPath:
     @property
     def flight_time_s(self) -> float:
         """Cruise time at the legs' speeds plus one dwell per photo."""
+        if self.leg_speed_m_s is None:      # one speed: the same float as it always was
+            return self.length_m / self.speed_m_s + self.dwell_s * len(self)
         return float((self.segment_lengths_m / self.leg_speeds()).sum()) + self.dwell_s * len(self)
 
     def stops(self, mission_mode: str) -> np.ndarray:

@@ -29,9 +29,12 @@ Per-view modes (:attr:`wrp_eval.planning.path.FlightPath.capture`, overriding ``
 flown through is flown on the fly-through reference, which comes to rest at the views marked ``stop`` (speed 0 there,
 :func:`vertex_speeds`), settles and hovers the dwell before the photo, exactly as a stop-mode view; the views
 marked ``fly-through`` are shot passing. What a DJI waypoint mission does per waypoint with its turn mode
-(WPML ``waypointTurnMode``: ``toPointAndStopWithDiscontinuityCurvature`` stops, ``toPointAndPassWithContinuity
-Curvature`` passes; DJI WPML "common element" reference) and PX4 with a hold time per waypoint
-(MAV_CMD_NAV_WAYPOINT param1). Every view marked ``stop`` is the stop mission itself, to the bit.
+(WPML ``waypointTurnMode``: ``toPointAndStopWithDiscontinuityCurvature`` stops,
+``toPointAndPassWithContinuityCurvature`` passes; DJI WPML "common element" reference) and PX4 with a hold time
+per waypoint (MAV_CMD_NAV_WAYPOINT param1). A path whose every view is marked ``stop`` is flown as the stop mission,
+to the bit; in a mixed mission a stop view is approached on the fly-through reference (from its neighbour's
+passing speed, the position integral growing in transit as in fly-through), so it is not the stop mission's
+approach.
 """
 
 from __future__ import annotations

@@ -15,14 +15,16 @@ The blur is read from campaign trials the evaluation does not fly (trial ids fro
 evaluation flies trials 0 .. n_trials - 1 under the campaign's seed), so the views are never chosen on the
 flights that judge them. A view never taken in those flights is not a stop.
 
-Placebo: as many stops at views chosen at random (seeded from the campaign seed), flown under the same winds;
-the verdict is the evaluation's (the gain's CI above 0 and above the placebos' 95th percentile).
+Placebo: as many stops at views chosen at random (seeded from the campaign seed; any view of the path, the first
+and last included, which fly-through photographs at rest already: a stop there adds only the dwell, so a placebo
+of 64 stops on a 141-view path wastes ~0.9 of them on average, a slightly weaker control), flown under the same
+winds; the verdict is the evaluation's (the gain's CI above 0 and above the placebos' 95th percentile).
 
 Speed per leg (``wrp.evaluate.slow_legs``): the same views, fly-through kept, but the legs arriving at and
 leaving each of them flown at ``slow_leg_speed_m_s`` (:attr:`wrp_eval.planning.path.FlightPath.leg_speed_m_s`):
 the translation blur scales with the speed at the shutter (:mod:`wrp_eval.sim.blur`), and a slower corner turns
-the velocity in a smaller step (less tilt and heading swing at the shutter). Its placebos slow as many legs chosen
-at random.
+the velocity in a smaller step (less tilt and heading swing at the shutter). Its placebos slow the legs at as many
+views chosen at random (the same structure: a view's arriving and leaving legs).
 """
 
 from __future__ import annotations
@@ -32,6 +34,7 @@ from pathlib import Path
 
 import numpy as np
 
+from wrp_eval.campaign.store import TrialStore
 from wrp_eval.errors import InputError
 from wrp_eval.planning.path import FlightPath
 from wrp_eval.sim.capture_mode import FLY_THROUGH
@@ -51,10 +54,20 @@ def blurred_views(blur_px: np.ndarray, limit_px: float, quantile: float = BLUR_Q
     return high > limit_px
 
 
-def held_out_blur(campaign_dir: str | Path, first_trial: int) -> np.ndarray:
-    """(k, n) px: the blur of every view in the campaign's trials with ids >= ``first_trial`` (the trials an
-    evaluation of ``first_trial`` flights does not fly); InputError when there are none."""
+def held_out_blur(campaign_dir: str | Path, first_trial: int, path: FlightPath) -> np.ndarray:
+    """(k, n) px: the blur of every view of ``path`` in the campaign's trials with ids >= ``first_trial`` (the
+    trials an evaluation of ``first_trial`` flights does not fly); InputError when there are none, when the
+    campaign flew another path or in stop mode."""
     trials = load_campaign_trials(campaign_dir, views=False)
+    flown = FlightPath.load(Path(campaign_dir) / "path.json")
+    if len(flown) != len(path) or not np.allclose(flown.positions, path.positions, atol=1e-6):
+        raise InputError(campaign_dir, f"its trials flew another path ({len(flown)} views) than the one evaluated "
+                                       f"({len(path)} views, wrp.path)")
+    mode = (((TrialStore(Path(campaign_dir)).read_meta() or {}).get("config") or {}).get("sim") or {}).get(
+        "capture", {}).get("mode", "stop")
+    if mode != FLY_THROUGH:
+        raise InputError(campaign_dir, f"its flights were flown in {mode} mode: their blur says nothing of a "
+                                       "fly-through mission's (the capture levers need a fly-through campaign)")
     if trials.trial_id is None or not (held_out := trials.trial_id >= first_trial).any():
         raise InputError(campaign_dir, f"no trials beyond the evaluation's {first_trial} to choose the stops on "
                                        "(wrp.evaluate.capture_stops): fly a larger campaign")
@@ -72,25 +85,31 @@ def legs_at(views: np.ndarray) -> np.ndarray:
     return legs
 
 
-def slow_leg_paths(initial: FlightPath, legs: np.ndarray, speed_m_s: float, placebos: int,
+def slow_leg_paths(initial: FlightPath, views: np.ndarray, speed_m_s: float, placebos: int,
                    rng: np.random.Generator) -> tuple[FlightPath, dict[str, FlightPath]]:
-    """The initial path flying the ``legs`` (n - 1,) bool at ``speed_m_s`` (the others at their own speed), and
-    ``placebos`` paths slowing as many legs chosen at random by ``rng``, named ``placebo-slow-legs-NN``."""
+    """The initial path flying the legs at the ``views`` (n,) bool (:func:`legs_at`) at ``speed_m_s`` (the others
+    at their own speed), and ``placebos`` paths slowing the legs at as many views chosen at random by ``rng`` (the
+    same structure: each view's arriving and leaving legs), named ``placebo-slow-legs-NN``."""
     own = initial.leg_speeds()
 
-    def slowed(mask: np.ndarray, placebo_of: str | None = None) -> FlightPath:
-        path = initial.with_leg_speeds(np.where(mask, np.minimum(own, speed_m_s), own))
-        extra = {"slow_legs": int(mask.sum()), "slow_leg_speed_m_s": speed_m_s} if placebo_of is None \
+    def slowed(at: np.ndarray, placebo_of: str | None = None) -> FlightPath:
+        legs = legs_at(at)
+        path = initial.with_leg_speeds(np.where(legs, np.minimum(own, speed_m_s), own))
+        extra = {"slow_legs": int(legs.sum()), "slow_leg_speed_m_s": speed_m_s} if placebo_of is None \
             else {"placebo_of": placebo_of}
         return replace(path, metadata={**initial.metadata, **extra})
 
-    n, count = len(own), int(np.count_nonzero(legs))
-    named = {}
-    for k in range(placebos):
-        mask = np.zeros(n, dtype=bool)
-        mask[rng.choice(n, size=count, replace=False)] = True
-        named[f"placebo-slow-legs-{k:02d}"] = slowed(mask, "slow-legs")
-    return slowed(np.asarray(legs, dtype=bool)), named
+    return slowed(np.asarray(views, dtype=bool)), {
+        f"placebo-slow-legs-{k:02d}": slowed(_random_views(len(initial), int(np.count_nonzero(views)), rng),
+                                             "slow-legs")
+        for k in range(placebos)}
+
+
+def _random_views(n: int, count: int, rng: np.random.Generator) -> np.ndarray:
+    """(n,) bool: ``count`` views chosen at random by ``rng``."""
+    mask = np.zeros(n, dtype=bool)
+    mask[rng.choice(n, size=count, replace=False)] = True
+    return mask
 
 
 def capture_lever_paths(initial: FlightPath, stops: np.ndarray, placebos: int,
@@ -102,10 +121,6 @@ def capture_lever_paths(initial: FlightPath, stops: np.ndarray, placebos: int,
         extra = {"capture_stops": int(mask.sum())} if placebo_of is None else {"placebo_of": placebo_of}
         return replace(path, metadata={**initial.metadata, **extra})
 
-    n, count = len(initial), int(np.count_nonzero(stops))
-    named = {}
-    for k in range(placebos):
-        mask = np.zeros(n, dtype=bool)
-        mask[rng.choice(n, size=count, replace=False)] = True
-        named[f"placebo-stops-{k:02d}"] = stopping(mask, "stops")
-    return stopping(np.asarray(stops, dtype=bool)), named
+    count = int(np.count_nonzero(stops))
+    return stopping(np.asarray(stops, dtype=bool)), {
+        f"placebo-stops-{k:02d}": stopping(_random_views(len(initial), count, rng), "stops") for k in range(placebos)}

@@ -67,7 +67,9 @@ def common_winds(evaluate_dir: Path, winds: int, seed: int) -> np.ndarray:
     for name in PATHS:
         folder = evaluated_campaign_dir(evaluate_dir, name)
         if not (folder / "campaign.json").is_file():
-            raise InputError(evaluate_dir, f"has no {folder.name}/: run `wrp-eval evaluate` first")
+            raise InputError(evaluate_dir, f"has no {folder.name}/: run `wrp-eval evaluate` first (the COLMAP check "
+                                           "compares ISWRP and SWRP with the initial path: wrp.evaluate.kinds must "
+                                           "name both)")
         trials = read_trials(name, folder)
         good = set(trials.trial_id[~trials.failed & np.isfinite(trials.error_m)].tolist())
         ok = good if ok is None else ok & good

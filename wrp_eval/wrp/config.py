@@ -5,7 +5,7 @@ from __future__ import annotations
 
 from typing import Literal
 
-from pydantic import Field
+from pydantic import Field, field_validator
 
 from wrp_eval.schema import StrictModel
 
@@ -53,6 +53,13 @@ class EvaluateSection(StrictModel):
     slow_leg_speed_m_s: float = Field(2.5, gt=0.0, description="slow_legs: the slowed legs' cruise speed, m/s (half "
                                       "the planner's 5 m/s: half the translation blur)")
     out_dir: str | None = Field(None, description="none: logs/<run.name>/evaluate")
+
+    @field_validator("kinds")
+    @classmethod
+    def _distinct_kinds(cls, kinds: list[str]) -> list[str]:
+        if len(set(kinds)) != len(kinds):
+            raise ValueError(f"each WRP kind at most once, got {kinds}")
+        return kinds
 
 
 class RobustSection(StrictModel):

@@ -307,9 +307,10 @@ def evaluate_job(ctx: ExperimentContext, out: Path | None = None, *, n_trials: i
                  campaign=None, e_original: float | None = None,
                  evaluator: str | None = None, surrogate: Surrogate | None = None,
                  trials: TrialData | None = None, forecast: bool = True) -> EvaluationResult:
-    """``wrp-eval evaluate``: ISWRP and SWRP optimised from one set of inputs, then the initial path and both
-    WRPs flown as campaigns with the same seed (common random numbers); returns the evaluate.json document
-    (written as its ``to_json_dict``).
+    """``wrp-eval evaluate``: the WRPs of ``wrp.evaluate.kinds`` (ISWRP and SWRP) optimised from one set of
+    inputs, the flown levers of ``wrp.evaluate`` (robust, direction, capture_stops, slow_legs) built, then the
+    initial path and every other path flown as campaigns with the same seed (common random numbers), with the
+    placebos of each that changed anything; returns the evaluate.json document (written as its ``to_json_dict``).
     ``evaluator``: the campaign's trial evaluator ("module:function"; default the MuJoCo flight + oracle);
     ``surrogate`` / ``trials``: already loaded by the caller (the checkpoint and campaign are then not read);
     ``forecast`` False: no forecast flights (``wrp-eval run`` reads the go / no-go off its envelope instead)."""
@@ -319,9 +320,16 @@ def evaluate_job(ctx: ExperimentContext, out: Path | None = None, *, n_trials: i
         raise InputError("wrp.evaluate.thresholds_m", "give two thresholds: [iswrp, swrp]")
     inputs = resolve_inputs(ctx, section, checkpoint, campaign, surrogate=surrogate, trials=trials,
                             need_surrogate=bool(ev.kinds))
-    paths, optimised = _optimise_both(ctx, out, inputs, e_original)
     flown = evaluation_trial(ctx.trial_config, n_trials or ev.n_trials)
+    # before the optimisation: a bad campaign or mode is reported at once
+    capture = _capture_levers(ctx, out, inputs, flown.campaign.n_trials) if ev.capture_stops or ev.slow_legs else {}
+    paths, optimised = _optimise_both(ctx, out, inputs, e_original)
     placebo_paths, infeasible, unmoved = _placebos(ctx, out, inputs, paths, optimised)
+    for name, lever in capture.items():
+        if lever is None:           # it would change nothing: not flown, listed as such
+            unmoved.append(name)
+        else:
+            paths[name], placebo_paths[name] = lever
 
     def fly(name: str, path: FlightPath, trial=flown) -> PathTrials:
         folder = evaluated_campaign_dir(out, name)
@@ -387,36 +395,40 @@ def _placebos(ctx: ExperimentContext, out: Path, inputs: WrpInputs, paths: dict[
         evaluated_wrp_dir(out, "reversed").mkdir(parents=True, exist_ok=True)
         paths["reversed"].save(evaluated_wrp_dir(out, "reversed") / "path.json")      # where a chosen WRP is read
         placebo_paths["reversed"] = direction_placebos(inputs.path, ev.placebos)
-    if ev.capture_stops or ev.slow_legs:
-        for name, (path, placebos) in _capture_levers(ctx, out, inputs).items():
-            paths[name], placebo_paths[name] = path, placebos
     return placebo_paths, infeasible, unmoved
 
 
-def _capture_levers(ctx: ExperimentContext, out: Path, inputs: WrpInputs
-                    ) -> dict[str, tuple[FlightPath, dict[str, FlightPath]]]:
-    """The capture levers of ``wrp.evaluate`` (wrp/capture_lever.py) at the views where the campaign's held-out
-    flights blur: "stops" (stop-and-shoot there) and / or "slow-legs" (their legs slowed), each with its placebos
-    seeded from the campaign seed; each path saved where a chosen WRP is read."""
+def _capture_levers(ctx: ExperimentContext, out: Path, inputs: WrpInputs, n_flown: int
+                    ) -> dict[str, tuple[FlightPath, dict[str, FlightPath]] | None]:
+    """The capture levers of ``wrp.evaluate`` (wrp/capture_lever.py) at the views where the campaign's flights
+    beyond the ``n_flown`` the evaluation flies blur: "stops" (stop-and-shoot there) and / or "slow-legs" (their
+    legs slowed), each with its placebos seeded from the campaign seed and saved where a chosen WRP is read; None
+    for a lever that would change nothing (no view blurs, or no leg is faster than the slow speed)."""
     ev = ctx.config.wrp.evaluate
     if ctx.config.sim.capture.mode != FLY_THROUGH:
-        raise InputError("wrp.evaluate.capture_stops / slow_legs", "the capture levers need sim.capture.mode fly-through (a stop "
-                                                       "mission stops at every view already, its photos do not blur)")
-    blur = held_out_blur(inputs.campaign_dir, ev.n_trials)
+        raise InputError("wrp.evaluate.capture_stops / slow_legs", "the capture levers need sim.capture.mode "
+                                                                  "fly-through (a stop mission stops at every view "
+                                                                  "already, its photos do not blur)")
+    blur = held_out_blur(inputs.campaign_dir, n_flown, inputs.path)
     views = blurred_views(blur, ev.capture_blur_limit_px)
     progress_log.info(f"capture levers: {int(views.sum())} of {len(views)} views blur (95th percentile over "
                       f"{len(blur)} held-out campaign flights above {ev.capture_blur_limit_px:g} px)")
-    levers = {}
+    levers: dict[str, tuple[FlightPath, dict[str, FlightPath]] | None] = {}
     if ev.capture_stops:
         rng = np.random.default_rng(np.random.SeedSequence(ctx.campaign_seed, spawn_key=(11, len(WRP_KINDS) + 1)))
-        levers["stops"] = capture_lever_paths(inputs.path, views, ev.placebos, rng)
+        levers["stops"] = capture_lever_paths(inputs.path, views, ev.placebos, rng) if views.any() else None
     if ev.slow_legs:
         rng = np.random.default_rng(np.random.SeedSequence(ctx.campaign_seed, spawn_key=(11, len(WRP_KINDS) + 2)))
-        levers["slow-legs"] = slow_leg_paths(inputs.path, legs_at(views), ev.slow_leg_speed_m_s, ev.placebos, rng)
-    for name, (path, _) in levers.items():
+        slows = bool((inputs.path.leg_speeds()[legs_at(views)] > ev.slow_leg_speed_m_s).any())
+        levers["slow-legs"] = (slow_leg_paths(inputs.path, views, ev.slow_leg_speed_m_s, ev.placebos, rng)
+                               if slows else None)
+    for name, lever in levers.items():
+        if lever is None:
+            progress_log.info(f"capture lever {name}: it would change nothing; not flown")
+            continue
         folder = evaluated_wrp_dir(out, name)
         folder.mkdir(parents=True, exist_ok=True)
-        path.save(folder / "path.json")
+        lever[0].save(folder / "path.json")
     return levers
 
 

@@ -45,7 +45,7 @@ from typing import Any
 import numpy as np
 
 from wrp_eval.camera import optical_axes
-from wrp_eval.planning.path import KIND_SURFACE, FlightPath
+from wrp_eval.planning.path import CAPTURE_MODES, KIND_SURFACE, FlightPath
 from wrp_eval.sim.captures import CaptureSet
 from wrp_eval.wrp.evaluate import robustness_verdict
 from wrp_eval.wrp.evaluation import RobustnessVerdict
@@ -136,6 +136,14 @@ def path_with_lever(path: FlightPath, lever: str, views: np.ndarray, standoff_fr
     slot = np.maximum(ends, partner)
     old = {**{name: np.asarray(getattr(path, name)) for name in new}, "view_id": ids}
     fields: dict[str, Any] = {name: np.insert(old[name], slot, value, axis=0) for name, value in new.items()}
+    if path.capture is not None:     # a view between a stop and another view stops too
+        modes = np.asarray(path.capture)
+        stop_mode = CAPTURE_MODES[0]
+        added = np.where((modes[ends] == stop_mode) | (modes[partner] == stop_mode), stop_mode, CAPTURE_MODES[1])
+        fields["capture"] = tuple(np.insert(modes, slot, added).tolist())
+    if path.leg_speed_m_s is not None:     # the split leg's two halves at its speed
+        legs = np.asarray(path.leg_speed_m_s, dtype=float)
+        fields["leg_speed_m_s"] = np.insert(legs, slot - 1, legs[slot - 1])
     return replace(path, **fields, metadata={**path.metadata, "lever": lever_note})
 
 
