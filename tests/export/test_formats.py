@@ -218,25 +218,29 @@ def test_a_failure_on_any_sortie_file_replaces_none(tmp_path):
 
 
 # -- the simulated flight is the exported mission (issue 26) -------------------------------------------------
+def _flown_and_read(path, mode, fmt, ship, section, tmp_path):
+    """[(what the reader recovers, the mission written)] of ``path`` exported in ``fmt`` as the simulator flies it
+    under ``mode`` with a dwell of its own (1.5 s, not the path's 2 s) and a corner radius of 3 m."""
+    from wrp_eval.sim.config import SimSection
+
+    sim = SimSection(dwell_s=1.5, capture={"mode": mode, "corner_radius_m": 3.0})
+    particulars, proxy = ship
+    written = export_path(path, particulars, proxy, fmt, tmp_path / f"m{FORMATS[fmt].suffix}", section,
+                          style=FlightStyle.of(path, sim.capture, sim.dwell_s))
+    return [(FORMATS[fmt].read(file), mission) for file, mission in written]
+
+
 @pytest.mark.parametrize("mode", ["stop", "fly-through"])
 @pytest.mark.parametrize("fmt", sorted(FORMATS))
 def test_every_file_is_flown_as_the_simulator_flies(fmt, mode, ship, path, section, tmp_path):
-    from wrp_eval.sim.config import SimSection
-
-    # a dwell of the simulator's own (1.5 s) that differs from the path's (2 s), and a corner radius of 3 m
-    sim = SimSection(dwell_s=1.5, capture={"mode": mode, "corner_radius_m": 3.0})
-    style = FlightStyle.of(path, sim.capture, sim.dwell_s)
-    particulars, proxy = ship
-    written = export_path(path, particulars, proxy, fmt, tmp_path / f"m{FORMATS[fmt].suffix}", section, style=style)
-    for file, mission in written:
-        back = FORMATS[fmt].read(file)
+    for back, mission in _flown_and_read(path, mode, fmt, ship, section, tmp_path):
         assert back.turn_mode == mode
         hold = 1.5 if mode == "stop" else 0.0          # the simulator dwells sim.dwell_s only when it stops
         np.testing.assert_allclose(back.hold_s, np.full(len(mission), hold))
         assert back.speed_m_s == pytest.approx(path.speed_m_s)
         assert back.photos == len(mission)
         if fmt == "dji-wpml":                           # the one format that names its heading mode
-            assert back.heading_mode == sim.capture.heading_mode == "smoothTransition"
+            assert back.heading_mode == "smoothTransition"
         else:                                           # MAVLink and the Litchi CSV carry none (README)
             assert back.heading_mode is None
         if fmt != "dji-wpml":                           # DJI's pass-through turn has no radius to write
@@ -246,17 +250,10 @@ def test_every_file_is_flown_as_the_simulator_flies(fmt, mode, ship, path, secti
 @pytest.mark.parametrize("mission_mode", ["stop", "fly-through"])
 @pytest.mark.parametrize("fmt", sorted(FORMATS))
 def test_per_view_capture_modes_are_written_per_waypoint(fmt, mission_mode, ship, path, section, tmp_path):
-    from wrp_eval.sim.config import SimSection
-
     stop = np.zeros(len(path), dtype=bool)
     stop[1::3] = True
     mixed = path.with_stops(stop, mission_mode)
-    sim = SimSection(dwell_s=1.5, capture={"mode": mission_mode, "corner_radius_m": 3.0})
-    style = FlightStyle.of(mixed, sim.capture, sim.dwell_s)
-    particulars, proxy = ship
-    written = export_path(mixed, particulars, proxy, fmt, tmp_path / f"m{FORMATS[fmt].suffix}", section, style=style)
-    for file, mission in written:
-        back = FORMATS[fmt].read(file)
+    for back, mission in _flown_and_read(mixed, mission_mode, fmt, ship, section, tmp_path):
         want = stop[mission.index]
         np.testing.assert_array_equal(back.stop, want)
         assert back.turn_mode == ("mixed" if 0 < want.sum() < len(want) else "stop" if want.all() else "fly-through")
