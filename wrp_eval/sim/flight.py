@@ -100,6 +100,15 @@ from wrp_eval.wind.base import WindModel
 _Shoot = Callable[[np.ndarray, np.ndarray, np.ndarray], Shot | None]
 
 
+def _profile_and_dwell(path: FlightPath, sec: SimSection) -> tuple[Profile, NDArray[np.float64]]:
+    """The reference profile ``path`` is flown on under ``sec`` (fly-through when any of its views is) and the hover
+    before each photo (n_views,) s: the dwell at its stop views, 0 elsewhere (in fly-through the first and last
+    views are photographed on arrival)."""
+    stops = path.stops(sec.capture.mode)
+    dwell: NDArray[np.float64] = np.where(stops, path.dwell_s if sec.dwell_s is None else sec.dwell_s, 0.0)
+    return Profile.of(path.speed_m_s, sec, through=not stops.all()), dwell
+
+
 def _mocap_id(model: mujoco.MjModel, name: str) -> int | None:
     """The mocap index of body ``name``, or None (no such body, or not a mocap body)."""
     try:
@@ -411,11 +420,7 @@ class FlightSimulator:
         phases.py) on the flight state, then the commands, the record and the rollout."""
         par = self.params
         dt = sec.timestep_s * sec.chunk_steps
-        stops = path.stops(sec.capture.mode)
-        profile = Profile.of(path.speed_m_s, sec, through=not stops.all())
-        # the hover before each photo taken at rest: the stop views' (in fly-through the first and last views are
-        # photographed on arrival)
-        dwell = np.where(stops, path.dwell_s if sec.dwell_s is None else sec.dwell_s, 0.0)
+        profile, dwell = _profile_and_dwell(path, sec)
         targets = self._targets(path, batch, view_offsets, ship, profile, sec)
         onboard, run = self._launch(path, targets, ship, flight_rngs, dt, start_time_s, sec)
         state = FlightState.start(targets)

@@ -324,12 +324,7 @@ def evaluate_job(ctx: ExperimentContext, out: Path | None = None, *, n_trials: i
     # before the optimisation: a bad campaign or mode is reported at once
     capture = _capture_levers(ctx, out, inputs, flown.campaign.n_trials) if ev.capture_stops or ev.slow_legs else {}
     paths, optimised = _optimise_both(ctx, out, inputs, e_original)
-    placebo_paths, infeasible, unmoved = _placebos(ctx, out, inputs, paths, optimised)
-    for name, lever in capture.items():
-        if lever is None:           # it would change nothing: not flown, listed as such
-            unmoved.append(name)
-        else:
-            paths[name], placebo_paths[name] = lever
+    placebo_paths, infeasible, unmoved = _placebos(ctx, out, inputs, paths, optimised, capture)
 
     def fly(name: str, path: FlightPath, trial=flown) -> PathTrials:
         folder = evaluated_campaign_dir(out, name)
@@ -346,13 +341,7 @@ def evaluate_job(ctx: ExperimentContext, out: Path | None = None, *, n_trials: i
             ev.spec_completeness)
     result = summarise(flown_trials, ctx.campaign_seed, ev.bootstrap, ev.confidence, spec, windfree, placebo_trials,
                        unmoved)
-    placebos = PlaceboControl(ev.placebos, tuple(unmoved), infeasible,
-                              "as many viewpoints as the WRP moved, chosen at random, moved by the WRP's move "
-                              "magnitudes in random directions with its yaw offsets (wrp/placebo.py); robust: its "
-                              "levers at as many viewpoints chosen at random (wrp/robust.py); reversed: the initial "
-                              "tour flown again in the same weather with its flights' own errors drawn again "
-                              "(wrp/direction.py); stops / slow-legs: as many stop-and-shoot views / slowed legs "
-                              "chosen at random (wrp/capture_lever.py)")
+    placebos = PlaceboControl(ev.placebos, tuple(unmoved), infeasible, PLACEBO_DESCRIPTION)
     verdict = None
     if forecast and ev.forecast_trials > 0:
         chosen = result.recommended_path
@@ -374,11 +363,21 @@ def evaluate_job(ctx: ExperimentContext, out: Path | None = None, *, n_trials: i
     return result
 
 
+PLACEBO_DESCRIPTION = ("as many viewpoints as the WRP moved, chosen at random, moved by the WRP's move magnitudes in "
+                       "random directions with its yaw offsets (wrp/placebo.py); robust: its levers at as many "
+                       "viewpoints chosen at random (wrp/robust.py); reversed: the initial tour flown again in the "
+                       "same weather with its flights' own errors drawn again (wrp/direction.py); stops / slow-legs: "
+                       "as many stop-and-shoot views / slowed legs at as many views chosen at random "
+                       "(wrp/capture_lever.py)")
+
+
 def _placebos(ctx: ExperimentContext, out: Path, inputs: WrpInputs, paths: dict[str, FlightPath],
-              optimised: dict[str, dict]) -> tuple[dict[str, dict[str, FlightPath]], int, list[str]]:
+              optimised: dict[str, dict], capture: dict[str, tuple[FlightPath, dict[str, FlightPath]] | None]
+              ) -> tuple[dict[str, dict[str, FlightPath]], int, list[str]]:
     """The placebo paths of every WRP that moved (WRP -> {name -> path}), the placebo moves without a flyable
     direction, and the WRPs that moved nothing; with ``wrp.evaluate.robust`` the robust kind is optimised
-    into ``paths`` first, with ``wrp.evaluate.direction`` the reversed tour added (wrp/direction.py)."""
+    into ``paths`` first, with ``wrp.evaluate.direction`` the reversed tour added (wrp/direction.py), then the
+    ``capture`` levers (:func:`_capture_levers`; None: it would change nothing, not flown)."""
     ev = ctx.config.wrp.evaluate
     unmoved = [kind for kind in optimised if not Table3Row.from_json_dict(optimised[kind]["table3"]).moved]
     # a WRP that moved nothing is the initial path: its placebos would all be the initial path too
@@ -395,6 +394,11 @@ def _placebos(ctx: ExperimentContext, out: Path, inputs: WrpInputs, paths: dict[
         evaluated_wrp_dir(out, "reversed").mkdir(parents=True, exist_ok=True)
         paths["reversed"].save(evaluated_wrp_dir(out, "reversed") / "path.json")      # where a chosen WRP is read
         placebo_paths["reversed"] = direction_placebos(inputs.path, ev.placebos)
+    for name, lever in capture.items():
+        if lever is None:
+            unmoved.append(name)
+        else:
+            paths[name], placebo_paths[name] = lever
     return placebo_paths, infeasible, unmoved
 
 
