@@ -71,3 +71,30 @@ def test_run_writes_report_recording_and_missions_and_is_reproducible(tmp_path, 
             a.pop(volatile, None), b.pop(volatile, None)
         assert a == b, key
     assert first["evaluate"]["paths"] == second["evaluate"]["paths"]
+
+
+def test_the_missions_of_every_path_the_evaluation_built_are_exported(tmp_path, monkeypatch):
+    import numpy as np
+
+    from tests.surrogate.helpers import make_path
+    from wrp_eval.config import ExperimentConfig
+    from wrp_eval.experiment import ExperimentContext
+    from wrp_eval.export.formats import FORMATS
+    from wrp_eval.pipeline import export_missions
+
+    monkeypatch.chdir(tmp_path)
+    config = ExperimentConfig.model_validate({
+        "run": {"name": "missions-test"}, "ship": {"type": "fishing"}, "sim": {"capture": {"mode": "fly-through"}},
+        "wrp": {"evaluate": {"kinds": [], "capture_stops": True, "slow_legs": True}}})
+    ctx = ExperimentContext(config, tmp_path)
+    path = make_path(16)        # a ring round the ship (no planning: the export is what is tested)
+    ctx.folders.plan.mkdir(parents=True)
+    path.save(ctx.folders.plan / "path.json")
+    stop = np.zeros(len(path), dtype=bool)
+    stop[2] = True
+    ctx.folders.evaluated_wrp("stops").mkdir(parents=True)       # the slow-legs lever changed nothing: no path
+    path.with_stops(stop, "fly-through").save(ctx.folders.evaluated_wrp("stops") / "path.json")
+    missions = export_missions(ctx)
+    assert set(missions) == {"initial", "stops"}
+    back = FORMATS["qgc-plan"].read(next(f for f in missions["stops"] if f.endswith(".plan")))
+    assert back.stop.sum() == 1 and back.turn_mode == "mixed"

@@ -77,7 +77,7 @@ def run_pipeline(ctx: ExperimentContext, *, smallest: bool = False) -> RunSummar
     job_start = time.perf_counter()
     path = _ship_and_plan(ctx, summary, timings)
     trials, envelope = _flights(ctx, path, summary, timings)
-    with Step(timings, "export", "missions of the three paths"):
+    with Step(timings, "export", "missions of the initial path and of every path the evaluation built"):
         summary["missions"] = export_missions(ctx)
     with Step(timings, "error sources", "the campaign's flights re-scored without each capture error"):
         sources = campaign_error_sources(ctx.folders.campaign, ctx.config.wrp.robust.screen_flights, ctx.run_seed,
@@ -170,12 +170,16 @@ def _risk_and_recording(ctx: ExperimentContext, path: FlightPath, summary: dict,
 
 
 def export_missions(ctx: ExperimentContext) -> dict[str, list[str]]:
-    """Every format's missions of the initial path, the ISWRP and the SWRP into the run's missions folder;
-    returns path name -> files written."""
-    folders, ship = ctx.folders, ctx.ship
+    """Every format's missions of the initial path and of every path the evaluation built (the ISWRP and SWRP of
+    ``wrp.evaluate.kinds``, and the robust, reversed, stops and slow-legs paths where it built them: any of them
+    may be the one it recommends) into the run's missions folder; returns path name -> files written."""
+    folders, ship, ev = ctx.folders, ctx.ship, ctx.config.wrp.evaluate
+    levers = [name for name, on in (("robust", ev.robust), ("reversed", ev.direction), ("stops", ev.capture_stops),
+                                    ("slow-legs", ev.slow_legs)) if on]
     files: dict[str, Path] = {"initial": folders.plan / "path.json",
-                              **{kind: folders.evaluated_wrp(kind) / "path.json" for kind in
-                                 ctx.config.wrp.evaluate.kinds}}
+                              **{kind: folders.evaluated_wrp(kind) / "path.json" for kind in ev.kinds},
+                              **{name: folders.evaluated_wrp(name) / "path.json" for name in levers
+                                 if (folders.evaluated_wrp(name) / "path.json").is_file()}}   # none: changed nothing
     missions: dict[str, list[str]] = {}
     for name, file in files.items():
         flight_path = FlightPath.load(file)
