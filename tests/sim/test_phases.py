@@ -44,6 +44,7 @@ from wrp_eval.sim.phases import (
     passing_views,
     plan_segments,
     reference,
+    reference_profile,
     resume,
     setpoints,
     swap_batteries,
@@ -148,7 +149,8 @@ def test_segment_duration_covers_a_pure_rotation_at_the_reference_yaw_rate():
     assert np.array_equal(seg.direction, [[0.0, 0.0, 0.0], [0.6, 0.8, 0.0]])
     assert seg.dyaw[0] == pytest.approx(np.pi - 0.1)             # wrapped: the short way round
     assert seg.duration[0] == pytest.approx((np.pi - 0.1) / YAW_RATE_REF_RAD_S)
-    assert seg.duration[1] == pytest.approx(PROFILE.at(np.array([5.0]), np.zeros(1))[3][0])
+    assert seg.duration[1] == pytest.approx(reference_profile(5.0, 0.0, PROFILE.cruise_m_s,
+                                                              PROFILE.acceleration_m_s2, PROFILE.jerk_window_s)[3])
 
 
 # -- fly-through profile ------------------------------------------------------------------------------------

@@ -50,10 +50,6 @@ class FlightStyle:
         return cls(capture.mode, capture.heading_mode, hold, float(path.speed_m_s),
                    0.0 if stops.all() else float(capture.corner_radius_m))
 
-    @property
-    def through(self) -> bool:
-        return self.mode == FLY_THROUGH
-
 
 @dataclass(frozen=True)
 class GeoMission:

@@ -27,7 +27,7 @@ shutter opens ``trigger_latency_s`` later (:func:`shutter_offset`).
 
 Per-view modes (:attr:`wrp_eval.planning.path.FlightPath.capture`, overriding ``mode``): a mission with any view
 flown through is flown on the fly-through reference, which comes to rest at the views marked ``stop`` (speed 0 there,
-:func:`vertex_speeds`), settles and hovers the dwell before the photo, exactly as a stop-mode view; the views
+:func:`vertex_speeds`), settles and hovers the dwell before the photo, as a stop-mode view; the views
 marked ``fly-through`` are shot passing. What a DJI waypoint mission does per waypoint with its turn mode
 (WPML ``waypointTurnMode``: ``toPointAndStopWithDiscontinuityCurvature`` stops,
 ``toPointAndPassWithContinuityCurvature`` passes; DJI WPML "common element" reference) and PX4 with a hold time

@@ -33,7 +33,7 @@ from __future__ import annotations
 import os
 from collections.abc import Callable
 from concurrent.futures import ThreadPoolExecutor
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from functools import partial
 from typing import Any, NamedTuple
 
@@ -100,11 +100,11 @@ from wrp_eval.wind.base import WindModel
 _Shoot = Callable[[np.ndarray, np.ndarray, np.ndarray], Shot | None]
 
 
-def _profile_and_dwell(path: FlightPath, sec: SimSection) -> tuple[Profile, NDArray[np.float64]]:
-    """The reference profile ``path`` is flown on under ``sec`` (fly-through when any of its views is) and the hover
-    before each photo (n_views,) s: the dwell at its stop views, 0 elsewhere (in fly-through the first and last
-    views are photographed on arrival)."""
-    stops = path.stops(sec.capture.mode)
+def _profile_and_dwell(path: FlightPath, stops: NDArray[np.bool_],
+                       sec: SimSection) -> tuple[Profile, NDArray[np.float64]]:
+    """The reference profile ``path`` is flown on under ``sec`` (fly-through unless every view ``stops`` (n_views,)
+    bool) and the hover before each photo (n_views,) s: the dwell at its stop views, 0 elsewhere (in fly-through
+    the first and last views are photographed on arrival)."""
     dwell: NDArray[np.float64] = np.where(stops, path.dwell_s if sec.dwell_s is None else sec.dwell_s, 0.0)
     return Profile.of(path.speed_m_s, sec, through=not stops.all()), dwell
 
@@ -403,12 +403,11 @@ class FlightSimulator:
         return self._fly(path, wind, batch, view_offsets, start_time_s, self.section, ship, flight_rngs)
 
     def _targets(self, path: FlightPath, batch: int, view_offsets: np.ndarray | None, ship: ShipInScene | None,
-                 profile: Profile, sec: SimSection) -> FlightTargets:
+                 profile: Profile, sec: SimSection, stop: NDArray[np.bool_]) -> FlightTargets:
         targets = FlightTargets.from_path(path, batch, view_offsets, self.params.camera_offset_m,
                                           view_depths(path, None if ship is None else ship.box))
         if not profile.through:
-            return targets
-        stop = path.stops(sec.capture.mode)
+            return replace(targets, stop=stop)
         speeds = vertex_speeds(targets.body, targets.yaw, path.leg_speeds(), sec.acceleration_m_s2, YAW_RATE_REF_RAD_S,
                                sec.capture.corner_radius_m, window_s=profile.jerk_window_s, stop=stop)
         return targets.flown_through(*speeds, *trigger_planes(targets.body), stop=stop)
@@ -420,8 +419,9 @@ class FlightSimulator:
         phases.py) on the flight state, then the commands, the record and the rollout."""
         par = self.params
         dt = sec.timestep_s * sec.chunk_steps
-        profile, dwell = _profile_and_dwell(path, sec)
-        targets = self._targets(path, batch, view_offsets, ship, profile, sec)
+        stops = path.stops(sec.capture.mode)
+        profile, dwell = _profile_and_dwell(path, stops, sec)
+        targets = self._targets(path, batch, view_offsets, ship, profile, sec, stops)
         onboard, run = self._launch(path, targets, ship, flight_rngs, dt, start_time_s, sec)
         state = FlightState.start(targets)
         controller = PositionController(par, self.gains, run.padded)

@@ -50,9 +50,9 @@ class FlightTargets:
     vertex_speed (batch, n_views) and leg_speed (batch, n_views - 1) m/s: the fly-through reference's speed
     at each viewpoint and cruise limit of each leg; arriving and trigger_normal (batch, n_views, 3): the
     arriving leg's direction and the trigger plane's normal at each viewpoint (None in stop mode); stop
-    (n_views,) bool: in fly-through, the views the reference stops at, shot after the settle and the dwell like
-    a stop-mode view (the path's per-view capture modes, :meth:`wrp_eval.planning.path.FlightPath.stops`; None:
-    none); leg_cruise (n_views - 1,) m/s: the cruise speed of each leg (the path's
+    (n_views,) bool: the views shot at rest after the settle and the dwell (the path's per-view capture modes,
+    :meth:`wrp_eval.planning.path.FlightPath.stops`; in fly-through the reference stops at them; None: none);
+    leg_cruise (n_views - 1,) m/s: the cruise speed of each leg (the path's
     :meth:`~wrp_eval.planning.path.FlightPath.leg_speeds`; None: the profile's cruise on every leg). home_view: the
     view (in flying order) of the plan's first viewpoint: the flights' home (a tour flown the other way round
     keeps the home it was planned from; the autopilot's home is where it took off, MAVLink HOME_POSITION "set

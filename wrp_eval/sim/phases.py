@@ -141,11 +141,6 @@ class Profile:
         return cls(cruise_m_s, a_max, a_max / sec.jerk_m_s3 if sec.jerk_m_s3 else 0.0,
                    sec.capture.mode == "fly-through" if through is None else bool(through))
 
-    def at(self, length: np.ndarray, tau: np.ndarray) -> tuple[Any, ...]:
-        """(s m, v m/s, a m/s^2, duration s), each (n,), rest to rest on segments of ``length`` (n,) m at
-        ``tau`` (n,) s."""
-        return reference_profile(length, tau, self.cruise_m_s, self.acceleration_m_s2, self.jerk_window_s)
-
     def along(self, seg: Segment, tau: np.ndarray) -> tuple[Any, ...]:
         """(s, v, a, duration) (n,) on the segments ``seg`` at ``tau`` (n,) s, in this profile's mode (rest to rest
         at each segment's own cruise ``v_max``, or this profile's where it is 0)."""

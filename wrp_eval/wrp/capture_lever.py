@@ -34,6 +34,7 @@ from pathlib import Path
 
 import numpy as np
 
+from wrp_eval.campaign.config import TrialConfig
 from wrp_eval.campaign.store import TrialStore
 from wrp_eval.errors import InputError
 from wrp_eval.planning.path import FlightPath
@@ -58,16 +59,18 @@ def held_out_blur(campaign_dir: str | Path, first_trial: int, path: FlightPath) 
     """(k, n) px: the blur of every view of ``path`` in the campaign's trials with ids >= ``first_trial`` (the
     trials an evaluation of ``first_trial`` flights does not fly); InputError when there are none, when the
     campaign flew another path or in stop mode."""
-    trials = load_campaign_trials(campaign_dir, views=False)
     flown = FlightPath.load(Path(campaign_dir) / "path.json")
     if len(flown) != len(path) or not np.allclose(flown.positions, path.positions, atol=1e-6):
         raise InputError(campaign_dir, f"its trials flew another path ({len(flown)} views) than the one evaluated "
                                        f"({len(path)} views, wrp.path)")
-    mode = (((TrialStore(Path(campaign_dir)).read_meta() or {}).get("config") or {}).get("sim") or {}).get(
-        "capture", {}).get("mode", "stop")
+    meta = TrialStore(Path(campaign_dir)).read_meta()
+    if meta is None or "config" not in meta:
+        raise InputError(campaign_dir, "not a campaign folder (no campaign.json with its config)")
+    mode = TrialConfig.from_stored(meta["config"]).sim.capture.mode
     if mode != FLY_THROUGH:
         raise InputError(campaign_dir, f"its flights were flown in {mode} mode: their blur says nothing of a "
                                        "fly-through mission's (the capture levers need a fly-through campaign)")
+    trials = load_campaign_trials(campaign_dir, views=False)
     if trials.trial_id is None or not (held_out := trials.trial_id >= first_trial).any():
         raise InputError(campaign_dir, f"no trials beyond the evaluation's {first_trial} to choose the stops on "
                                        "(wrp.evaluate.capture_stops): fly a larger campaign")
