@@ -146,9 +146,34 @@ def test_local_process_pool_matches_in_process(tmp_path, path_file, make_config,
     assert comparable(TrialStore(serial.out_dir).read_table()) == comparable(TrialStore(pooled.out_dir).read_table())
 
 
+def _workers_of(summary) -> set[str]:
+    return set(TrialStore(summary.out_dir).read_table().column("worker").to_pylist())
+
+
+def test_campaigns_inside_shared_process_pools_reuse_the_worker_processes(tmp_path, path_file, make_config,
+                                                                         comparable, run_analytic):
+    """Inside the block two campaigns run in the same worker process (host:pid), with the numbers a fresh pool
+    gives; a campaign aborted in its worker (here the evaluator's set-up fails there) discards the shared pool,
+    and the next one starts a fresh one; outside the block every campaign has its own process."""
+    from wrp_eval.campaign.backends import shared_process_pools
+    pooled = make_config(path_file, n_trials=4, backend={"workers": 1})
+    with shared_process_pools():
+        first = run_analytic(pooled, tmp_path / "a")
+        second = run_analytic(make_config(path_file, n_trials=4, seed=8, backend={"workers": 1}), tmp_path / "b")
+        assert _workers_of(first) == _workers_of(second) and len(_workers_of(first)) == 1
+        with pytest.raises(RuntimeError, match="worker set-up failed"):
+            run_analytic(pooled, tmp_path / "bad", no_such_option=1)
+        after = run_analytic(pooled, tmp_path / "c")
+        assert _workers_of(after) != _workers_of(first)
+    alone = run_analytic(pooled, tmp_path / "d")
+    assert _workers_of(alone) not in (_workers_of(first), _workers_of(after))
+    assert comparable(TrialStore(first.out_dir).read_table()) == comparable(TrialStore(alone.out_dir).read_table())
+
+
 def test_a_worker_set_up_error_stops_the_campaign_with_its_message(tmp_path, path_file, make_config):
-    """A bad input found while a worker builds its evaluator (here: the ship mesh file) is the campaign's
-    InputError, not a pile of crashed trials (the real evaluator, in a process pool)."""
+    """A bad input (here: the ship mesh file) is the campaign's InputError, not a pile of crashed trials (the real
+    evaluator, a process-pool campaign; the mesh is found missing when the campaign resolves its ship, before
+    any worker starts)."""
     from wrp_eval.campaign.jobs import campaign_job
     from wrp_eval.config import ExperimentConfig
     from wrp_eval.experiment import ExperimentContext

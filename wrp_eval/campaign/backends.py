@@ -28,6 +28,9 @@ from wrp_eval.errors import InputError
 
 IN_FLIGHT_PER_WORKER = 2
 
+# the local process pools shared inside :func:`shared_process_pools`, by (workers, threads); None: not shared
+_SHARED_POOLS: dict[tuple[int, int], ProcessPoolExecutor] | None = None
+
 Task = tuple[dict, Sequence]     # (worker spec, trial ids or TrialInputs)
 
 
@@ -41,6 +44,27 @@ def split_batches(count: int, batch_size: int, workers: int) -> list[np.ndarray]
     handing one worker the whole batch. Sizes differ by at most one."""
     parts = max(1, workers, -(-count // max(1, batch_size)))
     return [chunk for chunk in np.array_split(np.arange(count), parts) if chunk.size]
+
+
+@contextmanager
+def shared_process_pools() -> Iterator[None]:
+    """Within this block the local process pools of the same size and thread count are one: a command that flies
+    several campaigns one after another (an evaluation's paths and placebos, a study's variants, the pipeline's
+    stages) spawns its worker processes, and imports the package in them (~6 s each here), once. Each worker
+    still builds the evaluator of every campaign it is given (:func:`wrp_eval.campaign.worker.run_batch` caches
+    one by the spec's key). The pools are shut down when the block ends; a pool whose run was aborted or whose
+    worker died is shut down at once and the next run starts a fresh one."""
+    global _SHARED_POOLS
+    if _SHARED_POOLS is not None:       # nested: the outer block owns the pools
+        yield
+        return
+    _SHARED_POOLS = {}
+    try:
+        yield
+    finally:
+        pools, _SHARED_POOLS = _SHARED_POOLS, None
+        for pool in pools.values():
+            pool.shutdown(wait=True, cancel_futures=True)
 
 
 @contextmanager
@@ -92,8 +116,11 @@ class TrialPool:
         self.close()
 
     def close(self) -> None:
+        """Shut the pool's processes down (a shared pool stays up for the next run: every batch of this one has
+        come back) and leave Ray if this pool started it."""
         if self._pool is not None:
-            self._pool.shutdown(wait=True, cancel_futures=True)
+            if not self._shared(self._pool):
+                self._pool.shutdown(wait=True, cancel_futures=True)
             self._pool = None
         if self._ray_started:
             import ray
@@ -110,14 +137,30 @@ class TrialPool:
         else:
             yield from self._run_local(tasks)
 
+    def _shared(self, pool: ProcessPoolExecutor) -> bool:
+        return _SHARED_POOLS is not None and _SHARED_POOLS.get((self.workers, self.threads)) is pool
+
+    def _discard(self, pool: ProcessPoolExecutor) -> None:
+        """Shut ``pool`` down now, shared or not (a worker died, or the run was aborted with batches running)."""
+        if self._shared(pool) and _SHARED_POOLS is not None:
+            del _SHARED_POOLS[(self.workers, self.threads)]
+        pool.shutdown(wait=True, cancel_futures=True)
+        self._pool = None
+
     def _local_pool(self) -> ProcessPoolExecutor:
         if self._pool is None:
+            key = (self.workers, self.threads)
+            if _SHARED_POOLS is not None and key in _SHARED_POOLS:
+                self._pool = _SHARED_POOLS[key]
+                return self._pool
             with _child_environment(self.threads):
                 # no pool initializer: a worker's set-up error (bad ship mesh, netCDF, ...) then surfaces from
                 # run_batch as that batch's exception and aborts the run with its message, instead of
                 # breaking the pool like a crash
                 self._pool = ProcessPoolExecutor(max_workers=self.workers,
                                                  mp_context=multiprocessing.get_context("spawn"))
+            if _SHARED_POOLS is not None:
+                _SHARED_POOLS[key] = self._pool
         return self._pool
 
     def _run_local(self, tasks: Sequence[Task]) -> Iterator[tuple[int, list[dict]]]:
@@ -145,11 +188,11 @@ class TrialPool:
                     else:
                         todo.append(index)
                 todo.sort(reverse=True)
-                pool.shutdown(wait=True, cancel_futures=True)
-                self._pool = None
+                self._discard(pool)
             except BaseException:
                 # an aborted run (an input error, a kill, the caller closing the generator): no batch of it may
                 # still be running when the caller goes on
+                self._discard(pool)
                 self.close()
                 raise
 

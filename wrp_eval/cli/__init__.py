@@ -13,6 +13,7 @@ import logging
 import sys
 
 from wrp_eval import __version__
+from wrp_eval.campaign.backends import shared_process_pools
 from wrp_eval.cli import (
     bench,
     campaign,
@@ -58,7 +59,9 @@ def main(argv: list[str] | None = None) -> int:
     silent = getattr(args, "quiet", False) or getattr(args, "progress", True) is False
     progress_log.setLevel(logging.WARNING if silent else logging.NOTSET)
     try:
-        return int(args.func(args) or 0)
+        # one process pool per size for the whole command: its campaigns reuse the workers (campaign/backends.py)
+        with shared_process_pools():
+            return int(args.func(args) or 0)
     except InputError as err:
         print(f"wrp-eval: error: {err}", file=sys.stderr)
         return 2
