@@ -256,14 +256,24 @@ class FlightPath:
                    leg_speed)
 
 
+def _every_or_none(viewpoints: list, key: str, last: bool = True) -> tuple[list | None, bool]:
+    """(the viewpoints' ``key`` values, those of all but the last when not ``last``; whether exactly those
+    viewpoints give one), or (None, True) when no viewpoint gives one. A missing value is None."""
+    have = [key in v for v in viewpoints]
+    if not any(have):
+        return None, True
+    complete = all(have) if last else all(have[:-1]) and not have[-1]
+    return [v.get(key) for v in (viewpoints if last else viewpoints[:-1])], complete
+
+
 def _leg_speeds(viewpoints: list) -> np.ndarray | None:
     """The legs' ``leg_speed_m_s`` (n - 1,) m/s, given on every viewpoint but the last (finite, > 0), or None
     when no viewpoint gives one."""
-    have = [("leg_speed_m_s" in v) for v in viewpoints]
-    if not any(have):
+    values, complete = _every_or_none(viewpoints, "leg_speed_m_s", last=False)
+    if values is None:
         return None
-    speeds = np.array([v.get("leg_speed_m_s", np.nan) for v in viewpoints[:-1]], dtype=float)
-    if not all(have[:-1]) or have[-1] or not np.all(np.isfinite(speeds) & (speeds > 0)):
+    speeds = np.array(values, dtype=float)
+    if not complete or not np.all(np.isfinite(speeds) & (speeds > 0)):
         raise ValueError("'leg_speed_m_s' must be > 0 on every viewpoint but the last (the leg leaving it) or on "
                          "none")
     return speeds
@@ -272,21 +282,20 @@ def _leg_speeds(viewpoints: list) -> np.ndarray | None:
 def _capture_modes(viewpoints: list) -> tuple[str, ...] | None:
     """The viewpoints' ``capture`` modes (every viewpoint has one of :data:`CAPTURE_MODES`), or None when none has
     one."""
-    have = [("capture" in v) for v in viewpoints]
-    if not any(have):
+    values, complete = _every_or_none(viewpoints, "capture")
+    if values is None:
         return None
-    modes = tuple(v.get("capture") for v in viewpoints)
-    if not all(have) or not set(modes) <= set(CAPTURE_MODES):
+    if not complete or not set(values) <= set(CAPTURE_MODES):
         raise ValueError(f"'capture' must be one of {list(CAPTURE_MODES)} for every viewpoint or none")
-    return modes  # type: ignore[return-value]
+    return tuple(values)
 
 
 def _view_ids(viewpoints: list) -> np.ndarray | None:
     """The viewpoints' ``view_id`` (n,) int (every viewpoint has one, distinct), or None when none has one."""
-    have = [("view_id" in v) for v in viewpoints]
-    if not any(have):
+    values, complete = _every_or_none(viewpoints, "view_id")
+    if values is None:
         return None
-    ids = np.array([v["view_id"] for v in viewpoints] if all(have) else [], dtype=int)
+    ids = np.array(values if complete else [], dtype=int)
     if ids.size != len(viewpoints) or ids.min() < 0 or np.unique(ids).size != ids.size:
         raise ValueError("'view_id' must be given for every viewpoint or none, distinct and >= 0")
     return ids
