@@ -40,7 +40,7 @@ test: setup
 	$(BIN)/ruff check wrp_eval tests scripts
 	# mypy (one process, ~50 s on a fresh clone) type-checks beside the suite; its report follows the suite's,
 	# and either failing fails the target
-	$(BIN)/mypy > $(VENV)/mypy.log 2>&1 & typing=$$!; \
+	$(BIN)/mypy > $(VENV)/mypy.log 2>&1 & typing=$$!; trap 'kill $$typing 2>/dev/null' INT TERM; \
 	$(BIN)/python -m pytest -q -p no:cacheprovider -n $(TEST_WORKERS) --dist loadfile; tests=$$?; \
 	wait $$typing; typed=$$?; echo "mypy:"; cat $(VENV)/mypy.log; \
 	if [ $$tests -ne 0 ]; then exit $$tests; fi; exit $$typed

@@ -3,6 +3,9 @@
 from __future__ import annotations
 
 import json
+import os
+import signal
+import time
 
 import numpy as np
 import pytest
@@ -161,6 +164,11 @@ def test_campaigns_inside_shared_process_pools_reuse_the_worker_processes(tmp_pa
         first = run_analytic(pooled, tmp_path / "a")
         second = run_analytic(make_config(path_file, n_trials=4, seed=8, backend={"workers": 1}), tmp_path / "b")
         assert _workers_of(first) == _workers_of(second) and len(_workers_of(first)) == 1
+        # the shared worker dies while idle: the next campaign flies every trial on a fresh pool
+        os.kill(int(next(iter(_workers_of(second))).rsplit(":", 1)[1]), signal.SIGKILL)
+        time.sleep(0.5)
+        revived = run_analytic(make_config(path_file, n_trials=4, seed=9, backend={"workers": 1}), tmp_path / "r")
+        assert revived.done == 4 and _workers_of(revived) != _workers_of(first)
         with pytest.raises(RuntimeError, match="worker set-up failed"):
             run_analytic(pooled, tmp_path / "bad", no_such_option=1)
         after = run_analytic(pooled, tmp_path / "c")

@@ -60,18 +60,6 @@ def test_placebos_stop_at_as_many_random_views_and_are_seeded():
     assert [p.digest() for p in again.values()] == [p.digest() for p in placebos.values()]
 
 
-def test_stop_placebos_draw_among_the_views_flown_through_and_keep_the_levers_ends():
-    """The first and last views are at rest in a fly-through mission already: a placebo stop there would change
-    nothing, so the placebos draw their stops among the others; the lever's own stops at the ends are kept."""
-    path = helpers.make_path(6)
-    stops = np.array([True, False, True, False, False, False])
-    _, placebos = capture_lever_paths(path, stops, 40, np.random.default_rng(3))
-    masks = np.array([p.stops("fly-through") for p in placebos.values()])
-    assert masks[:, 0].all() and not masks[:, -1].any()          # the lever's end stop kept, no other end drawn
-    assert (masks[:, 1:-1].sum(axis=1) == 1).all()               # one stop among the four views passed through
-    assert set(np.flatnonzero(masks[:, 1:-1].any(axis=0)) + 1) == {1, 2, 3, 4}
-
-
 def test_the_slow_legs_lever_slows_the_legs_at_the_views_and_its_placebos_as_many():
     path = helpers.make_path(10)
     views = np.zeros(10, dtype=bool)

@@ -172,9 +172,12 @@ class TrialPool:
             try:
                 while todo or running:
                     while todo and len(running) < self.workers * IN_FLIGHT_PER_WORKER:
-                        index = todo.pop()
+                        index = todo[-1]
                         with _child_environment(self.threads):
-                            running[pool.submit(run_batch, *tasks[index])] = index
+                            # a pool broken while idle (a shared worker died between runs) raises here: the
+                            # batch stays in `todo` and goes to the fresh pool
+                            future = pool.submit(run_batch, *tasks[index])
+                        running[future] = todo.pop()
                     done, _ = wait(running, return_when=FIRST_COMPLETED)
                     for fut in done:
                         records = fut.result()   # a crashed worker raises here, its batch still in `running`

@@ -11,6 +11,7 @@ from __future__ import annotations
 import argparse
 import logging
 import sys
+from contextlib import nullcontext
 
 from wrp_eval import __version__
 from wrp_eval.campaign.backends import shared_process_pools
@@ -60,7 +61,7 @@ def main(argv: list[str] | None = None) -> int:
     progress_log.setLevel(logging.WARNING if silent else logging.NOTSET)
     try:
         # one process pool per size for the whole command: its campaigns reuse the workers (campaign/backends.py)
-        with shared_process_pools():
+        with shared_process_pools() if getattr(args, "shared_pools", True) else nullcontext():
             return int(args.func(args) or 0)
     except InputError as err:
         print(f"wrp-eval: error: {err}", file=sys.stderr)

@@ -22,4 +22,5 @@ def register(sub: argparse._SubParsersAction) -> None:
                        description=BENCH_DOC, formatter_class=argparse.RawDescriptionHelpFormatter)
     p.add_argument("--only", default="", help="comma-separated groups (default: all): " + ", ".join(BENCH_GROUPS))
     p.add_argument("--out", default="logs/bench/", help="output folder (default logs/bench/)")
-    p.set_defaults(func=_bench)
+    # the bench's campaign timings include the workers' start-up: no pool shared across its groups
+    p.set_defaults(func=_bench, shared_pools=False)

@@ -108,30 +108,22 @@ def slow_leg_paths(initial: FlightPath, views: np.ndarray, speed_m_s: float, pla
         for k in range(placebos)}
 
 
-def _random_views(n: int, count: int, rng: np.random.Generator, among: np.ndarray | None = None) -> np.ndarray:
-    """(n,) bool: ``count`` views chosen at random by ``rng`` (among the views ``among`` (n,) bool; default all)."""
-    pool = np.arange(n) if among is None else np.flatnonzero(among)
+def _random_views(n: int, count: int, rng: np.random.Generator) -> np.ndarray:
+    """(n,) bool: ``count`` views chosen at random by ``rng``."""
     mask = np.zeros(n, dtype=bool)
-    mask[rng.choice(pool, size=count, replace=False)] = True
+    mask[rng.choice(n, size=count, replace=False)] = True
     return mask
 
 
 def capture_lever_paths(initial: FlightPath, stops: np.ndarray, placebos: int,
                         rng: np.random.Generator) -> tuple[FlightPath, dict[str, FlightPath]]:
     """The initial (fly-through) path stopping at ``stops`` (n,) bool, and ``placebos`` paths stopping at as many
-    views chosen at random by ``rng``, named ``placebo-stops-NN``. A fly-through mission is at rest at its first
-    and last views already, so the placebos draw among the others as many stops as ``stops`` has there (and
-    keep its stops at the two ends): each changes as much of the flight as the lever does."""
+    views chosen at random by ``rng``, named ``placebo-stops-NN``."""
     def stopping(mask: np.ndarray, placebo_of: str | None = None) -> FlightPath:
         path = initial.with_stops(mask, FLY_THROUGH)
         extra = {"capture_stops": int(mask.sum())} if placebo_of is None else {"placebo_of": placebo_of}
         return replace(path, metadata={**initial.metadata, **extra})
 
-    stops = np.asarray(stops, dtype=bool)
-    passed = np.ones(len(initial), dtype=bool)
-    passed[[0, -1]] = False
-    count = int(np.count_nonzero(stops & passed))
-    return stopping(stops), {
-        f"placebo-stops-{k:02d}": stopping(_random_views(len(initial), count, rng, passed) | (stops & ~passed),
-                                           "stops")
-        for k in range(placebos)}
+    count = int(np.count_nonzero(stops))
+    return stopping(np.asarray(stops, dtype=bool)), {
+        f"placebo-stops-{k:02d}": stopping(_random_views(len(initial), count, rng), "stops") for k in range(placebos)}
