@@ -1,11 +1,15 @@
-"""Studies (`study:` configs, wrp_eval/study): validation, the variant mechanics, and every paper config
-(experiments/paper/table1..8.yaml) run end to end at its smallest setting through `wrp-eval run --smallest`."""
+"""Studies (`study:` configs, wrp_eval/study): validation, the variant mechanics, and the paper configs
+(experiments/paper/table1..8.yaml) run end to end at their smallest setting through `wrp-eval run --smallest`:
+tables 1, 2, 6, 7 and 8 as they are; tables 3, 4 and 5, which share one base config, as one study holding a
+variant of each kind from the three (the three tables' own smallest runs, ~90 s here: `wrp-eval bench --only
+study`)."""
 
 import json
 from pathlib import Path
 
 import numpy as np
 import pytest
+import yaml
 
 from wrp_eval.cli import main
 from wrp_eval.config import ExperimentConfig, load_experiment
@@ -111,10 +115,12 @@ def test_every_paper_config_is_valid_and_carries_the_papers_figures(table):
     assert len(variant_configs(config, "cfg")) == len(config.study.variants)
 
 
-def _run_smallest(table, tmp_path, monkeypatch) -> tuple[dict, str]:
+def _run_smallest(table, tmp_path, monkeypatch, config: Path | None = None) -> tuple[dict, str]:
+    """Run table ``table``'s paper config (or ``config``, a study of that table) at its smallest setting in
+    ``tmp_path``; returns its study.json and report.md after checking what every study writes."""
     tmp_path.mkdir(parents=True, exist_ok=True)
     monkeypatch.chdir(tmp_path)
-    assert main(["run", str(PAPER / f"table{table}.yaml"), "--smallest"]) == 0
+    assert main(["run", str(config or PAPER / f"table{table}.yaml"), "--smallest"]) == 0
     out = tmp_path / "logs" / f"paper-table{table}-smallest"
     doc = json.loads((out / "study.json").read_text())
     report = (out / "report.md").read_text()
@@ -196,37 +202,62 @@ def test_table7_and_table8_smallest(tmp_path, monkeypatch):
         assert len(stations) - 1 == int(np.ceil(extent / (footprint * (1.0 - overlap))))
 
 
-@pytest.mark.slow
-def test_table3_smallest_shares_one_surrogate_across_the_eight_wrps(tmp_path, monkeypatch):
-    doc, _ = _run_smallest(3, tmp_path, monkeypatch)
-    assert len(doc["shared_training"]) == 1 and len(doc["rows"]) == 9
-    wrp = [r["ours"] for r in doc["rows"][1:]]
-    e0 = wrp[0]["e_original_m"]
-    assert doc["rows"][0]["ours"]["error_m"] == pytest.approx(e0)      # the initial path's error is E_original
-    variants = load_experiment(PAPER / "table3.yaml").study.variants[1:]
-    assert [r["variant"] for r in doc["rows"][1:]] == [v.name for v in variants]
-    for ours, variant in zip(wrp, variants, strict=True):   # each variant's threshold fraction reached its optimisation
-        assert ours["threshold_m"] == pytest.approx(variant.overrides["wrp"]["threshold_fraction"] * e0)
+def _paper_variants(table: int, *names: str) -> list[dict]:
+    doc = yaml.safe_load((PAPER / f"table{table}.yaml").read_text())
+    by_name = {v["name"]: v for v in doc["study"]["variants"]}
+    return [by_name[name] for name in names]
+
+
+@pytest.fixture(scope="module")
+def tables_3_to_5_smallest(tmp_path_factory):
+    """Tables 3, 4 and 5 share their base config (the same ship, plan, wind, campaign and surrogate sections; checked
+    here): one study of table 3's base with the variants of each kind from all three, at the tables' smallest setting,
+    runs every mechanism they run once (the tables' own --smallest runs: `wrp-eval bench --only study`)."""
+    docs = {n: yaml.safe_load((PAPER / f"table{n}.yaml").read_text()) for n in (3, 4, 5)}
+    base = {k: v for k, v in docs[3].items() if k not in ("study", "run")}
+    assert all({k: v for k, v in docs[n].items() if k not in ("study", "run")} == base for n in (4, 5))
+    assert all(docs[n]["study"]["smallest"] == docs[3]["study"]["smallest"] for n in (4, 5))
+    docs[3]["study"]["variants"] = (
+        _paper_variants(3, "initial path", "ISWRP 0.20", "ISWRP 0.30", "SWRP 0.30", "ISWRP 0.30 Alg. 3 as written")
+        + _paper_variants(4, "no-WRP path + random offsets") + _paper_variants(5, "SWRP 0.30 + secondary offsets"))
+    folder = tmp_path_factory.mktemp("tables-3-5")
+    config = folder / "table3.yaml"
+    config.write_text(yaml.safe_dump(docs[3]))
+    with pytest.MonkeyPatch.context() as monkeypatch:
+        doc, _ = _run_smallest(3, folder, monkeypatch, config)
+    return doc, docs[3]["study"]["variants"], folder
+
+
+def test_tables_3_to_5_smallest_share_one_surrogate_across_the_wrps(tables_3_to_5_smallest):
+    doc, variants, _ = tables_3_to_5_smallest
+    assert len(doc["shared_training"]) == 1
+    rows = {r["variant"]: r for r in doc["rows"]}
+    e0 = rows["initial path"]["ours"]["error_m"]
+    wrp = [(v, rows[v["name"]]) for v in variants if v.get("path") and not v.get("random_offsets")]
+    assert len(wrp) == 4
+    for variant, row in wrp:   # each variant's threshold fraction reached its optimisation, against E_original
+        ours = row["ours"]
+        assert ours["e_original_m"] == pytest.approx(e0) and row["path"] == variant["path"]
+        assert ours["threshold_m"] == pytest.approx(variant["overrides"]["wrp"]["threshold_fraction"] * e0)
         assert 0 <= ours["offset_rate_pct"] <= 100 and ours["wrp_time_s"] > 0
-    assert [r["path"] for r in doc["rows"]] == ["plan"] + ["iswrp"] * 3 + ["swrp"] * 3 + ["iswrp", "swrp"]
+    assert rows["initial path"]["path"] == "plan"
 
 
-@pytest.mark.slow
-def test_tables_4_and_5_smallest_offset_rows(tmp_path, monkeypatch):
-    for table, n_rows in ((4, 7), (5, 6)):
-        doc, _ = _run_smallest(table, tmp_path / str(table), monkeypatch)
-        assert len(doc["rows"]) == n_rows
-        offset_rows = [r for r in doc["rows"] if r["random_offsets"]]
+def test_tables_4_and_5_smallest_offset_rows(tables_3_to_5_smallest):
+    doc, _, folder = tables_3_to_5_smallest     # the rows' folders are relative to the study's working folder
+    for variant, path in (("no-WRP path + random offsets", "plan"), ("SWRP 0.30 + secondary offsets", "swrp")):
+        offset_rows = [r for r in doc["rows"] if r["variant"] == variant]
+        assert all(r["random_offsets"] and r["path"] == path for r in offset_rows)
         assert [r["repetition"] for r in offset_rows] == [1, 2, 3, 4, 5]
         totals = [r["ours"]["position_offset_m"] for r in offset_rows]
         n = offset_rows[0]["ours"]["views"]
         assert len(set(totals)) == 5 and all(0 < t <= n * 2.0 * np.sqrt(3) for t in totals)
         assert all(r["ours"]["wrp_time_s"] is None and r["paper"]["wrp_time_s"] is None for r in offset_rows)
-        assert all(Path(r["folder"], f"offsets-{r['repetition']}", "path.json").is_file() for r in offset_rows)
+        assert all((folder / r["folder"] / f"offsets-{r['repetition']}" / "path.json").is_file() for r in offset_rows)
         # the offset paths are drawn beside their variant's plan in its recording
         from rerun.chunk import RrdReader
-        reader = RrdReader(str(tmp_path / str(table) / "logs" / f"paper-table{table}-smallest" / "run.rrd"))
-        store = next(s for s in reader.recordings() if s.recording_id.endswith("/" + offset_rows[0]["variant"]))
+        reader = RrdReader(str(folder / "logs" / "paper-table3-smallest" / "run.rrd"))
+        store = next(s for s in reader.recordings() if s.recording_id.endswith("/" + variant))
         entities = {chunk.entity_path for chunk in reader.stream(store=store)}
         assert {f"/paths/offsets-{k}/tour" for k in range(1, 6)} <= entities
-        assert f"/paths/{offset_rows[0]['path']}/tour" in entities or offset_rows[0]["path"] == "plan"
+        assert f"/paths/{path}/tour" in entities or path == "plan"

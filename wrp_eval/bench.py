@@ -40,6 +40,7 @@ BENCH_GROUPS: dict[str, str] = {
     "views": "wrp_eval.campaign.view_scaling",
     "cluster": "wrp_eval.campaign.cluster_bench",
     "peers": "wrp_eval.sim.peers_bench",
+    "study": "wrp_eval.study.bench",
 }
 
 
