@@ -178,6 +178,36 @@ def test_campaigns_inside_shared_process_pools_reuse_the_worker_processes(tmp_pa
     assert comparable(TrialStore(first.out_dir).read_table()) == comparable(TrialStore(alone.out_dir).read_table())
 
 
+def test_a_shared_pool_closed_while_a_run_of_it_is_still_open_is_shut_down(path_file, make_config):
+    """A caller that stops reading a run (a break out of its loop) may leave batches in the shared pool: closing
+    the TrialPool then shuts that pool down and unshares it, so the next campaign gets a fresh pool rather than
+    one still busy with (and later torn down by) the abandoned run; a run read to its end leaves it shared."""
+    from wrp_eval.campaign import backends
+    from wrp_eval.campaign.config import TrialConfig
+    from wrp_eval.campaign.evaluators import ANALYTIC_EVALUATOR
+    from wrp_eval.campaign.runner import worker_spec
+    from wrp_eval.planning.path import FlightPath
+    config = make_config(path_file, n_trials=6, backend={"workers": 1})
+    spec = worker_spec(TrialConfig(campaign=config.campaign), FlightPath.load(path_file), key="open-run",
+                       root_seed=0, config_dir=None, evaluator=ANALYTIC_EVALUATOR, evaluator_options={})
+    tasks = [(spec, [trial]) for trial in range(6)]
+    with backends.shared_process_pools():
+        with backends.TrialPool("local", 1) as pool:
+            assert len(list(pool.run(tasks))) == 6
+            shared = pool._pool
+        assert backends._SHARED_POOLS == {(1, 1): shared}          # read to its end: kept for the next run
+        with backends.TrialPool("local", 1) as pool:
+            stream = pool.run(tasks)
+            next(stream)                                          # the caller reads one batch and stops
+            assert pool._pool is shared
+        assert backends._SHARED_POOLS == {}
+        with pytest.raises(RuntimeError, match="after shutdown"):
+            shared.submit(int)
+        stream.close()
+        with backends.TrialPool("local", 1) as pool:               # the next run: a fresh pool
+            assert len(list(pool.run(tasks))) == 6 and pool._pool is not shared
+
+
 def test_a_worker_set_up_error_stops_the_campaign_with_its_message(tmp_path, path_file, make_config):
     """A bad input (here: the ship mesh file) is the campaign's InputError, not a pile of crashed trials (the real
     evaluator, a process-pool campaign; the mesh is found missing when the campaign resolves its ship, before

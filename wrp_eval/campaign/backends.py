@@ -106,6 +106,7 @@ class TrialPool:
         self.kind, self.workers, self.address, self.threads = kind, workers, address, threads
         self._pool: ProcessPoolExecutor | None = None
         self._ray_started = False
+        self._open_runs = 0         # run() generators started and not yet finished or closed
 
     def __enter__(self) -> "TrialPool":
         if self.kind == "ray":
@@ -116,12 +117,14 @@ class TrialPool:
         self.close()
 
     def close(self) -> None:
-        """Shut the pool's processes down (a shared pool stays up for the next run: every batch of this one has
-        come back) and leave Ray if this pool started it."""
+        """Shut the pool's processes down and leave Ray if this pool started it. A shared pool stays up for the
+        next run when every run of this one has finished (all its batches came back); with a run still open (its
+        caller stopped reading it) batches may still be in the pool, so it is shut down and unshared."""
         if self._pool is not None:
-            if not self._shared(self._pool):
-                self._pool.shutdown(wait=True, cancel_futures=True)
-            self._pool = None
+            if self._shared(self._pool) and not self._open_runs:
+                self._pool = None
+            else:
+                self._discard(self._pool)
         if self._ray_started:
             import ray
             ray.shutdown()
@@ -129,13 +132,17 @@ class TrialPool:
 
     def run(self, tasks: Sequence[Task]) -> Iterator[tuple[int, list[dict]]]:
         """(task index, its records) for every task, in completion order."""
-        if self.kind == "ray":
-            yield from self._run_ray(tasks)
-        elif self.workers == 0:
-            for index, (spec, trials) in enumerate(tasks):
-                yield index, run_batch(spec, trials)
-        else:
-            yield from self._run_local(tasks)
+        self._open_runs += 1
+        try:
+            if self.kind == "ray":
+                yield from self._run_ray(tasks)
+            elif self.workers == 0:
+                for index, (spec, trials) in enumerate(tasks):
+                    yield index, run_batch(spec, trials)
+            else:
+                yield from self._run_local(tasks)
+        finally:
+            self._open_runs -= 1
 
     def _shared(self, pool: ProcessPoolExecutor) -> bool:
         return _SHARED_POOLS is not None and _SHARED_POOLS.get((self.workers, self.threads)) is pool

@@ -16,9 +16,12 @@ evaluation flies trials 0 .. n_trials - 1 under the campaign's seed), so the vie
 flights that judge them. A view never taken in those flights is not a stop.
 
 Placebo: as many stops at views chosen at random (seeded from the campaign seed; any view of the path, the first
-and last included, which fly-through photographs at rest already: a stop there adds only the dwell, so a placebo
-of 64 stops on a 141-view path wastes ~0.9 of them on average, a slightly weaker control), flown under the same
-winds; the verdict is the evaluation's (the gain's CI above 0 and above the placebos' 95th percentile).
+and last included: fly-through takes the first at rest, where the flight starts, and the last as the reference
+brakes to rest on it (its trigger plane, through the target normal to the arriving leg, is crossed on arrival, at
+the residual speed of the tracking error, :func:`wrp_eval.sim.phases.passing_views`), so a stop there changes
+little: a placebo of 64 stops on a 141-view path spends ~0.9 of them there on average, a slightly weaker
+control), flown under the same winds; the verdict is the evaluation's (the gain's CI above 0 and above the
+placebos' 95th percentile).
 
 Speed per leg (``wrp.evaluate.slow_legs``): the same views, fly-through kept, but the legs arriving at and
 leaving each of them flown at ``slow_leg_speed_m_s`` (:attr:`wrp_eval.planning.path.FlightPath.leg_speed_m_s`):
