@@ -1,8 +1,8 @@
 """Studies (`study:` configs, wrp_eval/study): validation, the variant mechanics, and the paper configs
 (experiments/paper/table1..8.yaml) run end to end at their smallest setting through `wrp-eval run --smallest`:
 tables 1, 2, 6, 7 and 8 as they are; tables 3, 4 and 5, which share one base config, as one study holding a
-variant of each kind from the three (the three tables' own smallest runs, ~90 s here: `wrp-eval bench --only
-study`)."""
+variant of each kind from the three (25-34 s here; the three tables' own smallest runs, 82-88 s: `wrp-eval bench
+--only study`)."""
 
 import json
 from pathlib import Path
@@ -214,9 +214,11 @@ def tables_3_to_5_smallest(tmp_path_factory):
     here): one study of table 3's base with the variants of each kind from all three, at the tables' smallest setting,
     runs every mechanism they run once (the tables' own --smallest runs: `wrp-eval bench --only study`)."""
     docs = {n: yaml.safe_load((PAPER / f"table{n}.yaml").read_text()) for n in (3, 4, 5)}
-    base = {k: v for k, v in docs[3].items() if k not in ("study", "run")}
-    assert all({k: v for k, v in docs[n].items() if k not in ("study", "run")} == base for n in (4, 5))
-    assert all(docs[n]["study"]["smallest"] == docs[3]["study"]["smallest"] for n in (4, 5))
+
+    def shared(doc: dict) -> dict:      # all but the run's name and the table's own rows and headings
+        return {**doc, "run": {k: v for k, v in doc["run"].items() if k != "name"},
+                "study": {k: v for k, v in doc["study"].items() if k not in ("table", "title", "columns", "variants")}}
+    assert shared(docs[4]) == shared(docs[3]) == shared(docs[5])
     docs[3]["study"]["variants"] = (
         _paper_variants(3, "initial path", "ISWRP 0.20", "ISWRP 0.30", "SWRP 0.30", "ISWRP 0.30 Alg. 3 as written")
         + _paper_variants(4, "no-WRP path + random offsets") + _paper_variants(5, "SWRP 0.30 + secondary offsets"))
@@ -230,6 +232,7 @@ def tables_3_to_5_smallest(tmp_path_factory):
 
 def test_tables_3_to_5_smallest_share_one_surrogate_across_the_wrps(tables_3_to_5_smallest):
     doc, variants, _ = tables_3_to_5_smallest
+    assert [r["variant"] for r in doc["rows"]] == [v["name"] for v in variants for _ in range(v.get("repetitions", 1))]
     assert len(doc["shared_training"]) == 1
     rows = {r["variant"]: r for r in doc["rows"]}
     e0 = rows["initial path"]["ours"]["error_m"]

@@ -31,9 +31,10 @@ def thread_env(threads: int) -> dict[str, str]:
 
 
 def _limit_threads(threads: int) -> None:
-    """Keep this process's numerical libraries to ``threads`` threads. torch is not imported for it (a flight
-    worker never uses torch, and its import is ~1.6 s of each worker's start here): a torch imported later
-    sizes its pools from OMP_NUM_THREADS, set here; one already imported is told directly."""
+    """Keep this process's numerical libraries to ``threads`` threads. torch is not imported for it (the flight
+    and analytic evaluators never use torch, and importing it took a worker's imports from ~2.2 to ~4.0 s here):
+    a torch imported later sizes its intra-op pool from OMP_NUM_THREADS, set here; one already imported (or
+    imported by an evaluator's set-up, :func:`init_worker` calls this again) is told directly."""
     os.environ.update(thread_env(threads))
     torch = sys.modules.get("torch")
     if torch is None:
@@ -55,6 +56,8 @@ def init_worker(spec: dict) -> None:
     factory = resolve_factory(spec["evaluator"])
     _STATE.clear()
     evaluator: TrialEvaluator = factory(context, **spec["evaluator_options"])
+    if "torch" in sys.modules:      # a plug-in evaluator that imported torch: its pools too
+        _limit_threads(context.threads)
     _STATE.update(key=spec["key"], evaluator=evaluator,
                   worker=f"{socket.gethostname()}:{os.getpid()}")
 
