@@ -202,8 +202,8 @@ def test_table7_and_table8_smallest(tmp_path, monkeypatch):
         assert len(stations) - 1 == int(np.ceil(extent / (footprint * (1.0 - overlap))))
 
 
-def _paper_variants(table: int, *names: str) -> list[dict]:
-    doc = yaml.safe_load((PAPER / f"table{table}.yaml").read_text())
+def _variants(doc: dict, *names: str) -> list[dict]:
+    """The variants ``names`` of a study config's document, in that order."""
     by_name = {v["name"]: v for v in doc["study"]["variants"]}
     return [by_name[name] for name in names]
 
@@ -220,8 +220,8 @@ def tables_3_to_5_smallest(tmp_path_factory):
                 "study": {k: v for k, v in doc["study"].items() if k not in ("table", "title", "columns", "variants")}}
     assert shared(docs[4]) == shared(docs[3]) == shared(docs[5])
     docs[3]["study"]["variants"] = (
-        _paper_variants(3, "initial path", "ISWRP 0.20", "ISWRP 0.30", "SWRP 0.30", "ISWRP 0.30 Alg. 3 as written")
-        + _paper_variants(4, "no-WRP path + random offsets") + _paper_variants(5, "SWRP 0.30 + secondary offsets"))
+        _variants(docs[3], "initial path", "ISWRP 0.20", "ISWRP 0.30", "SWRP 0.30", "ISWRP 0.30 Alg. 3 as written")
+        + _variants(docs[4], "no-WRP path + random offsets") + _variants(docs[5], "SWRP 0.30 + secondary offsets"))
     folder = tmp_path_factory.mktemp("tables-3-5")
     config = folder / "table3.yaml"
     config.write_text(yaml.safe_dump(docs[3]))

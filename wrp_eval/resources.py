@@ -7,6 +7,8 @@ Two lookups, one place:
   ``wrp_eval/models`` (setuptools ``package-dir``), so a non-editable install carries it inside the package,
   while a source checkout or an editable install (which links the package folder, not the repository) finds
   it next to the package folder.
+- :func:`source_experiments_dir`: the repository's ``experiments/`` configs (a source checkout only; the benches
+  read them).
 - :func:`cache_dir`: where generated files (procedural ship meshes) are cached: ``$WRP_EVAL_CACHE_DIR`` when
   set, else the user's cache folder of the platform (``platformdirs.user_cache_dir``, e.g.
   ``~/.cache/wrp-eval`` on Linux), never the source tree or the installed package.
@@ -41,6 +43,13 @@ def models_dir() -> Path:
     if source.is_dir():
         return source
     raise FileNotFoundError(f"wrp-eval models folder not found (looked in {packaged} and {source})")
+
+
+def source_experiments_dir() -> Path:
+    """The repository's top-level ``experiments/`` folder (the quickstart and the paper configs) beside the package
+    folder: a source checkout or an editable install has it; a wheel does not carry it (the benches that read it
+    say so, or fall back to the embedded defaults)."""
+    return Path(__file__).resolve().parent.parent / "experiments"
 
 
 def model_file(*parts: str) -> Path:

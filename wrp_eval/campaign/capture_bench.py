@@ -33,6 +33,7 @@ from wrp_eval.campaign.records import column_array
 from wrp_eval.campaign.store import TrialStore
 from wrp_eval.config import ExperimentConfig
 from wrp_eval.experiment import ExperimentContext
+from wrp_eval.resources import source_experiments_dir
 from wrp_eval.sim.config import SimSection
 from wrp_eval.sim.flight import FlightSimulator
 from wrp_eval.sim.navigation import hover_p95_spec_m, navigation_params
@@ -156,7 +157,7 @@ def _speed_records(speed: int, summary, table) -> tuple[list[BenchRecord], np.nd
 def quickstart_context() -> ExperimentContext:
     """The quickstart experiment (experiments/quickstart.yaml of a source checkout; the embedded defaults
     elsewhere, which plan the same ship and path)."""
-    file = Path(__file__).resolve().parents[2] / "experiments" / "quickstart.yaml"
+    file = source_experiments_dir() / "quickstart.yaml"
     return ExperimentContext.load(file) if file.is_file() else ExperimentContext(ExperimentConfig())
 
 

@@ -56,8 +56,7 @@ def init_worker(spec: dict) -> None:
     factory = resolve_factory(spec["evaluator"])
     _STATE.clear()
     evaluator: TrialEvaluator = factory(context, **spec["evaluator_options"])
-    if "torch" in sys.modules:      # a plug-in evaluator that imported torch: its pools too
-        _limit_threads(context.threads)
+    _limit_threads(context.threads)     # again: a plug-in evaluator may have imported torch in its set-up
     _STATE.update(key=spec["key"], evaluator=evaluator,
                   worker=f"{socket.gethostname()}:{os.getpid()}")
 

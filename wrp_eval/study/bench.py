@@ -15,13 +15,13 @@ from __future__ import annotations
 import contextlib
 import tempfile
 import time
-from pathlib import Path
 
 from wrp_eval.bench_record import BenchRecord
 from wrp_eval.experiment import ExperimentContext
+from wrp_eval.resources import source_experiments_dir
 from wrp_eval.study.runner import run_study, variant_configs
 
-PAPER = Path(__file__).resolve().parents[2] / "experiments" / "paper"
+PAPER = source_experiments_dir() / "paper"
 TABLES = range(1, 9)
 
 

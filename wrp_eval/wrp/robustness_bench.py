@@ -21,11 +21,12 @@ from pathlib import Path
 from wrp_eval.bench_record import BenchRecord
 from wrp_eval.campaign.jobs import campaign_job
 from wrp_eval.experiment import ExperimentContext
+from wrp_eval.resources import source_experiments_dir
 from wrp_eval.surrogate.train import train_from_campaign
 from wrp_eval.wrp.evaluation import EvaluationResult
 from wrp_eval.wrp.jobs import evaluate_job
 
-CONFIG = Path(__file__).resolve().parents[2] / "experiments" / "quickstart.yaml"
+CONFIG = source_experiments_dir() / "quickstart.yaml"
 
 
 def run_bench() -> list[BenchRecord]:
