@@ -213,6 +213,16 @@ def test_flights_still_flying_at_the_time_limit_fail():
     assert state.flight_time.tolist() == [12.0, 0.0, 12.0]
 
 
+def test_the_time_limit_can_be_per_flight():
+    state = FlightState.start(_targets(4))
+    state.phase[3] = DONE
+    pos = np.tile(VIEWS[0], (4, 1))
+    cause = check_failures(state, pos, np.zeros((4, 3)), out_of_time=np.array([False, True, False, True]))
+    assert cause.tolist() == [COMPLETED, TIMED_OUT, COMPLETED, COMPLETED]
+    with pytest.raises(ValueError, match="out_of_time"):
+        check_failures(state, pos, np.zeros((4, 3)), out_of_time=np.ones(3, dtype=bool))
+
+
 def test_the_autopilot_returns_home_on_its_battery_wind_limit_or_headway_without_failing():
     sec = SimSection(mission={"px4_wind_limit_m_s": 12.0, "operator_wind_limit_m_s": 10.0})
     state = FlightState.start(_targets(7))

@@ -493,6 +493,8 @@ class FlightSimulator:
         if profile.through:
             FlightSimulator._passing_photos(state, targets, nav, shoot, dt, sec)
         moves = transitions(state, nav.position, nav.velocity, nav.yaw, targets, sec, dwell, profile.through)
+        if not (moves.trigger.any() or moves.chain.any() or moves.to_settle.any() or moves.to_dwell.any()):
+            return      # most chunks: no flight changes phase
         if profile.through:     # a view taken at rest (a stop, the last): the views still pending before it were missed
             state.photo = np.where(moves.trigger, np.maximum(state.photo, state.index), state.photo)
         due = np.flatnonzero(moves.trigger & (state.photo == state.index))
@@ -553,6 +555,8 @@ class FlightSimulator:
         back to the crossing, plus the trigger latency); views missed are moved over."""
         rows, past, normal, missed = passing_views(state, nav.position, targets, sec.capture.corner_radius_m)
         state.photo[missed] += 1
+        if not rows.size:       # most chunks
+            return
         delay = shutter_offset(past, (nav.velocity[rows] * normal).sum(axis=1), dt, sec.capture.trigger_latency_s)
         take_photos(state, targets, rows, shoot(rows, state.photo[rows], delay))
 

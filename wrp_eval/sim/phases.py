@@ -230,20 +230,37 @@ def reference(state: FlightState, position: np.ndarray, profile: Profile, leash_
 
 
 # -- how flights end ----------------------------------------------------------------------------------------
+@kernel
+def _failure_rows(phase: NDArray[np.int_], position: NDArray[np.float64], velocity: NDArray[np.float64],
+                  out_of_time: NDArray[np.bool_]) -> NDArray[np.int64]:
+    """(batch,) outcome codes of :func:`check_failures`, row by row."""
+    n = phase.size
+    cause = np.full(n, COMPLETED, np.int64)
+    for row in range(n):
+        if phase[row] >= DONE:
+            continue
+        # one non-finite component makes the row's sum non-finite (summed as numpy sums a row: left to right)
+        total = (position[row, 0] + position[row, 1] + position[row, 2]) + (
+            velocity[row, 0] + velocity[row, 1] + velocity[row, 2])
+        if not np.isfinite(total):
+            cause[row] = NON_FINITE
+        elif position[row, 2] < 0.0:
+            cause[row] = DITCHED
+        elif out_of_time[row]:
+            cause[row] = TIMED_OUT
+    return cause
+
+
 def check_failures(state: FlightState, position: np.ndarray, velocity: np.ndarray,
                    out_of_time: NDArray[np.bool_] | bool) -> np.ndarray:
     """(batch,) outcome codes of flights failing now (COMPLETED elsewhere): non-finite state, below the sea
     surface (ditched), or still flying when ``out_of_time`` ((batch,) bool or one bool for all: the sortie has
     run past the simulator's limit). ``position``, ``velocity`` (batch, 3): true."""
-    active = state.flying
-    bad = ~np.isfinite(position.sum(axis=1) + velocity.sum(axis=1))
-    ditched = position[:, 2] < 0.0
-    newly = active & (ditched | bad | out_of_time)
-    cause = np.full(len(newly), COMPLETED)
-    if newly.any():     # rare: np.select alone would cost a fifth of this function every chunk
-        first = np.select([bad, ditched], [NON_FINITE, DITCHED], TIMED_OUT)
-        cause[newly] = first[newly]
-    return cause
+    n = len(state.phase)
+    late = (np.full(n, out_of_time) if isinstance(out_of_time, (bool, np.bool_))
+            else np.ascontiguousarray(as_rows("out_of_time", out_of_time, (n,), np.bool_)))
+    return _failure_rows(state.phase, as_rows("position", position, (n, 3)), as_rows("velocity", velocity, (n, 3)),
+                         late)
 
 
 @kernel
@@ -442,7 +459,9 @@ def transitions(state: FlightState, position: np.ndarray, velocity: np.ndarray, 
     viewpoint and at the views of ``targets.stop``."""
     seg = state.segment
     stop = targets.stop if targets.stop is not None else np.zeros(targets.n_views, dtype=bool)
-    dwell = np.ascontiguousarray(np.broadcast_to(np.asarray(dwell_s, dtype=float), (targets.n_views,)))
+    dwell = as_rows("dwell_s", dwell_s, (targets.n_views,))
+    if not dwell.flags.c_contiguous:      # a number broadcast to the views (the flight passes its own array)
+        dwell = np.ascontiguousarray(dwell)
     moves = _transition_rows(state.phase, state.phase_time, state.index, seg.duration, seg.end, targets.yaw,
                              position, velocity, yaw, targets.n_views, bool(through), stop,
                              float(sec.settle_position_m), float(sec.settle_speed_m_s),
