@@ -107,3 +107,31 @@ def test_the_kernel_cache_folder_follows_every_module_of_the_package(tmp_path):
     assert edited != before
     kernels.write_text(kernels.read_text().replace("x * G", "x * G + 1"))
     assert kernel_sources_digest(package) not in (before, edited)
+
+
+def test_contiguous_hands_every_kernel_caller_the_same_kind_of_array():
+    from wrp_eval.compiled import contiguous
+
+    rows = np.arange(12.0).reshape(4, 3)
+    assert contiguous(rows) is rows                                   # already one: no copy
+    column = contiguous(rows[:, 1])                                   # a strided view
+    assert column.flags.c_contiguous and column.tolist() == [1.0, 4.0, 7.0, 10.0]
+    frozen = rows.copy()
+    frozen.flags.writeable = False
+    thawed = contiguous(frozen)
+    assert thawed.flags.writeable and np.array_equal(thawed, frozen)
+    assert contiguous(np.broadcast_to(2.0, (3,))).flags.writeable     # a broadcast number becomes an array
+    assert contiguous([1, 2]).dtype == np.float64
+
+
+def test_camera_rotations_compile_one_signature_whatever_their_inputs_flags():
+    from wrp_eval.camera import _rotation_rows, camera_rotations
+
+    yaw = np.linspace(0.0, 1.0, 5)
+    frozen = yaw.copy()
+    frozen.flags.writeable = False
+    camera_rotations(yaw, -0.3, 0.1)
+    before = len(_rotation_rows.signatures)
+    for y, p, r in ((frozen, -0.3, 0.1), (yaw[::-1], np.full(5, -0.3)[::-1], None), (frozen, frozen, frozen)):
+        camera_rotations(y, p, r)
+    assert len(_rotation_rows.signatures) == before

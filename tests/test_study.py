@@ -263,4 +263,27 @@ def test_tables_4_and_5_smallest_offset_rows(tables_3_to_5_smallest):
         store = next(s for s in reader.recordings() if s.recording_id.endswith("/" + variant))
         entities = {chunk.entity_path for chunk in reader.stream(store=store)}
         assert {f"/paths/offsets-{k}/tour" for k in range(1, 6)} <= entities
-        assert f"/paths/{path}/tour" in entities or path == "plan"
+        assert ("/plan/tour" if path == "plan" else f"/paths/{path}/tour") in entities     # and the path they offset
+
+
+def test_a_variant_reuses_what_an_earlier_one_resolved_only_where_its_sections_match():
+    from wrp_eval.experiment import ExperimentContext
+
+    base = ExperimentConfig.model_validate({"ship": {"type": "fishing"}})
+    first = ExperimentContext(base, Path("."), "cfg")
+    plan, scored = first.planned, first.scored_ship
+    same = ExperimentContext(base.model_copy(update={"wrp": base.wrp.model_copy(update={"iterations": 7})}),
+                             Path("."), "cfg")
+    same.reuse_from(first)
+    assert same.planned is plan and same.scored_ship is scored and same.ship is first.ship
+    replanned = ExperimentContext(base.model_copy(update={"planning": base.planning.model_copy(
+        update={"distance_m": 40.0})}), Path("."), "cfg")
+    replanned.reuse_from(first)
+    assert replanned.ship is first.ship and replanned.scored_ship is scored and "planned" not in replanned.__dict__
+    reseeded = ExperimentContext(base.model_copy(update={"run": base.run.model_copy(update={"seed": 9})}),
+                                 Path("."), "cfg")
+    reseeded.reuse_from(first)
+    assert "planned" not in reseeded.__dict__ and reseeded.scored_ship is scored
+    elsewhere = ExperimentContext(base, Path("other"), "cfg")
+    elsewhere.reuse_from(first)
+    assert not {"ship", "planned", "scored_ship"} & set(elsewhere.__dict__)

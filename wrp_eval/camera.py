@@ -25,7 +25,7 @@ from typing import overload
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from wrp_eval.compiled import kernel
+from wrp_eval.compiled import contiguous, kernel
 
 
 @dataclass(frozen=True)
@@ -133,9 +133,8 @@ def camera_rotations(yaw: ArrayLike, pitch: ArrayLike, roll: ArrayLike | None = 
     yaw = np.atleast_1d(np.asarray(yaw, dtype=float))
     pitch = np.atleast_1d(np.asarray(pitch, dtype=float))
     shape = np.broadcast_shapes(yaw.shape, pitch.shape)
-    yaw, pitch = (np.ascontiguousarray(np.broadcast_to(a, shape)).reshape(-1) for a in (yaw, pitch))
-    roll = np.empty(0) if roll is None else np.ascontiguousarray(
-        np.broadcast_to(np.asarray(roll, dtype=float), shape)).reshape(-1)
+    yaw, pitch = (contiguous(np.broadcast_to(a, shape)).reshape(-1) for a in (yaw, pitch))
+    roll = np.empty(0) if roll is None else contiguous(np.broadcast_to(np.asarray(roll, float), shape)).reshape(-1)
     return _rotation_rows(yaw, pitch, roll).reshape(shape + (3, 3))
 
 

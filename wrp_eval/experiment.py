@@ -119,6 +119,22 @@ class ExperimentContext:
         """The context of another (already validated) config in the same folder: a study variant."""
         return ExperimentContext(config, self.config_dir, source or self.source)
 
+    def reuse_from(self, other: "ExperimentContext") -> None:
+        """Take what ``other`` has already resolved where this config would resolve the same (the same config
+        folder and name, and the same sections it is built from): the ship (``ship:``), its plan (``ship:``,
+        ``planning:``, ``run.seed``) and the scored ship (``ship:``, ``oracle:``, ``campaign.oracle``). A study's
+        variants mostly differ in other sections, and each would otherwise plan and score the same ship again."""
+        if (other.config_dir, other.source) != (self.config_dir, self.source):
+            return
+        a, b = self.config, other.config
+        same_ship = a.ship == b.ship
+        shared = {"ship": same_ship, "particulars_with_provenance": same_ship, "flight_proxy": same_ship,
+                  "planned": same_ship and a.planning == b.planning and a.run.seed == b.run.seed,
+                  "scored_ship": same_ship and a.oracle == b.oracle and a.campaign.oracle == b.campaign.oracle}
+        for name, same in shared.items():      # the cached_property values other has computed
+            if same and name in other.__dict__ and name not in self.__dict__:
+                self.__dict__[name] = other.__dict__[name]
+
     # seeds --------------------------------------------------------------------------------------------
     @property
     def run_seed(self) -> int:

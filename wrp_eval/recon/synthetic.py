@@ -54,7 +54,7 @@ import scipy.sparse as sp
 from scipy.sparse.csgraph import connected_components, minimum_spanning_tree
 
 from wrp_eval.camera import Camera, optical_axes, world_rays
-from wrp_eval.compiled import kernel
+from wrp_eval.compiled import contiguous, kernel
 from wrp_eval.open3d_arrays import o3d_tensor
 from wrp_eval.recon.config import OracleSection, SyntheticOracleSection
 from wrp_eval.recon.fusion import FusedReconstruction, fuse
@@ -419,7 +419,7 @@ def match_pairs(obs: Observations, hit: np.ndarray, partner: np.ndarray, capture
     """Step 3 on the candidate pairs (:func:`candidate_pairs`) in one compiled pass (:func:`_match_pairs`)."""
     cam = capture_set.camera
     status, grid_index = _match_pairs(
-        obs.points, obs.normals, obs.dirs, hit, partner, np.asarray(capture_set.positions, dtype=float),
+        obs.points, obs.normals, obs.dirs, hit, partner, contiguous(capture_set.positions),
         capture_set.rotations(),  # roll included: decides what lands in j's image
         obs.hit_map.reshape(-1, 3), obs.normal_map.reshape(-1, 3), cam.focal_px, float(cam.image_width_px),
         float(cam.image_height_px), p.rays_x, p.rays_y, px_spacing, float(max_range_m), float(np.cos(incidence_max)),

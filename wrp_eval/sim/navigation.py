@@ -48,7 +48,7 @@ from numpy.typing import ArrayLike, NDArray
 from pydantic import Field
 from scipy.linalg import solve_discrete_are
 
-from wrp_eval.compiled import as_rows, kernel
+from wrp_eval.compiled import as_rows, contiguous, kernel
 from wrp_eval.schema import StrictModel
 from wrp_eval.streams import BlockNormals, FlightRngs, flight_generators
 
@@ -594,9 +594,10 @@ class NavigationEstimator:
             return NavigationEstimate(position.copy(), velocity.copy(), yaw.copy(), np.zeros_like(position),
                                       np.zeros_like(yaw))
         n = self.n_flights
-        position, velocity = as_rows("position", position, (n, 3)), as_rows("velocity", velocity, (n, 3))
-        yaw = as_rows("yaw", yaw, (n,))
-        hull = np.empty(0) if hull_distance_m is None else as_rows("hull_distance_m", hull_distance_m, (n,))
+        position, velocity = (contiguous(as_rows(name, value, (n, 3)))
+                              for name, value in (("position", position), ("velocity", velocity)))
+        yaw = contiguous(as_rows("yaw", yaw, (n,)))
+        hull = np.empty(0) if hull_distance_m is None else contiguous(as_rows("hull_distance_m", hull_distance_m, (n,)))
         self._advance(t_s)
         p = self.params
         return NavigationEstimate(*_estimate_rows(position, velocity, yaw, self._pos_err, self._vel_err,

@@ -147,7 +147,7 @@ def _interpolate_rows(points: NDArray[np.float64], grid_yaw: float, x_axis: NDAr
     c, s = np.cos(grid_yaw), np.sin(grid_yaw)                  # WindGrid.to_grid_frame
     gx = c * points[:, 0] + s * points[:, 1]
     gy = -s * points[:, 0] + c * points[:, 1]
-    gz = points[:, 2]
+    gz = np.ascontiguousarray(points[:, 2])     # one layout for _first_outside (compiled once)
     out = np.zeros((n, 3))
     if not clamp:
         row = _first_outside(gx, np.full(n, x_axis[0]), np.full(n, x_axis[-1]))
