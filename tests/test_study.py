@@ -284,6 +284,27 @@ def test_a_variant_reuses_what_an_earlier_one_resolved_only_where_its_sections_m
                                  Path("."), "cfg")
     reseeded.reuse_from(first)
     assert "planned" not in reseeded.__dict__ and reseeded.scored_ship is scored
+    other_oracle = ExperimentContext(base.model_copy(update={"campaign": base.campaign.model_copy(
+        update={"oracle": "colmap"})}), Path("."), "cfg")
+    other_oracle.reuse_from(first)
+    assert other_oracle.planned is plan and "scored_ship" not in other_oracle.__dict__
     elsewhere = ExperimentContext(base, Path("other"), "cfg")
     elsewhere.reuse_from(first)
     assert not {"ship", "planned", "scored_ship"} & set(elsewhere.__dict__)
+
+
+def test_a_study_plans_once_for_its_variants_that_share_the_planning(tmp_path, monkeypatch):
+    import wrp_eval.experiment as experiment
+
+    calls = []
+    real_plan = experiment.plan
+    monkeypatch.setattr(experiment, "plan", lambda *args: calls.append(args[2]) or real_plan(*args))
+    monkeypatch.chdir(tmp_path)
+    cfg = tmp_path / "study.yaml"
+    cfg.write_text("run: {name: reuse}\nship: {type: fishing}\nstudy: {columns: [views, error_m], variants: [\n"
+                   "  {name: a}, {name: b, overrides: {wrp: {iterations: 5}}},\n"
+                   "  {name: c, overrides: {planning: {distance_m: 40.0}}}]}\n")
+    assert main(["run", str(cfg)]) == 0
+    assert [section.distance_m for section in calls] == [None, 40.0]      # a and b share one plan; c plans its own
+    rows = json.loads((tmp_path / "logs" / "reuse" / "study.json").read_text())["rows"]
+    assert rows[0]["ours"]["views"] == rows[1]["ours"]["views"] != rows[2]["ours"]["views"]

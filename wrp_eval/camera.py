@@ -133,9 +133,11 @@ def camera_rotations(yaw: ArrayLike, pitch: ArrayLike, roll: ArrayLike | None = 
     yaw = np.atleast_1d(np.asarray(yaw, dtype=float))
     pitch = np.atleast_1d(np.asarray(pitch, dtype=float))
     shape = np.broadcast_shapes(yaw.shape, pitch.shape)
-    yaw, pitch = (contiguous(np.broadcast_to(a, shape)).reshape(-1) for a in (yaw, pitch))
-    roll = np.empty(0) if roll is None else contiguous(np.broadcast_to(np.asarray(roll, float), shape)).reshape(-1)
-    return _rotation_rows(yaw, pitch, roll).reshape(shape + (3, 3))
+    yaw, pitch = (contiguous(a if a.shape == shape else np.broadcast_to(a, shape)).reshape(-1) for a in (yaw, pitch))
+    if roll is not None:
+        roll = np.asarray(roll, float)
+        roll = contiguous(roll if roll.shape == shape else np.broadcast_to(roll, shape)).reshape(-1)
+    return _rotation_rows(yaw, pitch, np.empty(0) if roll is None else roll).reshape(shape + (3, 3))
 
 
 @kernel

@@ -121,8 +121,9 @@ class ExperimentContext:
 
     def reuse_from(self, other: "ExperimentContext") -> None:
         """Take what ``other`` has already resolved where this config would resolve the same (the same config
-        folder and name, and the same sections it is built from): the ship (``ship:``), its plan (``ship:``,
-        ``planning:``, ``run.seed``) and the scored ship (``ship:``, ``oracle:``, ``campaign.oracle``). A study's
+        folder and name, and the same sections it is built from): the ship, its particulars and flight proxy
+        (``ship:``), its plan (``ship:``, ``planning:``, ``run.seed``; its metrics keep the planning time of the
+        context that planned it) and the scored ship (``ship:``, ``oracle:``, ``campaign.oracle``). A study's
         variants mostly differ in other sections, and each would otherwise plan and score the same ship again."""
         if (other.config_dir, other.source) != (self.config_dir, self.source):
             return

@@ -18,7 +18,7 @@ from typing import Any, NamedTuple
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from wrp_eval.compiled import as_rows, kernel
+from wrp_eval.compiled import as_rows, contiguous, kernel
 from wrp_eval.sim.capture_mode import through_profile, through_row
 from wrp_eval.sim.config import SimSection
 from wrp_eval.sim.controller import PositionController, wrap_angle, wrapped
@@ -258,7 +258,7 @@ def check_failures(state: FlightState, position: np.ndarray, velocity: np.ndarra
     run past the simulator's limit). ``position``, ``velocity`` (batch, 3): true."""
     n = len(state.phase)
     late = (np.full(n, out_of_time) if isinstance(out_of_time, (bool, np.bool_))
-            else np.ascontiguousarray(as_rows("out_of_time", out_of_time, (n,), np.bool_)))
+            else contiguous(as_rows("out_of_time", out_of_time, (n,), np.bool_), np.bool_))
     return _failure_rows(state.phase, as_rows("position", position, (n, 3)), as_rows("velocity", velocity, (n, 3)),
                          late)
 
@@ -459,9 +459,7 @@ def transitions(state: FlightState, position: np.ndarray, velocity: np.ndarray, 
     viewpoint and at the views of ``targets.stop``."""
     seg = state.segment
     stop = targets.stop if targets.stop is not None else np.zeros(targets.n_views, dtype=bool)
-    dwell = as_rows("dwell_s", dwell_s, (targets.n_views,))
-    if not dwell.flags.c_contiguous:      # a number broadcast to the views (the flight passes its own array)
-        dwell = np.ascontiguousarray(dwell)
+    dwell = contiguous(as_rows("dwell_s", dwell_s, (targets.n_views,)))     # the flight's own array: no copy
     moves = _transition_rows(state.phase, state.phase_time, state.index, seg.duration, seg.end, targets.yaw,
                              position, velocity, yaw, targets.n_views, bool(through), stop,
                              float(sec.settle_position_m), float(sec.settle_speed_m_s),

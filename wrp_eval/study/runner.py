@@ -165,6 +165,8 @@ def run_study(ctx: ExperimentContext, *, smallest: bool = False) -> dict:
         start = time.perf_counter()
         log.info(f"[wrp-eval run] study {number}/{len(built)}: {variant.name} ...")
         folder = vctx.folders.study / slug(variant.name)
+        for _, earlier in built[:number - 1]:
+            vctx.reuse_from(earlier)
         ship, result = vctx.ship, vctx.planned
         path = dataclasses.replace(result.path, metadata={**result.path.metadata, "variant": variant.name})
         path.save(folder / "plan" / "path.json")
