@@ -74,9 +74,9 @@ def as_rows(name: str, array: ArrayLike, shape: tuple[int, ...], dtype: DTypeLik
 
 def contiguous(array: ArrayLike, dtype: DTypeLike = float) -> NDArray[Any]:
     """``array`` as a C-contiguous, writeable ``dtype`` array of at least one dimension (a number becomes shape
-    (1,)), copied only where it is not one already. numba
-    compiles (or loads) a kernel once per argument layout and read-only flag: a caller that hands it a strided
-    view or a read-only array costs a second compilation, ~1 s on a machine with an empty kernel cache."""
+    (1,)), copied only where it is not one already. numba compiles (or loads) a kernel once per argument layout
+    and read-only flag: a caller that hands it a strided view or a read-only array costs a second compilation,
+    ~1 s on a machine with an empty kernel cache."""
     out = np.ascontiguousarray(array, dtype=dtype)
     return out if out.flags.writeable else out.copy()
 
