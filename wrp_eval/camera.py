@@ -25,7 +25,7 @@ from typing import overload
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from wrp_eval.compiled import contiguous, kernel
+from wrp_eval.compiled import as_rows, contiguous, kernel
 
 
 @dataclass(frozen=True)
@@ -133,11 +133,9 @@ def camera_rotations(yaw: ArrayLike, pitch: ArrayLike, roll: ArrayLike | None = 
     yaw = np.atleast_1d(np.asarray(yaw, dtype=float))
     pitch = np.atleast_1d(np.asarray(pitch, dtype=float))
     shape = np.broadcast_shapes(yaw.shape, pitch.shape)
-    yaw, pitch = (contiguous(a if a.shape == shape else np.broadcast_to(a, shape)).reshape(-1) for a in (yaw, pitch))
-    if roll is not None:
-        roll = np.asarray(roll, float)
-        roll = contiguous(roll if roll.shape == shape else np.broadcast_to(roll, shape)).reshape(-1)
-    return _rotation_rows(yaw, pitch, np.empty(0) if roll is None else roll).reshape(shape + (3, 3))
+    yaw, pitch = (contiguous(as_rows(name, a, shape)).reshape(-1) for name, a in (("yaw", yaw), ("pitch", pitch)))
+    roll = np.empty(0) if roll is None else contiguous(as_rows("roll", roll, shape)).reshape(-1)
+    return _rotation_rows(yaw, pitch, roll).reshape(shape + (3, 3))
 
 
 @kernel

@@ -257,10 +257,8 @@ def check_failures(state: FlightState, position: np.ndarray, velocity: np.ndarra
     surface (ditched), or still flying when ``out_of_time`` ((batch,) bool or one bool for all: the sortie has
     run past the simulator's limit). ``position``, ``velocity`` (batch, 3): true."""
     n = len(state.phase)
-    late = (np.full(n, out_of_time) if isinstance(out_of_time, (bool, np.bool_))
-            else contiguous(as_rows("out_of_time", out_of_time, (n,), np.bool_), np.bool_))
     return _failure_rows(state.phase, as_rows("position", position, (n, 3)), as_rows("velocity", velocity, (n, 3)),
-                         late)
+                         contiguous(as_rows("out_of_time", out_of_time, (n,), np.bool_), np.bool_))
 
 
 @kernel
