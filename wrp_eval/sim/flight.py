@@ -44,6 +44,7 @@ from mujoco import rollout as mj_rollout
 from numpy.typing import ArrayLike, NDArray
 from scipy.spatial.transform import Rotation
 
+from wrp_eval.blas import single_threaded_blas
 from wrp_eval.compiled import kernel
 from wrp_eval.planning.path import FlightPath
 from wrp_eval.sim.aero import drag_force
@@ -398,9 +399,10 @@ class FlightSimulator:
         the plan per flight; the recorded offsets are always measured against the unperturbed plan.
         ``ship``: the ship flown around (its box for the compass and the views' depth, its motion); None:
         open sea. ``flight_rngs``: one Generator per flight (or a seed they are spawned from) for the
-        navigation errors and the ship's motion; None: seed 0.
+        navigation errors and the ship's motion; None: seed 0. BLAS runs on one thread meanwhile (wrp_eval/blas.py).
         """
-        return self._fly(path, wind, batch, view_offsets, start_time_s, self.section, ship, flight_rngs)
+        with single_threaded_blas():
+            return self._fly(path, wind, batch, view_offsets, start_time_s, self.section, ship, flight_rngs)
 
     def _targets(self, path: FlightPath, batch: int, view_offsets: np.ndarray | None, ship: ShipInScene | None,
                  profile: Profile, sec: SimSection, stop: NDArray[np.bool_]) -> FlightTargets:
@@ -577,4 +579,5 @@ class FlightSimulator:
                     np.array([-1]), np.array([1]), np.array([0]), speed_m_s=5.0, dwell_s=duration_s)
         sec = self.section.model_copy(update={"settle_timeout_s": 1e-9, "dwell_s": duration_s,
                                               "capture": self.section.capture.model_copy(update={"mode": "stop"})})
-        return self._fly(path, wind, batch, None, 0.0, sec, None, flight_rngs)
+        with single_threaded_blas():
+            return self._fly(path, wind, batch, None, 0.0, sec, None, flight_rngs)
