@@ -3,7 +3,7 @@ do not depend on how the steps are drawn."""
 
 import numpy as np
 
-from wrp_eval.streams import BlockNormals, children, flight_generators
+from wrp_eval.streams import FIRST_BLOCK_STEPS, BlockNormals, children, flight_generators
 
 
 def test_children_are_the_spawned_ones_and_leave_the_source_untouched():
@@ -28,6 +28,17 @@ def test_block_normals_do_not_depend_on_the_chunking():
     assert np.array_equal(whole, chunked)
     alone = BlockNormals([np.random.default_rng(s) for s in np.random.SeedSequence(3).spawn(2)][1:], 1, 4, 8)
     assert np.array_equal(whole[1:], alone.draw(20))
+
+
+def test_block_sizes_never_change_the_numbers_and_a_short_draw_draws_little():
+    n_steps, width = 3 * FIRST_BLOCK_STEPS + 5, 3
+    own = [g.standard_normal((n_steps, width)) for g in flight_generators(4, 2)]
+    for block_steps in (1, 8, FIRST_BLOCK_STEPS, 1024):
+        assert np.array_equal(BlockNormals(4, 2, width, block_steps).draw(n_steps), np.stack(own))
+    short = BlockNormals(4, 2, width, block_steps=1024)
+    short.draw(5)               # one first block: FIRST_BLOCK_STEPS steps drawn, not 1,024
+    after = [g.standard_normal() for g in short.rngs]
+    assert after == [g.standard_normal((FIRST_BLOCK_STEPS * width) + 1)[-1] for g in flight_generators(4, 2)]
 
 
 def test_children_continue_after_spawned_ones_keep_the_bit_generator_and_refuse_legacy_sources():

@@ -58,16 +58,22 @@ def flight_generators(rngs: FlightRngs, n_flights: int) -> list[np.random.Genera
     return [g if isinstance(g, np.random.Generator) else np.random.default_rng(g) for g in rngs]
 
 
+# steps of a BlockNormals' first block; each next block doubles, up to its block_steps: a short flight does not
+# draw a long flight's numbers (a batch of 64 drew 1,024 Dryden steps, 3.5 ms, for a 10 s flight of 200 steps)
+FIRST_BLOCK_STEPS = 32
+
+
 class BlockNormals:
-    """Standard normals (n_flights, n_steps, width) from each flight's own generator, drawn in blocks of
-    ``block_steps`` steps per flight (one stacked draw per block, not one per step): the numbers a flight
-    gets depend only on its generator and on how many steps it has consumed, never on how the caller
-    chunks the time axis."""
+    """Standard normals (n_flights, n_steps, width) from each flight's own generator, drawn in blocks per flight
+    (one stacked draw per block, not one per step; the first :data:`FIRST_BLOCK_STEPS` steps, each next one twice
+    the last, up to ``block_steps``): the numbers a flight gets depend only on its generator and on how many steps
+    it has consumed, never on how the caller chunks the time axis or on the block sizes."""
 
     def __init__(self, rngs: FlightRngs, n_flights: int, width: int, block_steps: int = 1024) -> None:
         self.rngs = flight_generators(rngs, n_flights)
         self.width = int(width)
         self.block_steps = int(block_steps)
+        self._next_block_steps = min(FIRST_BLOCK_STEPS, self.block_steps)
         self._block = np.empty((n_flights, 0, self.width))
         self._cursor = 0
 
@@ -77,8 +83,9 @@ class BlockNormals:
         filled = 0
         while filled < n_steps:
             if self._cursor >= self._block.shape[1]:
-                if self._block.shape[1] != self.block_steps:
-                    self._block = np.empty((len(self.rngs), self.block_steps, self.width))
+                if self._block.shape[1] != self._next_block_steps:
+                    self._block = np.empty((len(self.rngs), self._next_block_steps, self.width))
+                self._next_block_steps = min(2 * self._next_block_steps, self.block_steps)
                 for row, g in zip(self._block, self.rngs, strict=True):    # per flight: its own stream, into the buffer
                     g.standard_normal(out=row)
                 self._cursor = 0

@@ -40,6 +40,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
+from functools import cache
 from statistics import NormalDist
 from typing import Any, Literal, NamedTuple, TypeVar
 
@@ -408,6 +409,18 @@ def heading_gain(psd: float, interval_s: float, heading_noise: float) -> tuple[f
     return p / (p + heading_noise**2), p
 
 
+@cache
+def _filter_gains(interval_s: float, horizontal_m: float, vertical_m: float, velocity_h_m_s: float,
+                  velocity_v_m_s: float, heading_rad: float) -> tuple[NDArray[np.float64], float]:
+    """The fused filter's steady-state gains for a fix every ``interval_s`` s and the filter's observation noise
+    (:attr:`NavigationParams.filter_noise`): ((2, 2, 2) horizontal, vertical position / velocity gains (read-only),
+    heading gain). Solved once per setting: the Riccati solutions are constants of the preset."""
+    gains = np.stack([fusion_gain(FILTER_ACCEL_PSD, interval_s, horizontal_m, velocity_h_m_s)[0],
+                      fusion_gain(FILTER_ACCEL_PSD, interval_s, vertical_m, velocity_v_m_s)[0]])
+    gains.flags.writeable = False
+    return gains, heading_gain(FILTER_GYRO_PSD, interval_s, heading_rad)[0]
+
+
 @kernel
 def _navigation_steps(rows: NDArray[np.float64], fixes: NDArray[np.bool_], first: bool, fused: bool, dt_s: float,
                       gm: NDArray[np.float64], pos_err: NDArray[np.float64], vel_err: NDArray[np.float64],
@@ -542,11 +555,8 @@ class NavigationEstimator:
         _, q_step = inertial_error_step(p.accel_noise_density**2, self.dt_s)
         self._accel_chol = np.linalg.cholesky(q_step) if p.accel_noise_density > 0 else np.zeros((2, 2))
         self._gyro_step = p.gyro_noise_density * math.sqrt(self.dt_s)
-        interval = 1.0 / p.update_rate_hz
-        h, v, vel_h, vel_v, head = p.filter_noise
-        self.gains = np.stack([fusion_gain(FILTER_ACCEL_PSD, interval, h, vel_h)[0],
-                               fusion_gain(FILTER_ACCEL_PSD, interval, v, vel_v)[0]])  # (2, 2, 2): horizontal, vertical
-        self.yaw_gain = heading_gain(FILTER_GYRO_PSD, interval, head)[0]
+        gains, self.yaw_gain = _filter_gains(1.0 / p.update_rate_hz, *p.filter_noise)
+        self.gains = gains.copy()       # writeable: the kernels take one kind of array (compiled.contiguous)
         self._fix_index = -1
         self._pos_err = np.zeros((n_flights, 3))
         self._vel_err = np.zeros((n_flights, 3))
