@@ -35,6 +35,9 @@ def test_block_sizes_never_change_the_numbers_and_a_short_draw_draws_little():
     own = [g.standard_normal((n_steps, width)) for g in flight_generators(4, 2)]
     for block_steps in (1, 8, FIRST_BLOCK_STEPS, 1024):
         assert np.array_equal(BlockNormals(4, 2, width, block_steps).draw(n_steps), np.stack(own))
+    growing = BlockNormals(4, 2, width, block_steps=100)      # blocks 32, 64, 100, 100: draws across their ends
+    chunked = np.concatenate([growing.draw(k) for k in (1, 31, 0, 64, 5, n_steps - 101)], axis=1)
+    assert np.array_equal(chunked, np.stack(own))
     short = BlockNormals(4, 2, width, block_steps=1024)
     short.draw(5)               # one first block: FIRST_BLOCK_STEPS steps drawn, not 1,024
     after = [g.standard_normal() for g in short.rngs]

@@ -58,8 +58,9 @@ def flight_generators(rngs: FlightRngs, n_flights: int) -> list[np.random.Genera
     return [g if isinstance(g, np.random.Generator) else np.random.default_rng(g) for g in rngs]
 
 
-# steps of a BlockNormals' first block; each next block doubles, up to its block_steps: a short flight does not
-# draw a long flight's numbers (a batch of 64 drew 1,024 Dryden steps, 3.5 ms, for a 10 s flight of 200 steps)
+# steps of a BlockNormals' first block; each next block doubles, up to its block_steps: a short flight draws what it
+# needs, not a long flight's numbers (a fixed block of 1,024 Dryden steps for 64 flights is ~3.5 ms of draws, and a
+# 10 s flight steps 200 times)
 FIRST_BLOCK_STEPS = 32
 
 
@@ -70,6 +71,8 @@ class BlockNormals:
     it has consumed, never on how the caller chunks the time axis or on the block sizes."""
 
     def __init__(self, rngs: FlightRngs, n_flights: int, width: int, block_steps: int = 1024) -> None:
+        if block_steps < 1:
+            raise ValueError(f"block_steps must be >= 1, got {block_steps}")
         self.rngs = flight_generators(rngs, n_flights)
         self.width = int(width)
         self.block_steps = int(block_steps)

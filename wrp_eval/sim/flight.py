@@ -43,8 +43,8 @@ from dm_control import mjcf
 from mujoco import rollout as mj_rollout
 from numpy.typing import ArrayLike, NDArray
 from scipy.spatial.transform import Rotation
+from threadpoolctl import threadpool_limits
 
-from wrp_eval.blas import single_threaded_blas
 from wrp_eval.compiled import kernel
 from wrp_eval.planning.path import FlightPath
 from wrp_eval.sim.aero import drag_force
@@ -96,6 +96,14 @@ from wrp_eval.sim.results import FlightResult
 from wrp_eval.sim.vehicle import PHANTOM4, QuadrotorParams, Scene, build_scene
 from wrp_eval.streams import FlightRngs
 from wrp_eval.wind.base import WindModel
+
+# BLAS runs on one thread while a batch flies: OpenBLAS keeps the threads of a call it ran threaded busy-waiting for
+# ~0.1 s after it returns (measured: 0.107 s of CPU burnt in a 0.3 s sleep after the navigation filter's
+# solve_discrete_are), and that spinner takes a core from mujoco.rollout's threads (README.md, session 26). A
+# flight's matrices are 2 x 2 to 6 x 6: BLAS threads cannot speed them up. threadpoolctl sets the loaded libraries'
+# thread counts process-wide and restores them on exit (so fly() is not for several threads at once), and it cannot
+# stop threads a threaded call made before fly() left spinning.
+_BLAS_LIMIT = {"limits": 1, "user_api": "blas"}
 
 # Onboard.shoot with the chunk's state bound: (rows, views, delay_s) -> the photos of those rows
 _Shoot = Callable[[np.ndarray, np.ndarray, np.ndarray], Shot | None]
@@ -399,9 +407,9 @@ class FlightSimulator:
         the plan per flight; the recorded offsets are always measured against the unperturbed plan.
         ``ship``: the ship flown around (its box for the compass and the views' depth, its motion); None:
         open sea. ``flight_rngs``: one Generator per flight (or a seed they are spawned from) for the
-        navigation errors and the ship's motion; None: seed 0. BLAS runs on one thread meanwhile (wrp_eval/blas.py).
+        navigation errors and the ship's motion; None: seed 0. BLAS runs on one thread meanwhile (``_BLAS_LIMIT``).
         """
-        with single_threaded_blas():
+        with threadpool_limits(**_BLAS_LIMIT):
             return self._fly(path, wind, batch, view_offsets, start_time_s, self.section, ship, flight_rngs)
 
     def _targets(self, path: FlightPath, batch: int, view_offsets: np.ndarray | None, ship: ShipInScene | None,
@@ -574,10 +582,10 @@ class FlightSimulator:
               flight_rngs: FlightRngs = None) -> FlightResult:
         """Hold a hover at ``position`` (3,) m (camera position) with heading ``yaw`` rad for ``duration_s``:
         a one-view path whose dwell is the duration (the settle phase is skipped by a zero timeout; photo in
-        stop mode). ``flight_rngs``: as :meth:`fly`'s (the navigation errors)."""
+        stop mode). ``flight_rngs``: as :meth:`fly`'s (the navigation errors). BLAS on one thread, as in :meth:`fly`."""
         path = FlightPath(np.asarray(position, dtype=float)[None, :], np.array([yaw]), np.array([0.0]),
                     np.array([-1]), np.array([1]), np.array([0]), speed_m_s=5.0, dwell_s=duration_s)
         sec = self.section.model_copy(update={"settle_timeout_s": 1e-9, "dwell_s": duration_s,
                                               "capture": self.section.capture.model_copy(update={"mode": "stop"})})
-        with single_threaded_blas():
+        with threadpool_limits(**_BLAS_LIMIT):
             return self._fly(path, wind, batch, None, 0.0, sec, None, flight_rngs)

@@ -519,8 +519,8 @@ class NavigationEstimator:
     9 compass, 10-15 the IMU's acceleration error (two per axis: the exact (position, velocity) increment of
     white acceleration over the step), 16 gyro), whether or not the step brings a fix and whichever the
     estimator, so row i never depends on the batch, and the GM path does not depend on the fix rate or the
-    estimator. With an ideal ``params`` nothing is drawn. ``block_steps``: steps per stacked draw (memory
-    n_flights x block_steps x 17 doubles; 256 x 1024 flights = 36 MB).
+    estimator. With an ideal ``params`` nothing is drawn. ``block_steps``: the largest stacked draw, in steps
+    (memory n_flights x block_steps x 17 doubles; 256 x 1024 flights = 36 MB; :class:`wrp_eval.streams.BlockNormals`).
 
     Fused: the gains are the steady state of the fix interval 1 / update_rate (:func:`fusion_gain`); the
     IMU error propagates every ``dt_s`` step between fixes (the filter's own predictions at 100 Hz in

@@ -222,8 +222,9 @@ class DrydenTurbulence:
 
     rngs: one Generator per flight (e.g. ``np.random.default_rng(seed).spawn(n)``) or a single Generator /
     seed from which they are spawned. w20_mps: scalar or (n,). sigma_w_override_mps: if given, W20 is
-    replaced by 10 * sigma_w (the intensity override). Noise is drawn per flight in blocks of
-    ``block_steps`` steps, so the per-flight draws are independent of how the time axis is chunked.
+    replaced by 10 * sigma_w (the intensity override). Noise is drawn per flight in blocks of up to
+    ``block_steps`` steps (:class:`wrp_eval.streams.BlockNormals`), so the per-flight draws are independent of how
+    the time axis is chunked.
     """
 
     def __init__(self, n_flights: int, dt_s: float, rngs: FlightRngs, w20_mps: ArrayLike = 0.0,
