@@ -6,7 +6,8 @@ single-view changes? Offline: reads a stored campaign, changes nothing.
 Per ground-truth sample s, W_s = the observation weight of the planned capture set by the synthetic oracle's own
 model (``recon.fusion.observe_samples``, every view registered) and W'_s with one view moved; the proxy is
 sum_s [min(W_s, c) - min(W'_s, c)] for each level c. Three ways of computing it are ranked against the oracle's
-change of each move (averaged over 4 pose jitters, oracle seed 0, as ``surrogate.diagnostics.single_view_oracle``):
+change of each move (``surrogate.diagnostics.jittered_changes``: averaged over 4 pose jitters, oracle seed 0, as the
+surrogate bench's, but with sharp photos where the bench uses the forecast's per-view blur):
 ``exact`` (a whole-set pass per move), ``linear`` / ``quadratic`` (central differences of the c = 2 proxy in each
 view's 4 offsets at the plan, steps 0.5 m / 0.05 rad) and ``per_view`` (W'_s ~ W_s - w_v(s) + w'_v(s) from one-view
 passes; the per-sample top-K among views ignored). Moves: ``targeted_single_view_moves`` (the surrogate bench's),
@@ -24,7 +25,12 @@ import numpy as np
 from scipy.stats import spearmanr
 
 from wrp_eval.recon.fusion import observe_samples
-from wrp_eval.surrogate.diagnostics import CampaignOracle, campaign_oracle, targeted_single_view_moves
+from wrp_eval.surrogate.diagnostics import (
+    CampaignOracle,
+    campaign_oracle,
+    jittered_changes,
+    targeted_single_view_moves,
+)
 
 LEVELS = (0.5, 1.0, 2.0, 3.0, 5.0)
 C = 2.0
@@ -49,15 +55,6 @@ class Coverage:
 
     def lost(self, w0: np.ndarray, w1: np.ndarray, c: float = C) -> float:
         return float(np.sum(np.minimum(w0, c) - np.minimum(w1, c)))
-
-
-def oracle_changes(scorer: CampaignOracle, offsets: np.ndarray) -> np.ndarray:
-    """(moves,) the oracle's change of each move, averaged over 4 jitters (oracle seed 0)."""
-    n = len(scorer.planned)
-    rng = np.random.default_rng(np.random.SeedSequence(0, spawn_key=(1,)))
-    jit = np.concatenate([rng.normal(0.0, 0.02, (4, n, 3)), rng.normal(0.0, 0.002, (4, n, 1))], axis=2)
-    base = np.array([scorer.error(j, 0) for j in jit])
-    return (np.array([[scorer.error(o + j, 0) for j in jit] for o in offsets]) - base).mean(axis=1)
 
 
 def derivatives(cov: Coverage, w0: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
@@ -95,7 +92,7 @@ def probe_moves(cov: Coverage, campaign: str, seed: int, n_moves: int, w0, grad,
     per_view = np.array([cov.lost(w0, w0 - alone[v] + cov.weights(o, v))
                          for v, o in zip(views, offsets, strict=True)])
     per_view_ms = (time.perf_counter() - start) / n_moves * 1e3
-    oracle = oracle_changes(cov.scorer, offsets)
+    oracle = jittered_changes(cov.scorer, offsets, 4, 0.02, 0.002, 0).mean(axis=1)   # sharp photos
     lin = np.sum(grad[views] * moves, axis=1)
     out = {f"exact_c{c}": ranks(exact[:, j], oracle, exact[:, 2]) for j, c in enumerate(LEVELS)}
     out |= {"linear": ranks(lin, oracle, exact[:, 2]),

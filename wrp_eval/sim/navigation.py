@@ -556,7 +556,7 @@ class NavigationEstimator:
         self._accel_chol = np.linalg.cholesky(q_step) if p.accel_noise_density > 0 else np.zeros((2, 2))
         self._gyro_step = p.gyro_noise_density * math.sqrt(self.dt_s)
         gains, self.yaw_gain = _filter_gains(1.0 / p.update_rate_hz, *p.filter_noise)
-        self.gains = gains.copy()       # writeable: the kernels take one kind of array (compiled.contiguous)
+        self.gains = contiguous(gains)      # a writeable copy of the cached read-only array: one kernel signature
         self._fix_index = -1
         self._pos_err = np.zeros((n_flights, 3))
         self._vel_err = np.zeros((n_flights, 3))

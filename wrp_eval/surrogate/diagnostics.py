@@ -216,12 +216,21 @@ def single_view_oracle(surrogate, campaign_dir: str | Path, *, n_moves: int, jit
     offsets = np.zeros((n_moves, n, 4))
     offsets[np.arange(n_moves), views] = moves
     blur = surrogate.views.condition_reference[:, 0] if surrogate.views is not None else None
+    changes = jittered_changes(scorer, offsets, jitters, position_jitter_m, yaw_jitter_rad, seed, blur)
+    return {"views": views, "offsets": offsets, "changes": changes, "seed": seed}
+
+
+def jittered_changes(scorer: CampaignOracle, offsets: np.ndarray, jitters: int, position_jitter_m: float,
+                     yaw_jitter_rad: float, seed: int, blur_px: np.ndarray | None = None) -> np.ndarray:
+    """(moves, jitters) m: the oracle's change (seed 0) of each path at ``offsets`` (moves, n, 4) from the planned
+    one, under each of ``jitters`` pose jitters of every view (``position_jitter_m`` per axis, ``yaw_jitter_rad``;
+    drawn from ``seed``, the same for the moved and the planned path), photos blurred by ``blur_px`` (n,) or sharp."""
+    n = len(scorer.planned)
     rng = np.random.default_rng(np.random.SeedSequence(seed, spawn_key=(1,)))
     jit = np.concatenate([rng.normal(0.0, position_jitter_m, (jitters, n, 3)),
                           rng.normal(0.0, yaw_jitter_rad, (jitters, n, 1))], axis=2)
-    base = np.array([scorer.error(j, 0, blur_px=blur) for j in jit])          # the oracle is not batched
-    changes = np.array([[scorer.error(o + j, 0, blur_px=blur) for j in jit] for o in offsets]) - base
-    return {"views": views, "offsets": offsets, "changes": changes, "seed": seed}
+    base = np.array([scorer.error(j, 0, blur_px=blur_px) for j in jit])          # the oracle is not batched
+    return np.array([[scorer.error(o + j, 0, blur_px=blur_px) for j in jit] for o in offsets]) - base
 
 
 def mean_offset_baseline(data, split: dict, usable: np.ndarray | None = None, max_degree: int = 4,
