@@ -1,11 +1,17 @@
-"""Shared fixtures: trial data from a known function, a small trained surrogate, a campaign folder."""
+"""Shared fixtures: trial data from a known function, a small trained surrogate, a ring's scarce coverage."""
 
 from __future__ import annotations
 
 import numpy as np
 import pytest
 import torch
+import trimesh
 
+from wrp_eval.camera import Camera, yaw_pitch_towards
+from wrp_eval.recon.config import OracleSection
+from wrp_eval.recon.coverage import ScarceCoverage, scarce_coverage
+from wrp_eval.recon.oracle import prepare_ground_truth
+from wrp_eval.sim.captures import CaptureSet
 from wrp_eval.surrogate.config import SurrogateSection
 from wrp_eval.surrogate.data import known_function_trials
 from wrp_eval.surrogate.features import ViewContext
@@ -14,6 +20,7 @@ from wrp_eval.surrogate.model import Surrogate, SurrogateMeta, ViewSequenceCNN
 torch.set_num_threads(1)
 
 N_VIEWS = 8
+N_RING = 9
 
 
 @pytest.fixture(scope="session")
@@ -46,12 +53,16 @@ def random_views(n_views: int, rng: np.random.Generator) -> ViewContext:
 
 
 def random_surrogate(n_views: int, channels: int = 8, kernel: int = 3, layers: int = 2, seed: int = 0,
-                     pose: bool = True, digest: str | None = None, per_view: bool = False) -> Surrogate:
+                     pose: bool = True, digest: str | None = None, per_view: bool = False,
+                     scarce: ScarceCoverage | None = None) -> Surrogate:
     """An untrained network with non-trivial standardisation (for exactness and checkpoint tests); ``per_view``:
-    the per-view input set with random views."""
+    the per-view input set with random views; ``scarce``: the scarce input set on that coverage (per_view
+    implied)."""
     rng = np.random.default_rng(seed)
-    arch = {"in_channels": (11 if pose else 4) + (10 if per_view else 0), "channels": channels, "kernel": kernel,
-            "layers": layers, "hidden": 16, "outputs": 1}
+    per_view = per_view or scarce is not None
+    n_feat = 11 if scarce is not None else 10
+    arch = {"in_channels": (11 if pose else 4) + (n_feat if per_view else 0), "channels": channels,
+            "kernel": kernel, "layers": layers, "hidden": 16, "outputs": 1}
     with torch.random.fork_rng(devices=[]):
         torch.manual_seed(seed)
         net = ViewSequenceCNN(**arch)
@@ -63,8 +74,26 @@ def random_surrogate(n_views: int, channels: int = 8, kernel: int = 3, layers: i
                          pose_std=planned.std(0).tolist() if pose else None,
                          planned_pose=planned.tolist() if pose else None,
                          offset_low=[-2, -2, -2, -0.35], offset_high=[2, 2, 2, 0.35],
-                         **({"inputs": "per_view", "views": random_views(n_views, rng).to_json_dict(),
-                             "feature_mean": rng.normal(0, 1, 10).tolist(),
-                             "feature_std": rng.uniform(0.2, 3, 10).tolist()} if per_view else {}))
-    return Surrogate(net, meta)
+                         **({"inputs": "scarce" if scarce is not None else "per_view",
+                             "views": random_views(n_views, rng).to_json_dict(),
+                             "feature_mean": rng.normal(0, 1, n_feat).tolist(),
+                             "feature_std": rng.uniform(0.2, 3, n_feat).tolist(),
+                             "scarce_digest": None if scarce is None else scarce.digest()} if per_view else {}))
+    return Surrogate(net, meta, scarce)
+
+
+@pytest.fixture(scope="session")
+def ring_scarce() -> ScarceCoverage:
+    """The scarce coverage of 9 views on a ring around a 30 m hull with a deckhouse."""
+    hull = trimesh.creation.box(extents=(30.0, 8.0, 6.0))
+    hull.apply_translation((0.0, 0.0, 1.0))
+    house = trimesh.creation.box(extents=(6.0, 6.0, 5.0))
+    house.apply_translation((-8.0, 0.0, 6.5))
+    mesh = trimesh.util.concatenate([hull, house])
+    angle = np.linspace(0.0, 2 * np.pi, N_RING, endpoint=False)
+    pos = np.column_stack([22 * np.cos(angle), 22 * np.sin(angle), np.where(np.arange(N_RING) % 2, 9.0, 3.0)])
+    yaw, pitch = yaw_pitch_towards(pos, np.tile([0.0, 0.0, 3.0], (N_RING, 1)))
+    section = OracleSection()
+    gt = prepare_ground_truth(mesh, section.gt_density_per_m2, section.gt_seed)
+    return scarce_coverage(CaptureSet(pos, yaw, pitch, np.arange(N_RING), Camera()), mesh, section, gt)
 

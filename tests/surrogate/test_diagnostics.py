@@ -140,3 +140,35 @@ def test_mean_offset_baseline_without_enough_trials_gives_nan_not_an_error():
     assert np.isnan(mean_offset_baseline(data, split)["r2"])
     with_failed = mean_offset_baseline(data, split, usable=np.ones(10, bool))   # use_failed_trials: they count
     assert with_failed["n"] == 2 and with_failed["degree"] == 1 and np.isnan(with_failed["r2"])   # constant error
+
+
+def test_the_scarce_input_set_trains_on_the_campaigns_ship_and_its_checkpoint_needs_it(campaign_dir, tmp_path):
+    import dataclasses
+
+    from wrp_eval.surrogate.config import SurrogateSection
+    from wrp_eval.surrogate.data import load_campaign_trials
+    from wrp_eval.surrogate.model import Surrogate, ViewQuery
+    from wrp_eval.surrogate.train import train_surrogate
+    data = load_campaign_trials(campaign_dir, scarce=True)
+    assert data.scarce is not None and len(data.scarce) == data.n_views
+    assert load_campaign_trials(campaign_dir).scarce is None          # only on request (~1 s per 46 views)
+    rng = np.random.default_rng(0)
+    offsets = rng.uniform(-1, 1, (40, data.n_views, 4)) * [2.0, 2.0, 2.0, 0.2]
+    lost = data.scarce.lost_all(offsets)
+    error = 0.02 + 1e-4 * lost.sum(axis=1)
+    trials = dataclasses.replace(data, offsets=offsets, error=error, failed=np.zeros(40, bool), trial_id=None,
+                                 deviation=None, conditions=None, registered=None)
+    section = SurrogateSection(inputs="scarce", epochs=5, patience=5, validation_moves=0)
+    result = train_surrogate(trials, section, seed=0)
+    s = result.surrogate
+    assert s.meta.scarce_digest == data.scarce.digest() and s.meta.architecture["in_channels"] == 4 + 4 + 5 + 2 + 7
+    s.save(tmp_path / "s.pt")
+    again = Surrogate.load(tmp_path / "s.pt", inputs="scarce", scarce=load_campaign_trials(campaign_dir, scarce=True)
+                           .scarce)
+    np.testing.assert_array_equal(again.predict(offsets[:3]), s.predict(offsets[:3]))
+    query = ViewQuery(again, offsets[0])
+    full = np.repeat(offsets[:1], 2, axis=0)
+    full[:, 5] = offsets[1:3, 5]
+    np.testing.assert_allclose(query.errors(5, offsets[1:3, 5]), s.predict(full), atol=2e-5)
+    with pytest.raises(InputError, match="no scarce coverage"):
+        train_surrogate(dataclasses.replace(trials, scarce=None), section, seed=0)

@@ -1,3 +1,5 @@
+import dataclasses
+
 import numpy as np
 import pytest
 import torch
@@ -24,6 +26,41 @@ def test_view_query_matches_full_forward(kernel, layers, per_view):
         full[:, view] = cand
         np.testing.assert_allclose(query.errors(view, cand), s.predict(full), atol=2e-5)
     assert query.forward_calls == 5 and query.queries == 30
+
+
+@pytest.mark.parametrize("kernel,layers", [(3, 2), (5, 3)])
+def test_view_query_matches_full_forward_with_the_scarce_channel(ring_scarce, kernel, layers):
+    """The scarce coverage lost changes with the candidate too, and the one-view evaluation still equals the
+    full pass; the channel does move the prediction."""
+    s = random_surrogate(len(ring_scarce), kernel=kernel, layers=layers, scarce=ring_scarce)
+    rng = np.random.default_rng(2)
+    base = rng.normal(0, 0.5, (9, 4)) * [2, 2, 2, 0.1]
+    query = ViewQuery(s, base)
+    for view in (0, 4, 8):
+        cand = rng.normal(0, 1, (6, 4)) * [3, 3, 3, 0.2]
+        full = np.repeat(base[None], 6, axis=0)
+        full[:, view] = cand
+        np.testing.assert_allclose(query.errors(view, cand), s.predict(full), atol=2e-5)
+    moving = s.moving_features(full)
+    assert moving.shape == (6, 9, 4) and np.ptp(moving[:, 8, 3]) > 0.5
+    plain = Surrogate(s.net, s.meta.__class__(**{**s.meta.__dict__, "feature_std": [*s.meta.feature_std[:3], 1e9,
+                                                                                 *s.meta.feature_std[4:]]}),
+                      ring_scarce)
+    assert np.max(np.abs(plain.predict(full) - s.predict(full))) > 1e-6
+
+
+def test_a_scarce_checkpoint_needs_the_coverage_it_was_trained_on(tmp_path, ring_scarce):
+    s = random_surrogate(len(ring_scarce), scarce=ring_scarce)
+    s.save(tmp_path / "s.pt")
+    again = Surrogate.load(tmp_path / "s.pt", inputs="scarce", scarce=ring_scarce)
+    off = np.random.default_rng(0).normal(0, 1, (4, 9, 4))
+    np.testing.assert_array_equal(again.predict(off), s.predict(off))
+    with pytest.raises(InputError, match="not given to the loader") as err:
+        Surrogate.load(tmp_path / "s.pt", inputs="scarce")
+    assert "\n" not in str(err.value)
+    other = dataclasses.replace(ring_scarce, level=3.0)
+    with pytest.raises(InputError, match="another ship, oracle or plan"):
+        Surrogate.load(tmp_path / "s.pt", scarce=other)
 
 
 def test_view_query_update_view_moves_the_base():

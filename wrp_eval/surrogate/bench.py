@@ -56,7 +56,7 @@ def bench_surrogate(cv: bool = False):
     torch.set_num_threads(1)
     folder = os.environ.get(BENCH_ENV)
     if folder:
-        data = load_campaign_trials(folder)
+        data = load_campaign_trials(folder, scarce=True)
         what = f"campaign data: {data.source}"
     else:
         data, _ = known_function_trials(2000, 49, np.random.default_rng(0), noise_m=0.01)
@@ -81,6 +81,33 @@ def offsets_only_records(data, result, folder: str, oracle: dict) -> list[BenchR
             BenchRecord("surrogate.offsets_only.single_view_spearman", agree["spearman"], "", None, None, note),
             BenchRecord("surrogate.offsets_only.single_view_sign_top_decile", agree["sign_top_decile"], "", None,
                         None, note)]
+
+
+def scarce_records(data, result, folder: str, oracle: dict) -> list[BenchRecord]:
+    """The same network with the ``scarce`` input set (per_view + the scarce coverage each view's flown pose takes
+    away), on the same split and the same single-view oracle scores: what that channel changes."""
+    start = time.perf_counter()
+    tr, va, te = (np.asarray(result.split[k], dtype=np.int64) for k in ("train", "val", "test"))
+    scarce = train_surrogate(data, SurrogateSection(inputs="scarce"), seed=0, split=(tr, va, te))
+    agree = single_view_agreement(scarce.surrogate, folder, oracle=oracle)
+    rng = np.random.default_rng(2)
+    poses = rng.uniform(-1, 1, (240, 4)) * np.array([2, 2, 2, 0.35])
+    views = np.linspace(0, data.n_views - 1, 8).astype(int)
+    clock = time.perf_counter()
+    for view in views:
+        data.scarce.lost(int(view), poses)
+    per_pose_us = (time.perf_counter() - clock) / (len(views) * len(poses)) * 1e6
+    note = (f"per_view + scarce_lost, same split and the same {agree['n_moves']} oracle-scored moves; "
+            f"val R^2 {scarce.metrics['val']['r2']:.4f} against {result.metrics['val']['r2']:.4f}; surrogate change "
+            f"std {agree['surrogate_change_std_m'] * 1000:.3f} mm; {time.perf_counter() - start:.0f} s")
+    return [BenchRecord("surrogate.scarce.r2_test", scarce.metrics["test"]["r2"], "", None, None, note),
+            BenchRecord("surrogate.scarce.single_view_spearman", agree["spearman"], "", "issue 18 target", 0.7, note),
+            BenchRecord("surrogate.scarce.single_view_sign_top_decile", agree["sign_top_decile"], "",
+                        "issue 18 target", 0.9, note),
+            BenchRecord("surrogate.scarce.single_view_rmse_mm", agree["rmse_m"] * 1000, "mm", None, None, note),
+            BenchRecord("surrogate.scarce.feature_us_per_pose", per_pose_us, "us", None, None,
+                        f"ScarceCoverage.lost, {len(poses)} candidate poses of each of {len(views)} views, "
+                        f"{data.n_views} views")]
 
 
 def bench_single_view_rmse() -> float | None:
@@ -154,6 +181,7 @@ def _oracle_records(s, data, result, folder: str) -> list[BenchRecord]:
            f"{agree['surrogate_change_std_m'] * 1000:.2f} mm; {time.perf_counter() - start:.0f} s")
     _TRAINED["single_view_rmse_m"] = agree["rmse_m"]
     records += offsets_only_records(data, result, folder, agree["oracle"])
+    records += scarce_records(data, result, folder, agree["oracle"])
     records += [
         BenchRecord("surrogate.single_view_spearman", agree["spearman"], "", "issue 18 target", 0.7,
                     f"{how}; largest oracle changes (mm, oracle vs surrogate) {big}"),

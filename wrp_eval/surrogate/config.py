@@ -43,11 +43,12 @@ class SurrogateSection(StrictModel):
     pose_channels: bool = Field(True, description="add the planned pose of every viewpoint (x, y, z, cos yaw, "
                                 "sin yaw, pitch, index) as constant input channels, so that the network knows "
                                 "WHICH viewpoint an offset belongs to")
-    inputs: Literal["per_view", "offsets"] = Field("per_view", description="per_view: the offsets plus each "
-                                                  "view's flown geometry (standoff, incidence, pointing), its "
-                                                  "conditions at the shutter (blur, wind) and its coverage "
-                                                  "(unique share, co-visible partners); offsets: the 4 offsets "
-                                                  "only (the earlier model, the baseline of the comparison)")
+    inputs: Literal["per_view", "offsets", "scarce"] = Field(
+        "per_view", description="per_view: the offsets plus each view's flown geometry (standoff, incidence, "
+        "pointing), its conditions at the shutter (blur, wind) and its coverage (unique share, co-visible "
+        "partners); offsets: the 4 offsets only (the earlier model, the baseline of the comparison); scarce: "
+        "per_view plus the scarce coverage each view's flown pose takes away from the plan (the oracle's "
+        "observation model on the ship: ~30 us per view and candidate, README)")
     missing_views: Literal["input", "drop"] = Field("drop", description="trials in which the flight did not take "
                                                    "every view: drop (only complete trials) or input (kept, the "
                                                    "view's 'taken' channel 0). Measured on the 6,000-flight bench "

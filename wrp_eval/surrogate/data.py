@@ -17,6 +17,8 @@ from wrp_eval.campaign.records import column_array
 from wrp_eval.campaign.store import TrialStore
 from wrp_eval.errors import InputError
 from wrp_eval.planning.path import FlightPath
+from wrp_eval.recon.capture_io import captures_from_path
+from wrp_eval.recon.coverage import ScarceCoverage
 from wrp_eval.recon.scored_ship import scored_ship
 from wrp_eval.surrogate.features import CONDITION_NAMES, ViewContext, campaign_view_context, reference_conditions
 
@@ -37,7 +39,9 @@ class TrialData:
     (:data:`CONDITION_NAMES`; NaN where not recorded; None: none recorded); views: the path's
     :class:`ViewContext` (None: per-view inputs unavailable, only the ``offsets`` input set can be trained);
     registered (n_trials, n_views) or None: 1 where the oracle registered the view, 0 where it did not, NaN where
-    the view was not taken or the store does not record it (the campaign's ``view_registered``).
+    the view was not taken or the store does not record it (the campaign's ``view_registered``);
+    scarce: the path's :class:`~wrp_eval.recon.coverage.ScarceCoverage` on the ship (None: the ``scarce`` input
+    set cannot be trained).
     """
 
     offsets: np.ndarray
@@ -51,6 +55,7 @@ class TrialData:
     conditions: np.ndarray | None = None
     views: ViewContext | None = None
     registered: np.ndarray | None = None
+    scarce: ScarceCoverage | None = None
 
     @property
     def n_trials(self) -> int:
@@ -121,11 +126,13 @@ def path_pose_features(path) -> np.ndarray:
                                  np.asarray(path.pitch, float))
 
 
-def load_campaign_trials(campaign_dir: str | Path, *, views: bool = True, config_dir: str | Path = ".") -> TrialData:
+def load_campaign_trials(campaign_dir: str | Path, *, views: bool = True, config_dir: str | Path = ".",
+                         scarce: bool = False) -> TrialData:
     """The trials of a campaign folder (the campaign stage's ``TrialStore``): flown offsets, error_m, failed,
     the conditions at each view (blur, wind) and, with ``views``, the path's :class:`ViewContext` (the ship and
     oracle of the campaign's stored config, resolved relative to ``config_dir``: ~1 s; None without a stored
-    config) and which views the oracle registered (NaN in stores written before that column).
+    config), with ``scarce`` too its :class:`ScarceCoverage` (~4 s for 141 views), and which views the oracle
+    registered (NaN in stores written before that column).
 
     A view a flight did not take (it turned home, or the trial raised) gets offset 0 and the condition
     ``taken`` 0 (its other conditions NaN): such trials stay, since what a missing view costs is what each
@@ -161,16 +168,17 @@ def load_campaign_trials(campaign_dir: str | Path, *, views: bool = True, config
     incomplete = int((~taken[keep].all(axis=1)).sum())
     conditions = np.concatenate([column_array(table, "blur_px")[..., None], column_array(table, "wind_at_views"),
                                  taken[..., None].astype(float)], axis=2)[keep]
-    context = None
+    context = scarce_cover = None
     if views and "config" in meta:     # a store written without its config (tests) has no ship to look at
         trial = TrialConfig.from_stored(meta["config"])
         ship = scored_ship(trial.ship, trial.oracle, trial.campaign.oracle, config_dir)
         context = campaign_view_context(ship, path, conditions)
+        scarce_cover = ship.scarce_coverage(captures_from_path(path)) if scarce else None
     return TrialData(offsets=np.nan_to_num(flown[keep]), error=error[keep], failed=failed[keep],
                      planned_pose=path_pose_features(path), trial_id=trial_id[keep],
                      path_digest=str(meta.get("path_digest", digests.pop())),
                      deviation=flown[keep] - commanded[keep], conditions=conditions, views=context,
-                     registered=column_array(table, "view_registered")[keep],
+                     registered=column_array(table, "view_registered")[keep], scarce=scarce_cover,
                      source=f"{folder} ({len(keep)} trials, {incomplete} of them with views not taken; "
                             f"{dropped} without any view)")
 

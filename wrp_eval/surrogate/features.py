@@ -14,7 +14,11 @@ covers, or along a face twenty others see. Each viewpoint i therefore carries, b
   forecast's expectation, :attr:`ViewContext.condition_reference`) and every view taken;
 * **coverage** (:data:`COVERAGE_NAMES`, of the planned path, from the oracle's observation model,
   :func:`wrp_eval.recon.coverage.view_coverage`): the view's unique-coverage share and its co-visible
-  partner count.
+  partner count;
+* with the ``scarce`` input set, **scarce coverage lost** (:data:`SCARCE_NAMES`, computed from the offsets like
+  the geometry, so every candidate gets its own): what the view flown at its offset takes away from the planned
+  set's scarce coverage, the rest of the set held (:class:`wrp_eval.recon.coverage.ScarceCoverage`). It needs the
+  ship and the oracle, which the checkpoint does not hold: whoever loads such a surrogate passes them in.
 
 The network keeps the viewpoint order of the path (its convolution mixes path neighbours); the co-visibility
 graph enters through the partner count and unique share (see README: measured against offsets-only inputs).
@@ -33,7 +37,16 @@ from wrp_eval.recon.capture_io import captures_from_path
 GEOMETRY_NAMES = ("standoff_m", "incidence_rad", "pointing_rad")
 CONDITION_NAMES = ("blur_px", "wind_x_mps", "wind_y_mps", "wind_z_mps", "taken")
 COVERAGE_NAMES = ("unique_share", "partners")
-INPUT_SETS = ("per_view", "offsets")     # "offsets": the 4 offsets + planned pose only (the earlier model)
+SCARCE_NAMES = ("scarce_lost",)
+# "offsets": the 4 offsets + planned pose only (the earlier model); "scarce": per_view + SCARCE_NAMES
+INPUT_SETS = ("per_view", "offsets", "scarce")
+
+
+def moving_names(inputs: str) -> tuple[str, ...]:
+    """The per-view channels besides the offsets that a candidate move changes, in input order."""
+    if inputs == "offsets":
+        return ()
+    return GEOMETRY_NAMES + (SCARCE_NAMES if inputs == "scarce" else ())
 
 
 @dataclass(frozen=True)

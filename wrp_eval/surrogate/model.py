@@ -2,9 +2,10 @@
 
 Architecture (paper Sec. 4.1 fits "a CNN regression model"; the layout here is ours): the viewpoint sequence
 is a 1-D signal with one sample per viewpoint and standardised input channels, in this order: the 4 offsets
-(dx, dy, dz, dyaw); with the ``per_view`` input set the 3 flown-geometry channels computed from them and the 5
-conditions at the shutter (:mod:`wrp_eval.surrogate.features`); the 7 planned-pose channels; with
-``per_view`` the 2 coverage channels. The offsets and the geometry are what a candidate move changes;
+(dx, dy, dz, dyaw); with the ``per_view`` input set the 3 flown-geometry channels computed from them (with
+``scarce`` also the scarce coverage lost) and the 5 conditions at the shutter (:mod:`wrp_eval.surrogate.features`);
+the 7 planned-pose channels; with ``per_view`` / ``scarce`` the 2 coverage channels. The offsets and the channels
+computed from them are what a candidate move changes;
 ``layers`` x (Conv1d 'same' zero padding + GELU) -> global MEAN
 pooling over the viewpoints -> Linear-GELU-Linear head -> standardised error [+ failure logit]; optionally
 (``view_outputs``) a linear per-viewpoint head on the last conv features, trained as an auxiliary task
@@ -31,18 +32,18 @@ from torch.nn import functional as F
 
 from wrp_eval.atomic import write_bytes_atomic
 from wrp_eval.errors import InputError
+from wrp_eval.recon.coverage import ScarceCoverage
 from wrp_eval.surrogate.features import (
     CONDITION_NAMES,
-    GEOMETRY_NAMES,
     INPUT_SETS,
     ViewContext,
     conditions_or_reference,
+    moving_names,
 )
 
 CHECKPOINT_FORMAT = "wrp-eval-surrogate"
 CHECKPOINT_VERSION = 2    # 2: input sets and per-view inputs; version 1 checkpoints are refused
-VARIABLE_CHANNELS = {"offsets": 4, "per_view": 4 + len(GEOMETRY_NAMES)}   # channels a candidate move changes
-N_GEOMETRY, N_VARYING = len(GEOMETRY_NAMES), len(GEOMETRY_NAMES) + len(CONDITION_NAMES)  # feature layout
+VARIABLE_CHANNELS = {k: 4 + len(moving_names(k)) for k in INPUT_SETS}     # channels a candidate move changes
 
 
 class ViewSequenceCNN(nn.Module):
@@ -106,8 +107,10 @@ class SurrogateMeta:
     log when ``target`` is "log_error"); planned_pose (n_views, 7) or None;
     offset_low/offset_high (4,): range of the training offsets (the surrogate's domain); metrics: held-out
     figures; extra: free-form provenance (data source, seed, epochs run); inputs: the input set
-    (:data:`wrp_eval.surrogate.features.INPUT_SETS`); views: the path's ViewContext (JSON) for ``per_view``;
-    feature_mean/feature_std (10,): standardisation of the geometry, condition and coverage channels.
+    (:data:`wrp_eval.surrogate.features.INPUT_SETS`); views: the path's ViewContext (JSON) for ``per_view`` and
+    ``scarce``; feature_mean/feature_std (10,) or (11,): standardisation of the moving (geometry [+ scarce]),
+    condition and coverage channels; scarce_digest: :meth:`ScarceCoverage.digest` of the ship and plan the
+    ``scarce`` channel was computed on.
     """
 
     n_views: int
@@ -129,12 +132,16 @@ class SurrogateMeta:
     views: dict | None = None
     feature_mean: list | None = None
     feature_std: list | None = None
+    scarce_digest: str | None = None
 
 
 class Surrogate:
-    """A trained network with its standardisation: offsets (batch, n_views, 4) -> predicted error (batch,) m."""
+    """A trained network with its standardisation: offsets (batch, n_views, 4) -> predicted error (batch,) m.
 
-    def __init__(self, net: ViewSequenceCNN, meta: SurrogateMeta):
+    ``scarce``: the :class:`ScarceCoverage` of the path on the ship, which the ``scarce`` input set computes its
+    channel with (required there, its digest checked; ignored by the other input sets)."""
+
+    def __init__(self, net: ViewSequenceCNN, meta: SurrogateMeta, scarce: ScarceCoverage | None = None):
         self.net = net.eval()
         self.meta = meta
         self._off_mean = torch.tensor(meta.offset_mean, dtype=torch.float32)
@@ -145,11 +152,16 @@ class Surrogate:
             self._pose = torch.tensor(pose, dtype=torch.float32).unsqueeze(0)     # (1, n, 7)
         self.views = ViewContext.from_json_dict(meta.views) if meta.views is not None else None
         self.variable_channels = VARIABLE_CHANNELS[meta.inputs]
-        if meta.inputs == "per_view":
+        self.n_moving = self.variable_channels - 4            # channels computed from the offsets
+        self.scarce = scarce if meta.inputs == "scarce" else None
+        if meta.inputs == "scarce" and (scarce is None or scarce.digest() != meta.scarce_digest):
+            raise ValueError("the scarce input set needs the ScarceCoverage it was trained on"
+                             + (" (another ship, oracle or plan)" if scarce is not None else ""))
+        if self.views is not None and meta.inputs != "offsets":
             self._feat_mean = np.asarray(meta.feature_mean, float)
             self._feat_std = np.asarray(meta.feature_std, float)
-            views = cast(ViewContext, self.views)
-            cover = (views.coverage() - self._feat_mean[N_VARYING:]) / self._feat_std[N_VARYING:]
+            n_varying = self.n_moving + len(CONDITION_NAMES)
+            cover = (self.views.coverage() - self._feat_mean[n_varying:]) / self._feat_std[n_varying:]
             self._cover = torch.tensor(cover, dtype=torch.float32).unsqueeze(0)   # (1, n, 2)
 
     @property
@@ -160,7 +172,20 @@ class Surrogate:
     def variable_scale(self) -> np.ndarray:
         """(variable_channels,) the standard deviations of the channels a candidate move changes."""
         scale = np.asarray(self.meta.offset_std, float)
-        return np.concatenate([scale, self._feat_std[:N_GEOMETRY]]) if self.meta.inputs == "per_view" else scale
+        return np.concatenate([scale, self._feat_std[:self.n_moving]]) if self.n_moving else scale
+
+    def moving_features(self, offsets: np.ndarray, views: list[int] | slice = slice(None)) -> np.ndarray:
+        """(..., k, n_moving) the channels computed from offsets (..., k, 4) of the viewpoints ``views``: the flown
+        geometry [+ the scarce coverage lost], unstandardised."""
+        ctx = cast(ViewContext, self.views)
+        geometry = ctx.geometry(offsets, views=views)
+        if self.scarce is None:
+            return geometry
+        off = np.asarray(offsets, dtype=float)
+        index = np.arange(self.n_views)[views]
+        flat = off.reshape(-1, len(index), 4)
+        lost = np.stack([self.scarce.lost(int(v), flat[:, j]) for j, v in enumerate(index)], axis=1)
+        return np.concatenate([geometry, lost.reshape(*off.shape[:-1], 1)], axis=-1)
 
     def input_tensor(self, offsets: np.ndarray | torch.Tensor, conditions: np.ndarray | None = None) -> torch.Tensor:
         """(batch, n_views, 4) offsets [+ (batch, n_views, 5) conditions at the shutter, default the forecast
@@ -168,15 +193,16 @@ class Surrogate:
         off_np = np.asarray(offsets, dtype=float)
         x = (torch.as_tensor(off_np, dtype=torch.float32) - self._off_mean) / self._off_std
         parts = [x]
-        if self.meta.inputs == "per_view":
+        if self.n_moving:
             views = cast(ViewContext, self.views)
             cond = conditions_or_reference(conditions, views.condition_reference, x.shape[0])
-            feat = np.concatenate([views.geometry(off_np), cond], axis=2)
-            parts.append(torch.as_tensor((feat - self._feat_mean[:N_VARYING]) / self._feat_std[:N_VARYING],
+            feat = np.concatenate([self.moving_features(off_np), cond], axis=2)
+            n_varying = feat.shape[2]
+            parts.append(torch.as_tensor((feat - self._feat_mean[:n_varying]) / self._feat_std[:n_varying],
                                          dtype=torch.float32))
         if self._pose is not None:
             parts.append(self._pose.expand(x.shape[0], -1, -1))
-        if self.meta.inputs == "per_view":
+        if self.n_moving:
             parts.append(self._cover.expand(x.shape[0], -1, -1))
         return torch.cat(parts, dim=2) if len(parts) > 1 else x
 
@@ -219,10 +245,11 @@ class Surrogate:
 
     @classmethod
     def load(cls, file: str | Path, *, n_views: int | None = None, path_digest: str | set[str] | None = None,
-             inputs: str | None = None) -> "Surrogate":
+             inputs: str | None = None, scarce: ScarceCoverage | None = None) -> "Surrogate":
         """Load a checkpoint (``torch.load(weights_only=True)``). A corrupt file, another format or version, one
-        trained for another path (``n_views``, ``path_digest`` when both sides know it) or on another input set
-        than ``inputs`` (when given) is an :class:`InputError`."""
+        trained for another path (``n_views``, ``path_digest`` when both sides know it), on another input set
+        than ``inputs`` (when given) or, for the ``scarce`` input set, on another ship, oracle or plan than
+        ``scarce`` (the path's :class:`ScarceCoverage`) is an :class:`InputError`."""
         file = Path(file)
         if not file.is_file():
             raise InputError(file, "no such surrogate checkpoint")
@@ -243,13 +270,17 @@ class Surrogate:
         except Exception as err:
             raise InputError(file, f"damaged surrogate checkpoint: {type(err).__name__}: "
                                    f"{str(err).splitlines()[0] if str(err) else ''}") from None
-        if meta.inputs not in INPUT_SETS or (meta.inputs == "per_view" and meta.views is None):
+        if meta.inputs not in INPUT_SETS or (meta.inputs != "offsets" and meta.views is None):
             raise InputError(file, f"damaged surrogate checkpoint: input set {meta.inputs!r} without its views")
+        if meta.inputs == "scarce" and (scarce is None or scarce.digest() != meta.scarce_digest):
+            raise InputError(file, "checkpoint's scarce-coverage channel was computed on "
+                                   + ("another ship, oracle or plan than this config's" if scarce is not None
+                                      else "a ship and oracle not given to the loader"))
         if inputs is not None and meta.inputs != inputs:
             raise InputError(file, f"checkpoint was trained on the input set {meta.inputs!r}, the config asks for "
                                    f"{inputs!r} (surrogate.inputs); retrain with `wrp-eval train`")
         try:
-            surrogate = cls(net, meta)
+            surrogate = cls(net, meta, scarce)
         except Exception as err:
             raise InputError(file, f"damaged surrogate checkpoint: {type(err).__name__} in its metadata") from None
         surrogate.check_path(n_views, path_digest, source=file)
@@ -317,14 +348,13 @@ class ViewQuery:
         self._inside = inside.view(-1, 1, 1)
 
     def _variables(self, index: int, candidates: np.ndarray) -> torch.Tensor:
-        """(q, m) change of the move-dependent channels (offsets [+ flown geometry], unstandardised) of viewpoint
+        """(q, m) change of the move-dependent channels (offsets [+ moving features], unstandardised) of viewpoint
         ``index`` from the base to each candidate (q, 4)."""
         base = self.base[index].astype(float)
         delta = candidates - base
-        if self.s.variable_channels > 4:
-            views = cast(ViewContext, self.s.views)
-            geom = views.geometry(np.concatenate([candidates, base[None]])[:, None, :], views=[index])[:, 0]
-            delta = np.concatenate([delta, geom[:-1] - geom[-1]], axis=1)
+        if self.s.n_moving:
+            moving = self.s.moving_features(np.concatenate([candidates, base[None]])[:, None, :], views=[index])[:, 0]
+            delta = np.concatenate([delta, moving[:-1] - moving[-1]], axis=1)
         return torch.as_tensor(delta, dtype=torch.float32)
 
     def update_view(self, index: int, offset: np.ndarray) -> None:

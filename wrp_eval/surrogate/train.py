@@ -37,7 +37,7 @@ from wrp_eval.logs import progress_shown
 from wrp_eval.surrogate.config import SurrogateSection
 from wrp_eval.surrogate.data import TrialData, load_campaign_trials, physical_variance_share, split_indices
 from wrp_eval.surrogate.diagnostics import mean_offset_baseline, single_view_agreement
-from wrp_eval.surrogate.features import CONDITION_NAMES, COVERAGE_NAMES, GEOMETRY_NAMES, conditions_or_reference
+from wrp_eval.surrogate.features import CONDITION_NAMES, COVERAGE_NAMES, conditions_or_reference, moving_names
 from wrp_eval.surrogate.metrics import regression_metrics
 from wrp_eval.surrogate.model import Surrogate, SurrogateMeta, ViewSequenceCNN
 
@@ -141,7 +141,7 @@ def train_surrogate(data: TrialData, section: SurrogateSection = SurrogateSectio
     with torch.random.fork_rng(devices=[]):
         torch.manual_seed(seed)
         net = ViewSequenceCNN(**meta.architecture)
-    surrogate = Surrogate(net, meta)
+    surrogate = Surrogate(net, meta, data.scarce)
     history, epoch, best_epoch, final_lr = _fit(net, surrogate, data, section, offsets, target, usable, tr, va,
                                                 seed)
 
@@ -168,7 +168,7 @@ def train_surrogate(data: TrialData, section: SurrogateSection = SurrogateSectio
                     "n_views": data.n_views, "data": data.source})
     final_meta = SurrogateMeta(**{**meta.__dict__, "metrics": metrics,
                                   "extra": {"seed": seed, "data": data.source}})
-    surrogate = Surrogate(net, final_meta)
+    surrogate = Surrogate(net, final_meta, data.scarce)
     return TrainResult(surrogate, metrics, history, {"train": tr.tolist(), "val": va.tolist(), "test": te.tolist()},
                        preds["test"][0], preds["test"][1], seconds)
 
@@ -200,17 +200,25 @@ def _untrained_meta(data: TrialData, section: SurrogateSection, offsets: np.ndar
         pose = np.asarray(data.planned_pose, float)
         planned = pose.tolist()
         pose_mean, pose_std = (v.tolist() for v in _standardise(pose, 0))
-    views = feat_mean = feat_std = None
-    if section.inputs == "per_view":
+    views = feat_mean = feat_std = scarce_digest = None
+    if section.inputs != "offsets":
         if data.views is None:
             raise InputError(data.source or "surrogate data", "the data has no per-view context (ship coverage); "
                                                               "set surrogate.inputs: offsets")
         views = data.views.to_json_dict()
-        features = np.concatenate([data.views.geometry(offsets[tr]), _conditions(data, tr),
+        moving = data.views.geometry(offsets[tr])
+        if section.inputs == "scarce":
+            if data.scarce is None:
+                raise InputError(data.source or "surrogate data", "the data has no scarce coverage of its path "
+                                                                  "(a campaign read without its ship)")
+            scarce_digest = data.scarce.digest()
+            moving = np.concatenate([moving, data.scarce.lost_all(offsets[tr])[..., None]], axis=2)
+        features = np.concatenate([moving, _conditions(data, tr),
                                    np.broadcast_to(data.views.coverage(), (len(tr), data.n_views, 2))], axis=2)
         feat_mean, feat_std = (v.tolist() for v in _standardise(features.reshape(-1, features.shape[-1]), 0))
-    n_features = {"per_view": 4 + len(GEOMETRY_NAMES) + len(CONDITION_NAMES) + len(COVERAGE_NAMES), "offsets": 4}
-    arch = {"in_channels": n_features[section.inputs] + (7 if section.pose_channels else 0),
+    n_features = 4 + (len(moving_names(section.inputs)) + len(CONDITION_NAMES) + len(COVERAGE_NAMES)
+                      if section.inputs != "offsets" else 0)
+    arch = {"in_channels": n_features + (7 if section.pose_channels else 0),
             "channels": section.channels,
             "kernel": section.kernel, "layers": section.layers, "hidden": section.hidden,
             "outputs": 2 if section.predict_failure else 1}
@@ -221,7 +229,8 @@ def _untrained_meta(data: TrialData, section: SurrogateSection, offsets: np.ndar
                          error_std=err_std, pose_mean=pose_mean, pose_std=pose_std, planned_pose=planned,
                          offset_low=offsets[tr].reshape(-1, 4).min(0).tolist(),
                          offset_high=offsets[tr].reshape(-1, 4).max(0).tolist(), target=section.target,
-                         inputs=section.inputs, views=views, feature_mean=feat_mean, feature_std=feat_std)
+                         inputs=section.inputs, views=views, feature_mean=feat_mean, feature_std=feat_std,
+                         scarce_digest=scarce_digest)
 
 
 def _fit(net, surrogate: Surrogate, data: TrialData, section: SurrogateSection, offsets: np.ndarray,
@@ -436,7 +445,7 @@ def train_from_campaign(ctx: ExperimentContext, campaign_dir: str | Path | None 
     does not read the campaign again."""
     section = ctx.config.surrogate
     folder = campaign_dir if campaign_dir is not None else ctx.training_campaign_dir
-    data = load_campaign_trials(folder, config_dir=ctx.config_dir)
+    data = load_campaign_trials(folder, config_dir=ctx.config_dir, scarce=section.inputs == "scarce")
     result, cv = train_with_folds(data, section, section.seed_or(ctx.run_seed), folds, workers)
     result.metrics["physical_variance_share"] = physical_variance_share(data)
     result.metrics["baseline"] = mean_offset_baseline(data, result.split, usable_rows(data, section)[0])

@@ -98,8 +98,10 @@ def resolve_inputs(ctx: ExperimentContext, section: WrpSection, checkpoint: str 
         pass
     if surrogate is None and need_surrogate:
         ckpt = Path(checkpoint or section.checkpoint or ctx.folders.surrogate / "surrogate.pt")
+        scarce = (ctx.scored_ship.scarce_coverage(captures_from_path(path))
+                   if ctx.config.surrogate.inputs == "scarce" else None)
         surrogate = Surrogate.load(ckpt, n_views=len(path), path_digest=digests,
-                                   inputs=ctx.config.surrogate.inputs)
+                                   inputs=ctx.config.surrogate.inputs, scarce=scarce)
     elif surrogate is not None:
         surrogate.check_path(len(path), digests, source="surrogate")
     radius = np.full(len(path), section.sample_radius_m)
