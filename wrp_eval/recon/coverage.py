@@ -28,7 +28,7 @@ import trimesh
 
 from wrp_eval.camera import optical_axes
 from wrp_eval.recon.config import OracleSection
-from wrp_eval.recon.fusion import MAX_VIEWS_PER_SAMPLE, observe_samples
+from wrp_eval.recon.fusion import observe_samples
 from wrp_eval.recon.oracle import GroundTruth, prepare_ground_truth
 from wrp_eval.sim.captures import CaptureSet
 
@@ -107,10 +107,9 @@ class ScarceCoverage:
     lost = sum_s [min(W_s, c) - min(R_vs + w_s, c)] (negative: it adds scarce coverage), c = ``level``; 0 at
     the planned pose. Only samples with R_vs < c can change the sum, so each view keeps just those
     (``samples[v]`` indices, ``rest[v]`` their R) and its ``removal`` (n,) = sum_s [min(W_s, c) - min(R_vs, c)].
-    The moved view is not subject to the oracle's per-sample cap of views (it is one of at most
-    MAX_VIEWS_PER_SAMPLE candidates per call). ``mesh`` and ``section`` (an OracleSection) give the prepared
-    ground truth :attr:`gt`; a pickled copy (a training fold's process) leaves its ray-casting scenes behind and
-    prepares them again, the same way the oracle does.
+    The moved view is not subject to the oracle's per-sample cap of views. ``mesh`` and ``section`` (an
+    OracleSection) give the prepared ground truth :attr:`gt`; a pickled copy (a training fold's process) leaves its
+    ray-casting scenes behind and prepares them again, the same way the oracle does.
     """
 
     planned: CaptureSet
@@ -156,15 +155,14 @@ class ScarceCoverage:
             return self.removal[view] - regain
         gt = replace(self.gt, samples=self.gt.samples[idx], sample_normals=self.gt.sample_normals[idx])
         base = self.planned.subset(np.array([view]))
-        for lo in range(0, len(off), MAX_VIEWS_PER_SAMPLE):       # the cap then keeps every candidate's observations
-            part = off[lo:lo + MAX_VIEWS_PER_SAMPLE]
-            cands = replace(base.subset(np.zeros(len(part), dtype=int)), positions=base.positions + part[:, :3],
-                            yaw=base.yaw + part[:, 3])
-            obs = observe_samples(cands, gt, np.ones(len(part), dtype=bool), self.section,
-                                  1.0 / self.section.gt_density_per_m2)
-            r = rest[obs.sample]
-            gained = np.minimum(r + obs.weight, self.level) - np.minimum(r, self.level)
-            regain[lo:lo + len(part)] = np.bincount(obs.view, weights=gained, minlength=len(part))
+        cands = replace(base.subset(np.zeros(len(off), dtype=int)), positions=base.positions + off[:, :3],
+                        yaw=base.yaw + off[:, 3])
+        # every candidate's own observations: no per-sample cap, the candidates are alternatives, not a set
+        obs = observe_samples(cands, gt, np.ones(len(off), dtype=bool), self.section,
+                              1.0 / self.section.gt_density_per_m2, max_views_per_sample=None)
+        r = rest[obs.sample]
+        gained = np.minimum(r + obs.weight, self.level) - np.minimum(r, self.level)
+        regain = np.bincount(obs.view, weights=gained, minlength=len(off))
         return self.removal[view] - regain
 
     def lost_all(self, offsets: np.ndarray) -> np.ndarray:

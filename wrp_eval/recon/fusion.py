@@ -198,8 +198,11 @@ def _best_per_sample(sample, usable, weight, max_views):
 
 
 def observe_samples(capture_set: CaptureSet, gt: GroundTruth, registered: np.ndarray, section: OracleSection,
-                    sample_area_m2: float) -> SampleObservations:
-    """The observations of step 1 (module docstring) of every ground-truth sample by the registered views."""
+                    sample_area_m2: float,
+                    max_views_per_sample: int | None = MAX_VIEWS_PER_SAMPLE) -> SampleObservations:
+    """The observations of step 1 (module docstring) of every ground-truth sample by the registered views: the
+    ``max_views_per_sample`` best of each sample (None: every free one, sample-major, for callers that weigh views
+    apart rather than reconstruct from them)."""
     p = section.synthetic
     cam_model = capture_set.camera
     f = cam_model.focal_px
@@ -222,7 +225,8 @@ def observe_samples(capture_set: CaptureSet, gt: GroundTruth, registered: np.nda
     weight = (border_weight(pixel[:, 0], pixel[:, 1], cam_model.image_width_px, cam_model.image_height_px)
               * incidence_weight(cos_k, inc_max) * patch_match_probability(patch_px2))
     # the best MAX_VIEWS_PER_SAMPLE free observations of each sample (by weight; still sorted by sample)
-    keep = _best_per_sample(s_idx, free, weight, MAX_VIEWS_PER_SAMPLE)
+    keep = (np.flatnonzero(free) if max_views_per_sample is None
+            else _best_per_sample(s_idx, free, weight, max_views_per_sample))
     return SampleObservations(s_idx[keep], view[keep], rel_k[keep], dist_k[keep], cam_k[keep], weight[keep],
                               pixel_noise_px(p.sigma_px, blur[keep]), patch_px2[keep], gsd[keep])
 
