@@ -150,9 +150,8 @@ class ScarceCoverage:
         dz m, dyaw rad)."""
         off = np.asarray(offsets, dtype=float).reshape(-1, 4)
         idx, rest = self.samples[view], self.rest[view]
-        regain = np.zeros(len(off))
         if idx.size == 0 or len(off) == 0:
-            return self.removal[view] - regain
+            return np.full(len(off), self.removal[view])
         gt = replace(self.gt, samples=self.gt.samples[idx], sample_normals=self.gt.sample_normals[idx])
         base = self.planned.subset(np.array([view]))
         cands = replace(base.subset(np.zeros(len(off), dtype=int)), positions=base.positions + off[:, :3],
@@ -162,7 +161,7 @@ class ScarceCoverage:
                               1.0 / self.section.gt_density_per_m2, max_views_per_sample=None)
         r = rest[obs.sample]
         gained = np.minimum(r + obs.weight, self.level) - np.minimum(r, self.level)
-        regain = np.bincount(obs.view, weights=gained, minlength=len(off))
+        regain: np.ndarray = np.bincount(obs.view, weights=gained, minlength=len(off))
         return self.removal[view] - regain
 
     def lost_all(self, offsets: np.ndarray) -> np.ndarray:
