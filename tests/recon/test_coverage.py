@@ -57,8 +57,8 @@ def test_scarce_coverage_is_the_whole_set_reobserved_with_one_view_moved(hull_wi
         exact = [_exact_loss(cs, gt, section, view, m, 2.0) for m in moves]
         np.testing.assert_allclose(lost, exact, atol=1e-9)
         assert np.ptp(exact) > 1.0              # the moves do change the scarce coverage
-    np.testing.assert_allclose(scarce.lost_all(np.zeros((1, len(cs), 4))), 0.0, atol=1e-9)
-    both = scarce.lost_all(np.stack([np.zeros((len(cs), 4)), np.tile(moves[0], (len(cs), 1))]))
+    np.testing.assert_allclose(scarce.lost_views(np.zeros((1, len(cs), 4))), 0.0, atol=1e-9)
+    both = scarce.lost_views(np.stack([np.zeros((len(cs), 4)), np.tile(moves[0], (len(cs), 1))]))
     np.testing.assert_allclose(both[1], [scarce.lost(v, moves[:1])[0] for v in range(len(cs))])
 
 

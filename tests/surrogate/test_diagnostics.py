@@ -154,7 +154,7 @@ def test_the_scarce_input_set_trains_on_the_campaigns_ship_and_its_checkpoint_ne
     assert load_campaign_trials(campaign_dir).scarce is None          # only on request (~1 s per 46 views)
     rng = np.random.default_rng(0)
     offsets = rng.uniform(-1, 1, (40, data.n_views, 4)) * [2.0, 2.0, 2.0, 0.2]
-    lost = data.scarce.lost_all(offsets)
+    lost = data.scarce.lost_views(offsets)
     error = 0.02 + 1e-4 * lost.sum(axis=1)
     trials = dataclasses.replace(data, offsets=offsets, error=error, failed=np.zeros(40, bool), trial_id=None,
                                  deviation=None, conditions=None, registered=None)

@@ -164,11 +164,13 @@ class ScarceCoverage:
         regain: np.ndarray = np.bincount(obs.view, weights=gained, minlength=len(off))
         return self.removal[view] - regain
 
-    def lost_all(self, offsets: np.ndarray) -> np.ndarray:
-        """(..., n) :meth:`lost` of every view at offsets (..., n, 4), each view moved alone."""
+    def lost_views(self, offsets: np.ndarray, views: list[int] | slice = slice(None)) -> np.ndarray:
+        """(..., k) :meth:`lost` of the viewpoints ``views`` (k of them; default every one) at offsets (..., k, 4),
+        each view moved alone."""
         off = np.asarray(offsets, dtype=float)
-        flat = off.reshape(-1, len(self), 4)
-        out = np.stack([self.lost(v, flat[:, v]) for v in range(len(self))], axis=1)
+        index = np.arange(len(self))[views]
+        flat = off.reshape(-1, len(index), 4)
+        out = np.stack([self.lost(int(v), flat[:, j]) for j, v in enumerate(index)], axis=1)
         return out.reshape(off.shape[:-1])
 
 

@@ -181,11 +181,7 @@ class Surrogate:
         geometry = ctx.geometry(offsets, views=views)
         if self.scarce is None:
             return geometry
-        off = np.asarray(offsets, dtype=float)
-        index = np.arange(self.n_views)[views]
-        flat = off.reshape(-1, len(index), 4)
-        lost = np.stack([self.scarce.lost(int(v), flat[:, j]) for j, v in enumerate(index)], axis=1)
-        return np.concatenate([geometry, lost.reshape(*off.shape[:-1], 1)], axis=-1)
+        return np.concatenate([geometry, self.scarce.lost_views(offsets, views)[..., None]], axis=-1)
 
     def input_tensor(self, offsets: np.ndarray | torch.Tensor, conditions: np.ndarray | None = None) -> torch.Tensor:
         """(batch, n_views, 4) offsets [+ (batch, n_views, 5) conditions at the shutter, default the forecast

@@ -212,7 +212,7 @@ def _untrained_meta(data: TrialData, section: SurrogateSection, offsets: np.ndar
                 raise InputError(data.source or "surrogate data", "the data has no scarce coverage of its path "
                                                                   "(a campaign read without its ship)")
             scarce_digest = data.scarce.digest()
-            moving = np.concatenate([moving, data.scarce.lost_all(offsets[tr])[..., None]], axis=2)
+            moving = np.concatenate([moving, data.scarce.lost_views(offsets[tr])[..., None]], axis=2)
         features = np.concatenate([moving, _conditions(data, tr),
                                    np.broadcast_to(data.views.coverage(), (len(tr), data.n_views, 2))], axis=2)
         feat_mean, feat_std = (v.tolist() for v in _standardise(features.reshape(-1, features.shape[-1]), 0))
