@@ -4,7 +4,7 @@ an input? Offline: reads a stored campaign, trains in this process, writes only 
     .venv/bin/python scripts/probes/scarce_input.py CAMPAIGN_DIR OUT_DIR [--seeds 0 1 2] [--moves-seeds 0 1]
 
 Per training seed, two surrogates on the same split: ``surrogate.inputs: per_view`` (the default) and ``scarce``
-(per_view + :class:`wrp_eval.recon.coverage.ScarceCoverage`'s channel). Reported: validation / test R^2 (the held-out
+(per_view + :class:`wrp_eval.surrogate.scarce.ScarceCoverage`'s channel). Reported: validation / test R^2 (the held-out
 flights that choose inputs) and the single-view agreement with the jitter-averaged oracle on the surrogate bench's
 moves (``single_view_agreement``: 200 moves, 4 jitters, forecast blur; the oracle scores computed once per move
 seed and shared). The channel's level (c = 2) was picked on the seed-0 moves in session 26; seed 1's are not

@@ -9,13 +9,13 @@ import trimesh
 
 from wrp_eval.camera import Camera, yaw_pitch_towards
 from wrp_eval.recon.config import OracleSection
-from wrp_eval.recon.coverage import ScarceCoverage, scarce_coverage
 from wrp_eval.recon.oracle import prepare_ground_truth
 from wrp_eval.sim.captures import CaptureSet
 from wrp_eval.surrogate.config import SurrogateSection
 from wrp_eval.surrogate.data import known_function_trials
 from wrp_eval.surrogate.features import ViewContext
 from wrp_eval.surrogate.model import Surrogate, SurrogateMeta, ViewSequenceCNN
+from wrp_eval.surrogate.scarce import ScarceCoverage, scarce_coverage
 
 torch.set_num_threads(1)
 
@@ -78,22 +78,30 @@ def random_surrogate(n_views: int, channels: int = 8, kernel: int = 3, layers: i
                              "views": random_views(n_views, rng).to_json_dict(),
                              "feature_mean": rng.normal(0, 1, n_feat).tolist(),
                              "feature_std": rng.uniform(0.2, 3, n_feat).tolist(),
-                             "scarce_digest": None if scarce is None else scarce.digest()} if per_view else {}))
+                             "scarce_digest": None if scarce is None else scarce.digest} if per_view else {}))
     return Surrogate(net, meta, scarce)
 
 
-@pytest.fixture(scope="session")
-def ring_scarce() -> ScarceCoverage:
-    """The scarce coverage of 9 views on a ring around a 30 m hull with a deckhouse."""
+def ring_mesh() -> trimesh.Trimesh:
+    """A 30 m hull with a deckhouse standing on its deck (keel below the water)."""
     hull = trimesh.creation.box(extents=(30.0, 8.0, 6.0))
     hull.apply_translation((0.0, 0.0, 1.0))
     house = trimesh.creation.box(extents=(6.0, 6.0, 5.0))
     house.apply_translation((-8.0, 0.0, 6.5))
-    mesh = trimesh.util.concatenate([hull, house])
-    angle = np.linspace(0.0, 2 * np.pi, N_RING, endpoint=False)
-    pos = np.column_stack([22 * np.cos(angle), 22 * np.sin(angle), np.where(np.arange(N_RING) % 2, 9.0, 3.0)])
-    yaw, pitch = yaw_pitch_towards(pos, np.tile([0.0, 0.0, 3.0], (N_RING, 1)))
-    section = OracleSection()
-    gt = prepare_ground_truth(mesh, section.gt_density_per_m2, section.gt_seed)
-    return scarce_coverage(CaptureSet(pos, yaw, pitch, np.arange(N_RING), Camera()), mesh, section, gt)
+    return trimesh.util.concatenate([hull, house])
 
+
+def ring_views(n: int, radius: float = 22.0) -> CaptureSet:
+    """``n`` views on a ring of ``radius`` around :func:`ring_mesh`, at 3 and 9 m alternately, looking at its middle."""
+    angle = np.linspace(0.0, 2 * np.pi, n, endpoint=False)
+    pos = np.column_stack([radius * np.cos(angle), radius * np.sin(angle), np.where(np.arange(n) % 2, 9.0, 3.0)])
+    yaw, pitch = yaw_pitch_towards(pos, np.tile([0.0, 0.0, 3.0], (n, 1)))
+    return CaptureSet(pos, yaw, pitch, np.arange(n), Camera())
+
+
+@pytest.fixture(scope="session")
+def ring_scarce() -> ScarceCoverage:
+    """The scarce coverage of 9 views on a ring around :func:`ring_mesh`."""
+    mesh, section = ring_mesh(), OracleSection()
+    gt = prepare_ground_truth(mesh, section.gt_density_per_m2, section.gt_seed)
+    return scarce_coverage(ring_views(N_RING), mesh, section, gt)

@@ -161,7 +161,11 @@ def test_the_scarce_input_set_trains_on_the_campaigns_ship_and_its_checkpoint_ne
     section = SurrogateSection(inputs="scarce", epochs=5, patience=5, validation_moves=0)
     result = train_surrogate(trials, section, seed=0)
     s = result.surrogate
-    assert s.meta.scarce_digest == data.scarce.digest() and s.meta.architecture["in_channels"] == 4 + 4 + 5 + 2 + 7
+    assert s.meta.scarce_digest == data.scarce.digest and s.meta.architecture["in_channels"] == 4 + 4 + 5 + 2 + 7
+    # the training statistics standardise the same channel the queries compute (the 4th moving one)
+    train = np.asarray(result.split["train"])
+    assert s.meta.feature_mean[3] == pytest.approx(lost[train].mean(), rel=1e-9)
+    assert s.meta.feature_std[3] == pytest.approx(lost[train].std(), rel=1e-6)
     s.save(tmp_path / "s.pt")
     again = Surrogate.load(tmp_path / "s.pt", inputs="scarce", scarce=load_campaign_trials(campaign_dir, scarce=True)
                            .scarce)

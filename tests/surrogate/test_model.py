@@ -1,4 +1,6 @@
 import dataclasses
+import json
+from unittest import mock
 
 import numpy as np
 import pytest
@@ -7,6 +9,7 @@ import torch
 from wrp_eval.atomic import temporaries
 from wrp_eval.errors import InputError
 from wrp_eval.surrogate.model import CHECKPOINT_VERSION, Surrogate, ViewQuery
+from wrp_eval.surrogate.scarce import ScarceCoverage
 
 from .conftest import random_surrogate
 
@@ -43,10 +46,9 @@ def test_view_query_matches_full_forward_with_the_scarce_channel(ring_scarce, ke
         np.testing.assert_allclose(query.errors(view, cand), s.predict(full), atol=2e-5)
     moving = s.moving_features(full)
     assert moving.shape == (6, 9, 4) and np.ptp(moving[:, 8, 3]) > 0.5
-    plain = Surrogate(s.net, s.meta.__class__(**{**s.meta.__dict__, "feature_std": [*s.meta.feature_std[:3], 1e9,
-                                                                                 *s.meta.feature_std[4:]]}),
-                      ring_scarce)
-    assert np.max(np.abs(plain.predict(full) - s.predict(full))) > 1e-6
+    with mock.patch.object(ScarceCoverage, "lost", lambda self, view, off: np.zeros(len(off))):
+        blind = s.predict(full)                  # the same network with the scarce channel held at 0
+    assert np.max(np.abs(blind - s.predict(full))) > 1e-6
 
 
 def test_a_scarce_checkpoint_needs_the_coverage_it_was_trained_on(tmp_path, ring_scarce):
@@ -61,6 +63,22 @@ def test_a_scarce_checkpoint_needs_the_coverage_it_was_trained_on(tmp_path, ring
     other = dataclasses.replace(ring_scarce, level=3.0)
     with pytest.raises(InputError, match="another ship, oracle or plan"):
         Surrogate.load(tmp_path / "s.pt", scarce=other)
+    built = []
+    lazily = Surrogate.load(tmp_path / "s.pt", scarce=lambda: built.append(1) or ring_scarce)
+    assert built == [1] and lazily.scarce is ring_scarce
+    with pytest.raises(InputError, match="input set 'scarce', the config asks for 'per_view'"):
+        Surrogate.load(tmp_path / "s.pt", inputs="per_view", scarce=lambda: built.append(2) or ring_scarce)
+    assert built == [1]                          # the config's mismatch is named before any coverage is built
+
+
+def test_a_per_view_checkpoint_without_the_scarce_field_loads(tmp_path):
+    """Checkpoints of the other input sets carry no scarce_digest (and those saved before it existed load)."""
+    s = random_surrogate(6, per_view=True)
+    s.save(tmp_path / "s.pt")
+    doc = torch.load(tmp_path / "s.pt", weights_only=True)
+    assert "scarce_digest" not in json.loads(doc["metadata_json"])
+    off = np.random.default_rng(0).normal(0, 1, (2, 6, 4))
+    np.testing.assert_array_equal(Surrogate.load(tmp_path / "s.pt").predict(off), s.predict(off))
 
 
 def test_view_query_update_view_moves_the_base():

@@ -15,7 +15,7 @@ import trimesh
 from wrp_eval.errors import InputError
 from wrp_eval.recon.colmap import ColmapOracle
 from wrp_eval.recon.config import OracleSection
-from wrp_eval.recon.coverage import ScarceCoverage, ViewCoverage, scarce_coverage, view_coverage
+from wrp_eval.recon.coverage import ViewCoverage, view_coverage
 from wrp_eval.recon.oracle import MeshOracle
 from wrp_eval.recon.synthetic import SyntheticOracle
 from wrp_eval.ship.config import ShipSection
@@ -53,11 +53,6 @@ class ScoredShip:
     def coverage(self, captures) -> ViewCoverage:
         """What each view of ``captures`` sees of this ship (:func:`wrp_eval.recon.coverage.view_coverage`)."""
         return view_coverage(captures, self.oracle.ground_truth(self.mesh), self.oracle.section)
-
-    def scarce_coverage(self, planned) -> ScarceCoverage:
-        """The scarce coverage one view's move takes away from the ``planned`` CaptureSet on this ship
-        (:class:`wrp_eval.recon.coverage.ScarceCoverage`)."""
-        return scarce_coverage(planned, self.mesh, self.oracle.section, self.oracle.ground_truth(self.mesh))
 
 
 def scored_ship(ship: ShipSection, oracle: OracleSection, oracle_kind: str,

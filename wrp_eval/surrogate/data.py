@@ -18,9 +18,9 @@ from wrp_eval.campaign.store import TrialStore
 from wrp_eval.errors import InputError
 from wrp_eval.planning.path import FlightPath
 from wrp_eval.recon.capture_io import captures_from_path
-from wrp_eval.recon.coverage import ScarceCoverage
 from wrp_eval.recon.scored_ship import scored_ship
 from wrp_eval.surrogate.features import CONDITION_NAMES, ViewContext, campaign_view_context, reference_conditions
+from wrp_eval.surrogate.scarce import ScarceCoverage, ship_scarce_coverage
 
 POSE_NAMES = ("x_m", "y_m", "z_m", "cos_yaw", "sin_yaw", "pitch_rad", "index")
 
@@ -40,7 +40,7 @@ class TrialData:
     :class:`ViewContext` (None: per-view inputs unavailable, only the ``offsets`` input set can be trained);
     registered (n_trials, n_views) or None: 1 where the oracle registered the view, 0 where it did not, NaN where
     the view was not taken or the store does not record it (the campaign's ``view_registered``);
-    scarce: the path's :class:`~wrp_eval.recon.coverage.ScarceCoverage` on the ship (None: the ``scarce`` input
+    scarce: the path's :class:`~wrp_eval.surrogate.scarce.ScarceCoverage` on the ship (None: the ``scarce`` input
     set cannot be trained).
     """
 
@@ -131,7 +131,7 @@ def load_campaign_trials(campaign_dir: str | Path, *, views: bool = True, config
     """The trials of a campaign folder (the campaign stage's ``TrialStore``): flown offsets, error_m, failed,
     the conditions at each view (blur, wind) and, with ``views``, the path's :class:`ViewContext` (the ship and
     oracle of the campaign's stored config, resolved relative to ``config_dir``: ~1 s; None without a stored
-    config), with ``scarce`` too its :class:`ScarceCoverage` (~4 s for 141 views), and which views the oracle
+    config), with ``scarce`` too its :class:`ScarceCoverage` (~2 s for 141 views), and which views the oracle
     registered (NaN in stores written before that column).
 
     A view a flight did not take (it turned home, or the trial raised) gets offset 0 and the condition
@@ -173,7 +173,7 @@ def load_campaign_trials(campaign_dir: str | Path, *, views: bool = True, config
         trial = TrialConfig.from_stored(meta["config"])
         ship = scored_ship(trial.ship, trial.oracle, trial.campaign.oracle, config_dir)
         context = campaign_view_context(ship, path, conditions)
-        scarce_cover = ship.scarce_coverage(captures_from_path(path)) if scarce else None
+        scarce_cover = ship_scarce_coverage(ship, captures_from_path(path)) if scarce else None
     return TrialData(offsets=np.nan_to_num(flown[keep]), error=error[keep], failed=failed[keep],
                      planned_pose=path_pose_features(path), trial_id=trial_id[keep],
                      path_digest=str(meta.get("path_digest", digests.pop())),

@@ -17,7 +17,7 @@ covers, or along a face twenty others see. Each viewpoint i therefore carries, b
   partner count;
 * with the ``scarce`` input set, **scarce coverage lost** (:data:`SCARCE_NAMES`, computed from the offsets like
   the geometry, so every candidate gets its own): what the view flown at its offset takes away from the planned
-  set's scarce coverage, the rest of the set held (:class:`wrp_eval.recon.coverage.ScarceCoverage`). It needs the
+  set's scarce coverage, the rest of the set held (:class:`wrp_eval.surrogate.scarce.ScarceCoverage`). It needs the
   ship and the oracle, which the checkpoint does not hold: whoever loads such a surrogate passes them in.
 
 The network keeps the viewpoint order of the path (its convolution mixes path neighbours); the co-visibility
@@ -28,11 +28,15 @@ from __future__ import annotations
 
 import warnings
 from dataclasses import asdict, dataclass
+from typing import TYPE_CHECKING
 
 import numpy as np
 
 from wrp_eval.camera import optical_axes
 from wrp_eval.recon.capture_io import captures_from_path
+
+if TYPE_CHECKING:
+    from wrp_eval.surrogate.scarce import ScarceCoverage
 
 GEOMETRY_NAMES = ("standoff_m", "incidence_rad", "pointing_rad")
 CONDITION_NAMES = ("blur_px", "wind_x_mps", "wind_y_mps", "wind_z_mps", "taken")
@@ -40,6 +44,17 @@ COVERAGE_NAMES = ("unique_share", "partners")
 SCARCE_NAMES = ("scarce_lost",)
 # "offsets": the 4 offsets + planned pose only (the earlier model); "scarce": per_view + SCARCE_NAMES
 INPUT_SETS = ("per_view", "offsets", "scarce")
+
+
+def moving_features(context: ViewContext, scarce: ScarceCoverage | None, offsets: np.ndarray,
+                    views: np.ndarray | slice | list[int] = slice(None)) -> np.ndarray:
+    """(..., k, m) the channels computed from offsets (..., k, 4) of the viewpoints ``views`` (k of them), in the
+    order :func:`moving_names` gives: the flown geometry, then with ``scarce`` the scarce coverage lost;
+    unstandardised. The one layout the training statistics and every query share."""
+    geometry = context.geometry(offsets, views=views)
+    if scarce is None:
+        return geometry
+    return np.concatenate([geometry, scarce.lost_views(offsets, views)[..., None]], axis=-1)
 
 
 def moving_names(inputs: str) -> tuple[str, ...]:

@@ -20,10 +20,10 @@ from __future__ import annotations
 
 import io
 import json
-from collections.abc import Iterable
+from collections.abc import Callable, Iterable
 from dataclasses import asdict, dataclass, field
 from pathlib import Path
-from typing import cast
+from typing import TYPE_CHECKING, cast
 
 import numpy as np
 import torch
@@ -32,14 +32,17 @@ from torch.nn import functional as F
 
 from wrp_eval.atomic import write_bytes_atomic
 from wrp_eval.errors import InputError
-from wrp_eval.recon.coverage import ScarceCoverage
 from wrp_eval.surrogate.features import (
     CONDITION_NAMES,
     INPUT_SETS,
     ViewContext,
     conditions_or_reference,
+    moving_features,
     moving_names,
 )
+
+if TYPE_CHECKING:
+    from wrp_eval.surrogate.scarce import ScarceCoverage
 
 CHECKPOINT_FORMAT = "wrp-eval-surrogate"
 CHECKPOINT_VERSION = 2    # 2: input sets and per-view inputs; version 1 checkpoints are refused
@@ -109,7 +112,7 @@ class SurrogateMeta:
     figures; extra: free-form provenance (data source, seed, epochs run); inputs: the input set
     (:data:`wrp_eval.surrogate.features.INPUT_SETS`); views: the path's ViewContext (JSON) for ``per_view`` and
     ``scarce``; feature_mean/feature_std (10,) or (11,): standardisation of the moving (geometry [+ scarce]),
-    condition and coverage channels; scarce_digest: :meth:`ScarceCoverage.digest` of the ship and plan the
+    condition and coverage channels; scarce_digest: :attr:`ScarceCoverage.digest` of the ship and plan the
     ``scarce`` channel was computed on.
     """
 
@@ -135,6 +138,15 @@ class SurrogateMeta:
     scarce_digest: str | None = None
 
 
+def _metadata(meta: SurrogateMeta) -> dict:
+    """The checkpoint's metadata: ``meta`` as a dict, without a None ``scarce_digest`` (checkpoints of the other
+    input sets stay readable by code from before that field)."""
+    doc = asdict(meta)
+    if doc["scarce_digest"] is None:
+        del doc["scarce_digest"]
+    return doc
+
+
 class Surrogate:
     """A trained network with its standardisation: offsets (batch, n_views, 4) -> predicted error (batch,) m.
 
@@ -154,7 +166,7 @@ class Surrogate:
         self.variable_channels = VARIABLE_CHANNELS[meta.inputs]
         self.n_moving = self.variable_channels - 4            # channels computed from the offsets
         self.scarce = scarce if meta.inputs == "scarce" else None
-        if meta.inputs == "scarce" and (scarce is None or scarce.digest() != meta.scarce_digest):
+        if meta.inputs == "scarce" and (scarce is None or scarce.digest != meta.scarce_digest):
             raise ValueError("the scarce input set needs the ScarceCoverage it was trained on"
                              + (" (another ship, oracle or plan)" if scarce is not None else ""))
         if self.views is not None and meta.inputs != "offsets":
@@ -177,11 +189,7 @@ class Surrogate:
     def moving_features(self, offsets: np.ndarray, views: list[int] | slice = slice(None)) -> np.ndarray:
         """(..., k, n_moving) the channels computed from offsets (..., k, 4) of the viewpoints ``views``: the flown
         geometry [+ the scarce coverage lost], unstandardised."""
-        ctx = cast(ViewContext, self.views)
-        geometry = ctx.geometry(offsets, views=views)
-        if self.scarce is None:
-            return geometry
-        return np.concatenate([geometry, self.scarce.lost_views(offsets, views)[..., None]], axis=-1)
+        return moving_features(cast(ViewContext, self.views), self.scarce, offsets, views)
 
     def input_tensor(self, offsets: np.ndarray | torch.Tensor, conditions: np.ndarray | None = None) -> torch.Tensor:
         """(batch, n_views, 4) offsets [+ (batch, n_views, 5) conditions at the shutter, default the forecast
@@ -233,7 +241,7 @@ class Surrogate:
         """state_dict + metadata (as a JSON string: plain data for ``torch.load(weights_only=True)``), written
         atomically."""
         doc = {"format": CHECKPOINT_FORMAT, "version": CHECKPOINT_VERSION,
-               "metadata_json": json.dumps(asdict(self.meta)),
+               "metadata_json": json.dumps(_metadata(self.meta)),
                "state_dict": {k: v.detach().clone() for k, v in self.net.state_dict().items()}}
         buf = io.BytesIO()
         torch.save(doc, buf)
@@ -241,11 +249,13 @@ class Surrogate:
 
     @classmethod
     def load(cls, file: str | Path, *, n_views: int | None = None, path_digest: str | set[str] | None = None,
-             inputs: str | None = None, scarce: ScarceCoverage | None = None) -> "Surrogate":
+             inputs: str | None = None,
+             scarce: ScarceCoverage | Callable[[], ScarceCoverage] | None = None) -> "Surrogate":
         """Load a checkpoint (``torch.load(weights_only=True)``). A corrupt file, another format or version, one
         trained for another path (``n_views``, ``path_digest`` when both sides know it), on another input set
         than ``inputs`` (when given) or, for the ``scarce`` input set, on another ship, oracle or plan than
-        ``scarce`` (the path's :class:`ScarceCoverage`) is an :class:`InputError`."""
+        ``scarce`` (the path's :class:`ScarceCoverage`, or a function that builds it: called only for a ``scarce``
+        checkpoint) is an :class:`InputError`."""
         file = Path(file)
         if not file.is_file():
             raise InputError(file, "no such surrogate checkpoint")
@@ -268,32 +278,41 @@ class Surrogate:
                                    f"{str(err).splitlines()[0] if str(err) else ''}") from None
         if meta.inputs not in INPUT_SETS or (meta.inputs != "offsets" and meta.views is None):
             raise InputError(file, f"damaged surrogate checkpoint: input set {meta.inputs!r} without its views")
-        if meta.inputs == "scarce" and (scarce is None or scarce.digest() != meta.scarce_digest):
-            raise InputError(file, "checkpoint's scarce-coverage channel was computed on "
-                                   + ("another ship, oracle or plan than this config's" if scarce is not None
-                                      else "a ship and oracle not given to the loader"))
         if inputs is not None and meta.inputs != inputs:
             raise InputError(file, f"checkpoint was trained on the input set {meta.inputs!r}, the config asks for "
                                    f"{inputs!r} (surrogate.inputs); retrain with `wrp-eval train`")
+        check_path(meta, n_views, path_digest, source=file)
+        cover = None
+        if meta.inputs == "scarce":
+            cover = scarce() if callable(scarce) else scarce
+            if cover is None or cover.digest != meta.scarce_digest:
+                raise InputError(file, "checkpoint's scarce-coverage channel (surrogate.inputs: scarce) was computed "
+                                       "on " + ("another ship, oracle or plan than this config's" if cover is not None
+                                                else "a ship and oracle not given to the loader"))
         try:
-            surrogate = cls(net, meta, scarce)
+            surrogate = cls(net, meta, cover)
         except Exception as err:
             raise InputError(file, f"damaged surrogate checkpoint: {type(err).__name__} in its metadata") from None
-        surrogate.check_path(n_views, path_digest, source=file)
         return surrogate
 
     def check_path(self, n_views: int | None, path_digest: str | set[str] | None,
                    source: str | Path = "surrogate") -> None:
-        """Refuse use on a path the checkpoint was not trained for. ``path_digest``: the path's digest, or a set
-        of digests that all identify it (the file's own JSON and its re-serialisation, which can differ in
-        the last bits of the degree <-> radian round trip)."""
-        if n_views is not None and int(n_views) != self.n_views:
-            raise InputError(source, f"checkpoint was trained for a path of {self.n_views} viewpoints, "
-                                     f"this path has {n_views}")
-        digests = {path_digest} if isinstance(path_digest, str) else set(path_digest or ())
-        if digests and self.meta.path_digest is not None and self.meta.path_digest not in digests:
-            raise InputError(source, f"checkpoint was trained for path {self.meta.path_digest}, "
-                                     f"not this path ({', '.join(sorted(digests))})")
+        """Refuse use on a path the checkpoint was not trained for (:func:`check_path`)."""
+        check_path(self.meta, n_views, path_digest, source)
+
+
+def check_path(meta: SurrogateMeta, n_views: int | None, path_digest: str | set[str] | None,
+               source: str | Path = "surrogate") -> None:
+    """Refuse a checkpoint's ``meta`` on a path it was not trained for. ``path_digest``: the path's digest, or a set
+    of digests that all identify it (the file's own JSON and its re-serialisation, which can differ in the last
+    bits of the degree <-> radian round trip)."""
+    if n_views is not None and int(n_views) != meta.n_views:
+        raise InputError(source, f"checkpoint was trained for a path of {meta.n_views} viewpoints, "
+                                 f"this path has {n_views}")
+    digests = {path_digest} if isinstance(path_digest, str) else set(path_digest or ())
+    if digests and meta.path_digest is not None and meta.path_digest not in digests:
+        raise InputError(source, f"checkpoint was trained for path {meta.path_digest}, "
+                                 f"not this path ({', '.join(sorted(digests))})")
 
 
 class ViewQuery:

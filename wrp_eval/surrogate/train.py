@@ -37,7 +37,13 @@ from wrp_eval.logs import progress_shown
 from wrp_eval.surrogate.config import SurrogateSection
 from wrp_eval.surrogate.data import TrialData, load_campaign_trials, physical_variance_share, split_indices
 from wrp_eval.surrogate.diagnostics import mean_offset_baseline, single_view_agreement
-from wrp_eval.surrogate.features import CONDITION_NAMES, COVERAGE_NAMES, conditions_or_reference, moving_names
+from wrp_eval.surrogate.features import (
+    CONDITION_NAMES,
+    COVERAGE_NAMES,
+    conditions_or_reference,
+    moving_features,
+    moving_names,
+)
 from wrp_eval.surrogate.metrics import regression_metrics
 from wrp_eval.surrogate.model import Surrogate, SurrogateMeta, ViewSequenceCNN
 
@@ -206,13 +212,13 @@ def _untrained_meta(data: TrialData, section: SurrogateSection, offsets: np.ndar
             raise InputError(data.source or "surrogate data", "the data has no per-view context (ship coverage); "
                                                               "set surrogate.inputs: offsets")
         views = data.views.to_json_dict()
-        moving = data.views.geometry(offsets[tr])
+        scarce = data.scarce if section.inputs == "scarce" else None
         if section.inputs == "scarce":
             if data.scarce is None:
                 raise InputError(data.source or "surrogate data", "the data has no scarce coverage of its path "
                                                                   "(a campaign read without its ship)")
-            scarce_digest = data.scarce.digest()
-            moving = np.concatenate([moving, data.scarce.lost_views(offsets[tr])[..., None]], axis=2)
+            scarce_digest = data.scarce.digest
+        moving = moving_features(data.views, scarce, offsets[tr])
         features = np.concatenate([moving, _conditions(data, tr),
                                    np.broadcast_to(data.views.coverage(), (len(tr), data.n_views, 2))], axis=2)
         feat_mean, feat_std = (v.tolist() for v in _standardise(features.reshape(-1, features.shape[-1]), 0))

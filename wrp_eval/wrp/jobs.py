@@ -35,6 +35,7 @@ from wrp_eval.sim.capture_mode import FLY_THROUGH
 from wrp_eval.sim.onboard import view_depths
 from wrp_eval.surrogate.data import TrialData, load_campaign_trials
 from wrp_eval.surrogate.model import Surrogate
+from wrp_eval.surrogate.scarce import ship_scarce_coverage
 from wrp_eval.wrp.capture_lever import (
     blurred_views,
     capture_lever_paths,
@@ -98,10 +99,9 @@ def resolve_inputs(ctx: ExperimentContext, section: WrpSection, checkpoint: str 
         pass
     if surrogate is None and need_surrogate:
         ckpt = Path(checkpoint or section.checkpoint or ctx.folders.surrogate / "surrogate.pt")
-        scarce = (ctx.scored_ship.scarce_coverage(captures_from_path(path))
-                   if ctx.config.surrogate.inputs == "scarce" else None)
         surrogate = Surrogate.load(ckpt, n_views=len(path), path_digest=digests,
-                                   inputs=ctx.config.surrogate.inputs, scarce=scarce)
+                                   inputs=ctx.config.surrogate.inputs,
+                                   scarce=lambda: ship_scarce_coverage(ctx.scored_ship, captures_from_path(path)))
     elif surrogate is not None:
         surrogate.check_path(len(path), digests, source="surrogate")
     radius = np.full(len(path), section.sample_radius_m)
