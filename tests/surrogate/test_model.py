@@ -51,6 +51,24 @@ def test_view_query_matches_full_forward_with_the_scarce_channel(ring_scarce, ke
     assert np.max(np.abs(blind - s.predict(full))) > 1e-6
 
 
+def test_a_view_not_taken_loses_its_whole_scarce_share(ring_scarce):
+    """With conditions that say view 4 was not photographed, its scarce channel is the view's whole removal, not
+    the loss at its (meaningless, zero) offset."""
+    s = random_surrogate(len(ring_scarce), scarce=ring_scarce)
+    off = np.zeros((2, 9, 4))
+    taken = np.ones((2, 9), bool)
+    taken[1, 4] = False
+    moving = s.moving_features(off, taken=taken)
+    assert moving[0, 4, 3] == pytest.approx(0.0, abs=1e-9)
+    assert moving[1, 4, 3] == ring_scarce.removal[4] > 0.0
+    np.testing.assert_array_equal(np.delete(moving[1], 4, axis=0), np.delete(moving[0], 4, axis=0))
+    cond = np.broadcast_to(s.views.condition_reference, (2, 9, 5)).copy()
+    cond[1, 4, -1] = 0.0
+    y = s.predict(off, cond)
+    cond[1, 4, -1] = 1.0
+    assert y[1] != s.predict(off, cond)[1]
+
+
 def test_a_scarce_checkpoint_needs_the_coverage_it_was_trained_on(tmp_path, ring_scarce):
     s = random_surrogate(len(ring_scarce), scarce=ring_scarce)
     s.save(tmp_path / "s.pt")

@@ -47,14 +47,19 @@ INPUT_SETS = ("per_view", "offsets", "scarce")
 
 
 def moving_features(context: ViewContext, scarce: ScarceCoverage | None, offsets: np.ndarray,
-                    views: np.ndarray | slice | list[int] = slice(None)) -> np.ndarray:
+                    views: np.ndarray | slice | list[int] = slice(None),
+                    taken: np.ndarray | None = None) -> np.ndarray:
     """(..., k, m) the channels computed from offsets (..., k, 4) of the viewpoints ``views`` (k of them), in the
-    order :func:`moving_names` gives: the flown geometry, then with ``scarce`` the scarce coverage lost;
+    order :func:`moving_names` gives: the flown geometry, then with ``scarce`` the scarce coverage lost, which for a
+    view not ``taken`` ((..., k) bool; None: every view taken) is the view's whole share (its ``removal``);
     unstandardised. The one layout the training statistics and every query share."""
     geometry = context.geometry(offsets, views=views)
     if scarce is None:
         return geometry
-    return np.concatenate([geometry, scarce.lost_views(offsets, views)[..., None]], axis=-1)
+    lost = scarce.lost_views(offsets, views)
+    if taken is not None:
+        lost = np.where(taken, lost, scarce.removal[np.arange(len(scarce))[views]])
+    return np.concatenate([geometry, lost[..., None]], axis=-1)
 
 
 def moving_names(inputs: str) -> tuple[str, ...]:

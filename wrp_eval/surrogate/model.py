@@ -186,10 +186,11 @@ class Surrogate:
         scale = np.asarray(self.meta.offset_std, float)
         return np.concatenate([scale, self._feat_std[:self.n_moving]]) if self.n_moving else scale
 
-    def moving_features(self, offsets: np.ndarray, views: list[int] | slice = slice(None)) -> np.ndarray:
+    def moving_features(self, offsets: np.ndarray, views: list[int] | slice = slice(None),
+                        taken: np.ndarray | None = None) -> np.ndarray:
         """(..., k, n_moving) the channels computed from offsets (..., k, 4) of the viewpoints ``views``: the flown
-        geometry [+ the scarce coverage lost], unstandardised."""
-        return moving_features(cast(ViewContext, self.views), self.scarce, offsets, views)
+        geometry [+ the scarce coverage lost; a view not ``taken`` loses its whole share], unstandardised."""
+        return moving_features(cast(ViewContext, self.views), self.scarce, offsets, views, taken)
 
     def input_tensor(self, offsets: np.ndarray | torch.Tensor, conditions: np.ndarray | None = None) -> torch.Tensor:
         """(batch, n_views, 4) offsets [+ (batch, n_views, 5) conditions at the shutter, default the forecast
@@ -200,7 +201,7 @@ class Surrogate:
         if self.n_moving:
             views = cast(ViewContext, self.views)
             cond = conditions_or_reference(conditions, views.condition_reference, x.shape[0])
-            feat = np.concatenate([self.moving_features(off_np), cond], axis=2)
+            feat = np.concatenate([self.moving_features(off_np, taken=cond[..., -1] >= 0.5), cond], axis=2)
             n_varying = feat.shape[2]
             parts.append(torch.as_tensor((feat - self._feat_mean[:n_varying]) / self._feat_std[:n_varying],
                                          dtype=torch.float32))

@@ -16,7 +16,7 @@ import time
 from concurrent.futures import ProcessPoolExecutor
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import Any
+from typing import Any, cast
 
 import numpy as np
 import torch
@@ -218,8 +218,9 @@ def _untrained_meta(data: TrialData, section: SurrogateSection, offsets: np.ndar
                 raise InputError(data.source or "surrogate data", "the data has no scarce coverage of its path "
                                                                   "(a campaign read without its ship)")
             scarce_digest = data.scarce.digest
-        moving = moving_features(data.views, scarce, offsets[tr])
-        features = np.concatenate([moving, _conditions(data, tr),
+        cond = cast(np.ndarray, _conditions(data, tr))
+        moving = moving_features(data.views, scarce, offsets[tr], taken=cond[..., -1] >= 0.5)
+        features = np.concatenate([moving, cond,
                                    np.broadcast_to(data.views.coverage(), (len(tr), data.n_views, 2))], axis=2)
         feat_mean, feat_std = (v.tolist() for v in _standardise(features.reshape(-1, features.shape[-1]), 0))
     n_features = 4 + (len(moving_names(section.inputs)) + len(CONDITION_NAMES) + len(COVERAGE_NAMES)
