@@ -131,7 +131,7 @@ def load_campaign_trials(campaign_dir: str | Path, *, views: bool = True, config
     """The trials of a campaign folder (the campaign stage's ``TrialStore``): flown offsets, error_m, failed,
     the conditions at each view (blur, wind) and, with ``views``, the path's :class:`ViewContext` (the ship and
     oracle of the campaign's stored config, resolved relative to ``config_dir``: ~1 s; None without a stored
-    config), with ``scarce`` too its :class:`ScarceCoverage` (~2 s for 141 views), and which views the oracle
+    config), with ``scarce`` too its :class:`ScarceCoverage` (~0.2 s for 141 views), and which views the oracle
     registered (NaN in stores written before that column).
 
     A view a flight did not take (it turned home, or the trial raised) gets offset 0 and the condition

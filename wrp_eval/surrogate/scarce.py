@@ -125,16 +125,16 @@ def scarce_coverage(planned: CaptureSet, mesh: trimesh.Trimesh, section: OracleS
     """The :class:`ScarceCoverage` of the ``planned`` capture set on the ship ``mesh`` with the oracle section
     ``section``; ``gt``: the mesh's prepared ground truth (the oracle's, :func:`prepare_ground_truth`)."""
     total = _sample_weights(planned, gt, section)
-    kept = np.minimum(total, level)
-    removal, samples, rest = np.zeros(len(planned)), [], []
-    for v in range(len(planned)):
-        own = _sample_weights(planned.subset(np.array([v])), gt, section)
-        r = total - own
-        removal[v] = float(np.sum(kept - np.minimum(r, level)))
-        idx = np.flatnonzero(r < level)
-        samples.append(idx)
-        rest.append(r[idx])
-    scarce = ScarceCoverage(planned, mesh, section, float(level), removal, tuple(samples), tuple(rest))
+    # each view's own weights, every view at once: uncapped, a (sample, view) pair is one observation
+    alone = observe_samples(planned, gt, np.ones(len(planned), dtype=bool), section, 1.0 / section.gt_density_per_m2,
+                            max_views_per_sample=None)
+    own = np.zeros((len(planned), len(gt.samples)))
+    own[alone.view, alone.sample] = alone.weight
+    r = total - own                                                   # (n, samples): R_vs
+    removal = np.sum(np.minimum(total, level) - np.minimum(r, level), axis=1)
+    samples = tuple(np.flatnonzero(row < level) for row in r)
+    rest = tuple(row[idx] for row, idx in zip(r, samples, strict=True))
+    scarce = ScarceCoverage(planned, mesh, section, float(level), removal, samples, rest)
     scarce.__dict__["gt"] = gt          # the oracle's prepared one (cached_property's slot)
     return scarce
 

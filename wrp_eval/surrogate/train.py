@@ -213,11 +213,10 @@ def _untrained_meta(data: TrialData, section: SurrogateSection, offsets: np.ndar
                                                               "set surrogate.inputs: offsets")
         views = data.views.to_json_dict()
         scarce = data.scarce if section.inputs == "scarce" else None
-        if section.inputs == "scarce":
-            if data.scarce is None:
-                raise InputError(data.source or "surrogate data", "the data has no scarce coverage of its path "
-                                                                  "(a campaign read without its ship)")
-            scarce_digest = data.scarce.digest
+        if section.inputs == "scarce" and scarce is None:
+            raise InputError(data.source or "surrogate data", "the data has no scarce coverage of its path "
+                                                              "(a campaign read without its ship)")
+        scarce_digest = None if scarce is None else scarce.digest
         cond = cast(np.ndarray, _conditions(data, tr))
         moving = moving_features(data.views, scarce, offsets[tr], taken=cond[..., -1] >= 0.5)
         features = np.concatenate([moving, cond,
